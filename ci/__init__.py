@@ -1,0 +1,1 @@
+"""Scripts shared by CI and people: benchmarks, campaigns, scenario generators."""

@@ -1,0 +1,1 @@
+"""Promela templates rendered from spec/ and the Spin engine (see issue: Spin engine)."""

@@ -1,0 +1,1 @@
+"""The PyBullet simulator (see issue: simulator)."""

@@ -1,0 +1,69 @@
+"""Reading scenario files (JSON or TOML) with exactly the documented keys."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from spec.errors import ScenarioError
+from spec.scenario import Scenario, make_scenario
+
+REQUIRED_KEYS = ("lane", "left_lane", "right_lane")
+OPTIONAL_KEYS = ("targets", "model", "horizon")
+SUFFIXES = (".json", ".toml")
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """The scenario in ``path``; every problem raises ScenarioError naming the file."""
+    source = str(path)
+    try:
+        return scenario_from_dict(_read(Path(path)))
+    except ScenarioError as err:
+        raise err.with_source(source) from None
+
+
+def _read(path: Path) -> dict[str, Any]:
+    suffix = path.suffix.lower()
+    if suffix not in SUFFIXES:
+        raise ScenarioError("file", path.name, "unknown format: use a .json or .toml file")
+    try:
+        raw = path.read_bytes()
+    except OSError as err:
+        raise ScenarioError("file", path.name, f"cannot read: {err.strerror or err}") from None
+    try:
+        text = raw.decode("utf-8")
+        data = json.loads(text) if suffix == ".json" else tomllib.loads(text)
+    except UnicodeDecodeError:
+        raise ScenarioError("file", path.name, "not UTF-8 text") from None
+    except json.JSONDecodeError as err:
+        raise ScenarioError("file", path.name, f"malformed JSON: {err.msg} (line {err.lineno})") from None
+    except tomllib.TOMLDecodeError as err:
+        raise ScenarioError("file", path.name, f"malformed TOML: {err}") from None
+    if not isinstance(data, dict):
+        raise ScenarioError("file", path.name, "the top level must be an object")
+    return data
+
+
+def scenario_from_dict(data: dict[str, Any]) -> Scenario:
+    """A validated scenario from a parsed file's top-level table."""
+    for key in data:
+        if key not in REQUIRED_KEYS + OPTIONAL_KEYS:
+            raise ScenarioError(key, data[key], f"unknown key (allowed: {', '.join(REQUIRED_KEYS + OPTIONAL_KEYS)})")
+    for key in REQUIRED_KEYS:
+        if key not in data:
+            raise ScenarioError(key, None, "missing required key")
+    return make_scenario(**data)
+
+
+def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
+    """The file representation of a scenario (inverse of ``scenario_from_dict``)."""
+    return {
+        "lane": scenario.lane.value,
+        "left_lane": list(scenario.left_lane),
+        "right_lane": list(scenario.right_lane),
+        "targets": scenario.targets,
+        "model": scenario.model.value,
+        "horizon": scenario.horizon,
+    }
