@@ -1,0 +1,75 @@
+"""What a planner answers: a plan, no plan (proved, or within the horizon), or an incomplete search."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+from spec.actions import Action
+from spec.models import ModelKind
+from spec.scenario import State
+
+
+class Status(enum.Enum):
+    """The four answers, never reported one as another."""
+
+    PLAN = "plan"
+    NO_PLAN = "no_plan"  # proved: no plan of any length exists
+    NO_PLAN_WITHIN_HORIZON = "no_plan_within_horizon"  # exhaustive up to the horizon
+    INCOMPLETE = "incomplete"  # a search limit was hit: nothing is claimed
+
+    @property
+    def exit_code(self) -> int:
+        """The CLI's exit code: 0 plan, 1 no plan, 3 incomplete."""
+        return {Status.PLAN: 0, Status.INCOMPLETE: 3}.get(self, 1)
+
+
+@dataclass(frozen=True, slots=True)
+class SearchResult:
+    """What one search of one model returns."""
+
+    status: Status
+    actions: tuple[Action, ...] = ()
+    states_explored: int = 0
+    detail: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class Answer:
+    """An engine's answer for a scenario, with the states a plan passes through."""
+
+    status: Status
+    model: ModelKind | None  # the model whose plan this is (or the last model tried)
+    engine: str
+    strategy: str
+    actions: tuple[Action, ...]
+    states: tuple[State, ...]
+    states_explored: int
+    elapsed_ms: float
+    detail: str = ""
+    stages: tuple[tuple[ModelKind, Status, str], ...] = field(default=())
+
+    def to_json(self) -> dict[str, object]:
+        """The documented JSON object of ``overtake plan --json``."""
+        return {
+            "status": self.status.value,
+            "model": self.model.value if self.model else None,
+            "engine": self.engine,
+            "strategy": self.strategy,
+            "actions": [a.value for a in self.actions],
+            "states": [state_to_json(s) for s in self.states],
+            "detail": self.detail,
+            "stages": [{"model": m.value, "status": st.value, "detail": d} for m, st, d in self.stages],
+            "stats": {"states_explored": self.states_explored, "elapsed_ms": round(self.elapsed_ms, 3)},
+        }
+
+
+def state_to_json(state: State) -> dict[str, object]:
+    """A state as JSON: lane, both lanes' cells, lane changes, steps."""
+    return {
+        "lane": state.lane.value,
+        "left_lane": list(state.left_lane),
+        "right_lane": list(state.right_lane),
+        "lane_changes": state.lane_changes,
+        "steps": state.steps,
+    }

@@ -1,0 +1,69 @@
+"""The engine registry: every engine is registered once, with the strategies it answers.
+
+Later engines (spin, z3) register here; tests are parametrised over ``ENGINES`` and fail
+when an engine skips a strategy it claims.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+from oracle import bitplan, search
+from oracle.answer import SearchResult, Status
+from spec.errors import ScenarioError
+from spec.scenario import Problem
+
+Solver = Callable[[Problem, str], SearchResult]
+
+
+@dataclass(frozen=True, slots=True)
+class Engine:
+    """A registered engine: its name, the strategies it answers, and how it solves a problem."""
+
+    name: str
+    strategies: tuple[str, ...]
+    solve: Solver
+    description: str
+
+
+ENGINES: dict[str, Engine] = {}
+
+
+def register(engine: Engine) -> Engine:
+    """Add an engine to the registry (once)."""
+    if engine.name in ENGINES:
+        raise ValueError(f"engine {engine.name!r} registered twice")
+    ENGINES[engine.name] = engine
+    return engine
+
+
+def get_engine(name: str) -> Engine:
+    """The engine called ``name``; bad names are bad input."""
+    try:
+        return ENGINES[name]
+    except KeyError:
+        raise ScenarioError("--engine", name, f"unknown engine (known: {', '.join(ENGINES)})") from None
+
+
+def check_strategy(engine: Engine, strategy: str) -> None:
+    """Raise bad input when ``engine`` does not answer ``strategy``."""
+    if strategy not in engine.strategies:
+        raise ScenarioError(
+            "--strategy", strategy, f"engine {engine.name} answers {', '.join(engine.strategies)} only"
+        )
+
+
+def _interpreter(problem: Problem, strategy: str, max_states: int = search.DEFAULT_MAX_STATES) -> SearchResult:
+    """The reference engine: explicit DFS for sensible, bitset BFS for shortest."""
+    if strategy == "shortest":
+        return bitplan.shortest(problem)
+    result = search.sensible(problem, max_states)
+    if result.status is Status.NO_PLAN_WITHIN_HORIZON:
+        return bitplan.beyond_horizon(problem, result.states_explored)
+    return result
+
+
+INTERPRETER = register(
+    Engine("interpreter", ("sensible", "shortest"), _interpreter, "Python reference interpreter and planners")
+)

@@ -1,0 +1,66 @@
+"""The planner pipeline: the final model, then the preparations model, then "no plan"."""
+
+from __future__ import annotations
+
+import time
+
+from oracle.answer import Answer, SearchResult, Status
+from oracle.engines import Engine, check_strategy, get_engine
+from oracle.interpreter import validate
+from spec.errors import EngineError
+from spec.models import ModelChoice, ModelKind, models_for
+from spec.scenario import Problem, Scenario, problem_for
+
+
+def plan(
+    scenario: Scenario,
+    strategy: str = "sensible",
+    model: ModelChoice | None = None,
+    horizon: int | None = None,
+    engine: str | Engine = "interpreter",
+) -> Answer:
+    """Plan for ``scenario`` with one engine; every plan returned has been validated."""
+    eng = engine if isinstance(engine, Engine) else get_engine(engine)
+    check_strategy(eng, strategy)
+    choice = model or scenario.model
+    started = time.perf_counter()
+    stages: list[tuple[ModelKind, Status, str]] = []
+    explored = 0
+    result = SearchResult(Status.NO_PLAN)
+    kind = models_for(choice)[0]
+    for kind in models_for(choice):
+        problem = problem_for(scenario, kind, horizon)
+        result = eng.solve(problem, strategy)
+        explored += result.states_explored
+        stages.append((kind, result.status, result.detail))
+        if result.status in (Status.PLAN, Status.INCOMPLETE):
+            break
+    elapsed_ms = (time.perf_counter() - started) * 1000
+    if result.status is Status.PLAN:
+        states = _checked_states(eng, problem, result)
+        return Answer(Status.PLAN, kind, eng.name, strategy, result.actions, states, explored, elapsed_ms,
+                      result.detail, tuple(stages))
+    status = _combined(stages)
+    return Answer(status, kind, eng.name, strategy, (), (), explored, elapsed_ms, _summary(stages), tuple(stages))
+
+
+def _checked_states(engine: Engine, problem: Problem, result: SearchResult) -> tuple:
+    """The states of a plan, after checking it with the interpreter: an invalid plan is an engine error."""
+    verdict = validate(problem, result.actions)
+    if not verdict.valid:
+        raise EngineError(f"engine {engine.name} returned an invalid plan: {verdict.reason}")
+    return verdict.states
+
+
+def _combined(stages: list[tuple[ModelKind, Status, str]]) -> Status:
+    """No plan at all only when every model proved it; an incomplete stage makes the answer incomplete."""
+    statuses = {status for _, status, _ in stages}
+    if Status.INCOMPLETE in statuses:
+        return Status.INCOMPLETE
+    if statuses == {Status.NO_PLAN}:
+        return Status.NO_PLAN
+    return Status.NO_PLAN_WITHIN_HORIZON
+
+
+def _summary(stages: list[tuple[ModelKind, Status, str]]) -> str:
+    return "; ".join(f"{kind.value}: {status.value}" + (f" ({detail})" if detail else "") for kind, status, detail in stages)

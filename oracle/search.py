@@ -1,0 +1,102 @@
+"""Explicit-state planners over interpreter states: depth-first ``sensible`` and a reference BFS.
+
+States include the step count, so pruning a visited state never cuts a path that a
+shorter prefix could still complete within the horizon: both searches are exhaustive.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from typing import Iterator
+
+from oracle.answer import SearchResult, Status
+from oracle.interpreter import collision_in, enabled_actions, problem_goal, step
+from spec.actions import Action
+from spec.scenario import Collision, Problem, State
+
+#: Default bound on stored states before a search reports ``incomplete``.
+DEFAULT_MAX_STATES = 2_000_000
+
+
+def _successors(problem: Problem, state: State) -> Iterator[tuple[Action, State]]:
+    """Collision-free successors in the action order; none at the horizon or in a goal state."""
+    if state.steps >= problem.horizon:
+        return
+    for action in enabled_actions(state, problem.rules):
+        nxt = step(state, action, problem.rules)
+        if not isinstance(nxt, Collision):
+            yield action, nxt
+
+
+def _trivial(problem: Problem) -> SearchResult | None:
+    """The answer when the initial state already decides: a collision or the goal."""
+    start = problem.scenario.initial_state()
+    hit = collision_in(start, problem.rules, 0)
+    if hit is not None:
+        return SearchResult(Status.NO_PLAN, (), 1, f"initial state: {hit.describe()}")
+    if problem_goal(problem, start):
+        return SearchResult(Status.PLAN, (), 1, "goal holds in the initial state")
+    return None
+
+
+def sensible(problem: Problem, max_states: int = DEFAULT_MAX_STATES) -> SearchResult:
+    """Depth-first search in the action order with visited-state pruning (Spin's default search)."""
+    trivial = _trivial(problem)
+    if trivial is not None:
+        return trivial
+    start = problem.scenario.initial_state()
+    visited = {start}
+    plan: list[Action] = []
+    stack = [_successors(problem, start)]
+    while stack:
+        for action, nxt in stack[-1]:
+            if nxt in visited:
+                continue
+            visited.add(nxt)
+            plan.append(action)
+            if problem_goal(problem, nxt):
+                return SearchResult(Status.PLAN, tuple(plan), len(visited))
+            if len(visited) >= max_states:
+                return SearchResult(Status.INCOMPLETE, (), len(visited), f"state limit {max_states} reached")
+            stack.append(_successors(problem, nxt))
+            break
+        else:
+            stack.pop()
+            if plan:
+                plan.pop()
+    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(visited))
+
+
+def shortest_reference(problem: Problem, max_states: int = DEFAULT_MAX_STATES) -> SearchResult:
+    """Breadth-first search with ordered expansion: the first shortest plan in the action order.
+
+    Slow but plain; the fast planner in ``oracle.bitplan`` is checked against it.
+    """
+    trivial = _trivial(problem)
+    if trivial is not None:
+        return trivial
+    start = problem.scenario.initial_state()
+    parent: dict[State, tuple[State, Action] | None] = {start: None}
+    queue = deque([start])
+    while queue:
+        state = queue.popleft()
+        for action, nxt in _successors(problem, state):
+            if nxt in parent:
+                continue
+            parent[nxt] = (state, action)
+            if problem_goal(problem, nxt):
+                return SearchResult(Status.PLAN, _path(parent, nxt), len(parent))
+            if len(parent) >= max_states:
+                return SearchResult(Status.INCOMPLETE, (), len(parent), f"state limit {max_states} reached")
+            queue.append(nxt)
+    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(parent))
+
+
+def _path(parent: dict[State, tuple[State, Action] | None], last: State) -> tuple[Action, ...]:
+    actions: list[Action] = []
+    link = parent[last]
+    while link is not None:
+        state, action = link
+        actions.append(action)
+        link = parent[state]
+    return tuple(reversed(actions))
