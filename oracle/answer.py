@@ -32,6 +32,7 @@ class SearchResult:
     actions: tuple[Action, ...] = ()
     states_explored: int = 0
     detail: str = ""
+    extra: dict[str, object] = field(default_factory=dict)  # engine facts: versions, cache hits, costs
 
 
 @dataclass(frozen=True, slots=True)
@@ -48,6 +49,7 @@ class Answer:
     elapsed_ms: float
     detail: str = ""
     stages: tuple[tuple[ModelKind, Status, str], ...] = field(default=())
+    extra: dict[str, object] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, object]:
         """The documented JSON object of ``overtake plan --json``."""
@@ -60,6 +62,7 @@ class Answer:
             "states": [state_to_json(s) for s in self.states],
             "detail": self.detail,
             "stages": [{"model": m.value, "status": st.value, "detail": d} for m, st, d in self.stages],
+            **self.extra,
             "stats": {"states_explored": self.states_explored, "elapsed_ms": round(self.elapsed_ms, 3)},
         }
 

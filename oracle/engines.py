@@ -6,6 +6,7 @@ when an engine skips a strategy it claims.
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 from typing import Callable
 
@@ -29,6 +30,16 @@ class Engine:
 
 ENGINES: dict[str, Engine] = {}
 
+#: Modules that register further engines when imported (each issue adds its own line).
+ENGINE_MODULES: tuple[str, ...] = ()
+
+
+def load_engines() -> dict[str, Engine]:
+    """Import every engine module so that the registry is complete, and return it."""
+    for module in ENGINE_MODULES:
+        importlib.import_module(module)
+    return ENGINES
+
 
 def register(engine: Engine) -> Engine:
     """Add an engine to the registry (once)."""
@@ -40,6 +51,7 @@ def register(engine: Engine) -> Engine:
 
 def get_engine(name: str) -> Engine:
     """The engine called ``name``; bad names are bad input."""
+    load_engines()
     try:
         return ENGINES[name]
     except KeyError:

@@ -39,9 +39,10 @@ def plan(
     if result.status is Status.PLAN:
         states = _checked_states(eng, problem, result)
         return Answer(Status.PLAN, kind, eng.name, strategy, result.actions, states, explored, elapsed_ms,
-                      result.detail, tuple(stages))
+                      result.detail, tuple(stages), result.extra)
     status = _combined(stages)
-    return Answer(status, kind, eng.name, strategy, (), (), explored, elapsed_ms, _summary(stages), tuple(stages))
+    return Answer(status, kind, eng.name, strategy, (), (), explored, elapsed_ms, _summary(stages), tuple(stages),
+                  result.extra)
 
 
 def _checked_states(engine: Engine, problem: Problem, result: SearchResult) -> tuple:
