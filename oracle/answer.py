@@ -32,6 +32,7 @@ class SearchResult:
     actions: tuple[Action, ...] = ()
     states_explored: int = 0
     detail: str = ""
+    states: tuple[State, ...] = ()  # the engine's own states along the plan (initial included), if it reports them
     extra: dict[str, object] = field(default_factory=dict)  # engine facts: versions, cache hits, costs
 
 

@@ -23,7 +23,7 @@ from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.constants import AV_CELL
 from spec.errors import EngineError
 from spec.lanes import Lane
-from spec.scenario import Collision, Problem
+from spec.scenario import Collision, Problem, State
 
 _MAX_TICKS = max(rule.oncoming_ticks for rule in ACTION_RULES.values())
 
@@ -171,7 +171,7 @@ def shortest(problem: Problem) -> SearchResult:
     if hit is not None:
         return SearchResult(Status.NO_PLAN, (), 1, f"initial state: {hit.describe()}")
     if problem_goal(problem, start_state):
-        return SearchResult(Status.PLAN, (), 1, "goal holds in the initial state")
+        return SearchResult(Status.PLAN, (), 1, "goal holds in the initial state", (start_state,))
     space = BitSpace(problem, -problem.horizon, problem.horizon)
     layers = [[space.start()] + [0] * (len(space.lanes) - 1)]
     explored = 1
@@ -180,7 +180,8 @@ def shortest(problem: Problem) -> SearchResult:
         layers.append(layer)
         explored += sum(x.bit_count() for x in layer)
         if space.hits_goal(layer):
-            return SearchResult(Status.PLAN, _first_plan(space, layers), explored)
+            actions, states = _first_plan(space, layers)
+            return SearchResult(Status.PLAN, actions, explored, states=states)
         if not any(layer):
             return SearchResult(Status.NO_PLAN, (), explored, "every path collides")
     return beyond_horizon(problem, explored)
@@ -207,7 +208,7 @@ def beyond_horizon(problem: Problem, explored: int) -> SearchResult:
     return SearchResult(Status.NO_PLAN, (), explored, "no plan of any length: the goal is unreachable")
 
 
-def _first_plan(space: BitSpace, layers: list[list[int]]) -> tuple[Action, ...]:
+def _first_plan(space: BitSpace, layers: list[list[int]]) -> tuple[tuple[Action, ...], tuple[State, ...]]:
     """Walk forward from the start, taking the first action (in order) that can still reach the goal in time."""
     depth = len(layers) - 1
     back = [[x & g for x, g in zip(layers[depth], space.goals)]]
@@ -221,6 +222,7 @@ def _first_plan(space: BitSpace, layers: list[list[int]]) -> tuple[Action, ...]:
     problem, lc, here = space.problem, 0, space.start()
     state = problem.scenario.initial_state()
     plan: list[Action] = []
+    states = [state]
     for k in range(depth):
         for move in space.moves[lc]:
             there = space.image(move, here)
@@ -232,7 +234,8 @@ def _first_plan(space: BitSpace, layers: list[list[int]]) -> tuple[Action, ...]:
         if isinstance(result, Collision):
             raise EngineError(f"bitplan: interpreter disagrees at step {k + 1}: {result.describe()}")
         plan.append(move.action)
+        states.append(result)
         lc, here, state = move.lc_dst, there, result
     if not problem_goal(problem, state):
         raise EngineError("bitplan: interpreter disagrees: the plan does not reach the goal")
-    return tuple(plan)
+    return tuple(plan), tuple(states)

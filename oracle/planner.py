@@ -9,7 +9,7 @@ from oracle.engines import Engine, check_strategy, get_engine
 from oracle.interpreter import validate
 from spec.errors import EngineError
 from spec.models import ModelChoice, ModelKind, models_for
-from spec.scenario import Problem, Scenario, problem_for
+from spec.scenario import Problem, Scenario, State, problem_for
 
 
 def plan(
@@ -45,11 +45,14 @@ def plan(
                   result.extra)
 
 
-def _checked_states(engine: Engine, problem: Problem, result: SearchResult) -> tuple:
+def _checked_states(engine: Engine, problem: Problem, result: SearchResult) -> tuple[State, ...]:
     """The states of a plan, after checking it with the interpreter: an invalid plan is an engine error."""
     verdict = validate(problem, result.actions)
     if not verdict.valid:
         raise EngineError(f"engine {engine.name} returned an invalid plan: {verdict.reason}")
+    if result.states and result.states != verdict.states:
+        n = next((i for i, (a, b) in enumerate(zip(result.states, verdict.states)) if a != b), len(result.states))
+        raise EngineError(f"engine {engine.name}: its state after step {n} differs from the interpreter's")
     return verdict.states
 
 

@@ -35,7 +35,7 @@ def _trivial(problem: Problem) -> SearchResult | None:
     if hit is not None:
         return SearchResult(Status.NO_PLAN, (), 1, f"initial state: {hit.describe()}")
     if problem_goal(problem, start):
-        return SearchResult(Status.PLAN, (), 1, "goal holds in the initial state")
+        return SearchResult(Status.PLAN, (), 1, "goal holds in the initial state", (start,))
     return None
 
 
@@ -47,6 +47,7 @@ def sensible(problem: Problem, max_states: int = DEFAULT_MAX_STATES) -> SearchRe
     start = problem.scenario.initial_state()
     visited = {start}
     plan: list[Action] = []
+    path = [start]
     stack = [_successors(problem, start)]
     while stack:
         for action, nxt in stack[-1]:
@@ -54,14 +55,16 @@ def sensible(problem: Problem, max_states: int = DEFAULT_MAX_STATES) -> SearchRe
                 continue
             visited.add(nxt)
             plan.append(action)
+            path.append(nxt)
             if problem_goal(problem, nxt):
-                return SearchResult(Status.PLAN, tuple(plan), len(visited))
+                return SearchResult(Status.PLAN, tuple(plan), len(visited), states=tuple(path))
             if len(visited) >= max_states:
                 return SearchResult(Status.INCOMPLETE, (), len(visited), f"state limit {max_states} reached")
             stack.append(_successors(problem, nxt))
             break
         else:
             stack.pop()
+            path.pop()
             if plan:
                 plan.pop()
     return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(visited))
@@ -85,18 +88,23 @@ def shortest_reference(problem: Problem, max_states: int = DEFAULT_MAX_STATES) -
                 continue
             parent[nxt] = (state, action)
             if problem_goal(problem, nxt):
-                return SearchResult(Status.PLAN, _path(parent, nxt), len(parent))
+                actions, states = _path(parent, nxt)
+                return SearchResult(Status.PLAN, actions, len(parent), states=states)
             if len(parent) >= max_states:
                 return SearchResult(Status.INCOMPLETE, (), len(parent), f"state limit {max_states} reached")
             queue.append(nxt)
     return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(parent))
 
 
-def _path(parent: dict[State, tuple[State, Action] | None], last: State) -> tuple[Action, ...]:
+def _path(
+    parent: dict[State, tuple[State, Action] | None], last: State
+) -> tuple[tuple[Action, ...], tuple[State, ...]]:
     actions: list[Action] = []
+    states = [last]
     link = parent[last]
     while link is not None:
         state, action = link
         actions.append(action)
+        states.append(state)
         link = parent[state]
-    return tuple(reversed(actions))
+    return tuple(reversed(actions)), tuple(reversed(states))

@@ -14,9 +14,10 @@ class ScenarioError(SuiteError):
 
     exit_code = 2
 
-    def __init__(self, key: str, value: object, reason: str, source: str = "<scenario>") -> None:
+    def __init__(self, key: str, value: object, reason: str, source: str = "") -> None:
         self.source, self.key, self.value, self.reason = source, key, value, reason
-        super().__init__(f"{source}: {key}={value!r}: {reason}")
+        where = f"{source}: " if source else ""
+        super().__init__(f"{where}{key}={value!r}: {reason}")
 
     def with_source(self, source: str) -> ScenarioError:
         """The same error, naming the file it came from."""

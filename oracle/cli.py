@@ -1,0 +1,230 @@
+"""The ``overtake`` command: plan, validate, list and demonstrate built-in scenarios.
+
+Every error reaches the user as one line on stderr with a documented exit code:
+0 plan / valid, 1 no plan / invalid, 2 bad input, 3 search incomplete,
+4 a tool is missing, 5 an engine failed.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+from rich.console import Console
+from rich.table import Table
+
+from oracle.answer import Answer, state_to_json
+from oracle.engines import load_engines
+from oracle.interpreter import Validation, validate
+from oracle.planner import plan as run_plan
+from oracle.render import draw
+from spec.actions import Action, parse_action
+from spec.constants import MAX_HORIZON
+from spec.errors import ScenarioError, SuiteError
+from spec.files import load_scenario
+from spec.library import BUILTINS, builtin
+from spec.models import ModelChoice, models_for
+from spec.scenario import Scenario, problem_for
+
+STRATEGIES = ("sensible", "shortest", "optimal")
+MODELS = [m.value for m in ModelChoice]
+
+out = Console(highlight=False, width=None if sys.stdout.isatty() else 120)
+
+
+def _scenario(file: str) -> Scenario:
+    """A scenario from a file path or the name of a built-in scenario."""
+    path = Path(file)
+    if not path.exists() and builtin(file) is not None:
+        return builtin(file).load()  # type: ignore[union-attr]
+    if not path.exists():
+        raise ScenarioError("file", file, "no such file (nor a built-in scenario: see `overtake scenarios`)")
+    return load_scenario(path)
+
+
+def _horizon(horizon: int | None) -> int | None:
+    if horizon is not None and not 0 <= horizon <= MAX_HORIZON:
+        raise ScenarioError("--horizon", horizon, f"must be between 0 and {MAX_HORIZON}")
+    return horizon
+
+
+def _print_json(obj: Any) -> None:
+    click.echo(json.dumps(obj, indent=2))
+
+
+def _print_states(scenario: Scenario, actions: tuple[Action, ...], states: tuple) -> None:
+    targets = scenario.target_indices
+    out.print("step 0: start")
+    for line in draw(states[0], targets):
+        out.print(f"  {line}")
+    for n, (action, state) in enumerate(zip(actions, states[1:]), start=1):
+        out.print(f"step {n}: {action.value}")
+        for line in draw(state, targets):
+            out.print(f"  {line}")
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="overtake-mc")
+def cli() -> None:
+    """Plan overtaking manoeuvres by model checking, with cross-validated engines."""
+
+
+@cli.command()
+@click.argument("file")
+@click.option("--strategy", type=click.Choice(STRATEGIES), default="sensible", show_default=True)
+@click.option("--model", type=click.Choice(MODELS), default=None, help="Default: the scenario's (auto).")
+@click.option("--horizon", type=int, default=None, help="Maximum plan length (default: the scenario's, 30).")
+@click.option("--engine", default="interpreter", show_default=True, help="An engine name (see `overtake engines`).")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
+def plan(file: str, strategy: str, model: str | None, horizon: int | None, engine: str, as_json: bool) -> None:
+    """Plan an overtake for a scenario FILE (.json/.toml) or a built-in scenario name."""
+    scenario = _scenario(file)
+    answer = run_plan(scenario, strategy, ModelChoice(model) if model else None, _horizon(horizon), engine)
+    if as_json:
+        _print_json(answer.to_json())
+    else:
+        _print_answer(scenario, answer)
+    sys.exit(answer.status.exit_code)
+
+
+def _print_answer(scenario: Scenario, answer: Answer) -> None:
+    model = answer.model.value if answer.model else "-"
+    out.print(f"{answer.status.value} ({answer.engine}, {answer.strategy}, model {model}, "
+              f"{answer.states_explored} states, {answer.elapsed_ms:.2f} ms)")
+    if answer.detail:
+        out.print(answer.detail)
+    if answer.actions or answer.states:
+        out.print("actions: " + (", ".join(a.value for a in answer.actions) or "(none: the goal already holds)"))
+        _print_states(scenario, answer.actions, answer.states)
+
+
+@cli.command(name="validate")
+@click.argument("file")
+@click.option("--actions", "actions_text", required=True, help="Comma-separated actions, e.g. accelerate,drive.")
+@click.option("--model", type=click.Choice(MODELS), default=None, help="Default: the scenario's (auto: any model).")
+@click.option("--horizon", type=int, default=None)
+@click.option("--json", "as_json", is_flag=True)
+def validate_cmd(file: str, actions_text: str, model: str | None, horizon: int | None, as_json: bool) -> None:
+    """Check that an action list is a plan for FILE: enabled, collision-free, goal first at the end."""
+    scenario = _scenario(file)
+    actions = tuple(parse_action(a) for a in actions_text.split(",") if a.strip())
+    choice = ModelChoice(model) if model else scenario.model
+    verdicts = []
+    for kind in models_for(choice):
+        verdict = validate(problem_for(scenario, kind, _horizon(horizon)), actions)
+        verdicts.append((kind, verdict))
+        if verdict.valid:
+            break
+    kind, verdict = next(((k, v) for k, v in verdicts if v.valid), verdicts[0])
+    reason = verdict.reason if verdict.valid else "; ".join(f"{k.value}: {v.reason}" for k, v in verdicts)
+    if as_json:
+        _print_json({"valid": verdict.valid, "reason": reason, "model": kind.value,
+                     "states": [state_to_json(s) for s in verdict.states]})
+    else:
+        _print_validation(scenario, actions, kind.value, verdict, reason)
+    sys.exit(0 if verdict.valid else 1)
+
+
+def _print_validation(scenario: Scenario, actions: tuple[Action, ...], model: str, verdict: Validation,
+                      reason: str) -> None:
+    out.print(f"{'valid' if verdict.valid else 'invalid'} (model {model}): {reason}")
+    _print_states(scenario, actions[: len(verdict.states) - 1], verdict.states)
+
+
+@cli.command()
+@click.option("--json", "as_json", is_flag=True)
+def scenarios(as_json: bool) -> None:
+    """List the built-in scenarios and their expected outcomes."""
+    if as_json:
+        _print_json([{"name": b.name, "description": b.description, "path": str(b.path),
+                      "expected": b.expected.status, "model": b.expected.model} for b in BUILTINS])
+        return
+    table = Table(title="built-in scenarios")
+    for col in ("name", "description", "expected", "model"):
+        table.add_column(col)
+    for b in BUILTINS:
+        table.add_row(b.name, b.description, b.expected.status, b.expected.model)
+    out.print(table)
+
+
+@cli.command()
+def engines() -> None:
+    """List the registered engines and the strategies each answers."""
+    table = Table(title="engines")
+    for col in ("engine", "strategies", "description"):
+        table.add_column(col)
+    for engine in load_engines().values():
+        table.add_row(engine.name, ", ".join(engine.strategies), engine.description)
+    out.print(table)
+
+
+@cli.command()
+@click.option("--strategy", type=click.Choice(STRATEGIES), default="sensible", show_default=True)
+@click.option("--engine", "engine_names", multiple=True, help="Engines to run (default: every registered one).")
+def demo(strategy: str, engine_names: tuple[str, ...]) -> None:
+    """Plan every built-in scenario and print a table; exit 1 if any answer differs from its expectation."""
+    names = engine_names or tuple(load_engines())
+    table = Table(title=f"overtake demo: built-in scenarios, strategy {strategy}")
+    for col in ("scenario", "engine", "status", "model", "plan", "length", "ms", "expected"):
+        table.add_column(col, overflow="fold")
+    mismatches = 0
+    for b in BUILTINS:
+        for name in names:
+            engine = load_engines().get(name)
+            if engine is None:
+                raise ScenarioError("--engine", name, f"unknown engine (known: {', '.join(load_engines())})")
+            if strategy not in engine.strategies:
+                continue
+            answer = run_plan(b.load(), strategy, engine=engine)
+            ok = _matches(answer, b.expected, strategy)
+            mismatches += not ok
+            table.add_row(b.name, name, answer.status.value, answer.model.value if answer.model else "-",
+                          " ".join(_short(a) for a in answer.actions) or "-", str(len(answer.actions)),
+                          f"{answer.elapsed_ms:.1f}", "ok" if ok else f"EXPECTED {b.expected.status}")
+    out.print(table)
+    out.print("actions: L left_lane_change, A accelerate, R right_lane_change, D drive, B brake")
+    out.print(f"{'all answers as expected' if not mismatches else f'{mismatches} answer(s) differ from expectation'}")
+    sys.exit(1 if mismatches else 0)
+
+
+def _short(action: Action) -> str:
+    return {"left_lane_change": "L", "right_lane_change": "R"}.get(action.value, action.value[0].upper())
+
+
+def _matches(answer: Answer, expected: Any, strategy: str) -> bool:
+    if answer.status.value != expected.status or (answer.model and answer.model.value != expected.model):
+        return False
+    if strategy == "sensible":
+        return tuple(a.value for a in answer.actions) == expected.sensible
+    return strategy != "shortest" or len(answer.actions) == expected.shortest_length
+
+
+def main() -> None:
+    """Entry point: run the CLI, turning every suite error into one line and its exit code."""
+    try:
+        cli.main(standalone_mode=False)
+    except click.exceptions.Exit as done:
+        sys.exit(done.exit_code)
+    except click.ClickException as err:
+        err.show()
+        sys.exit(err.exit_code)
+    except click.exceptions.Abort:
+        click.echo("overtake: interrupted", err=True)
+        sys.exit(130)
+    except SuiteError as err:
+        click.echo(f"overtake: error: {err}", err=True)
+        sys.exit(err.exit_code)
+    except Exception as err:  # noqa: BLE001 - last resort: one line, never a traceback
+        if os.environ.get("OVERTAKE_DEBUG"):
+            raise
+        click.echo(f"overtake: internal error: {type(err).__name__}: {err} (set OVERTAKE_DEBUG=1 for details)",
+                   err=True)
+        sys.exit(5)
+
+
+if __name__ == "__main__":
+    main()

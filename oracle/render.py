@@ -1,0 +1,28 @@
+"""ASCII drawings of both lanes, for people reading a plan."""
+
+from __future__ import annotations
+
+from spec.constants import AV_CELL, ROAD_CELLS
+from spec.lanes import Lane
+from spec.scenario import State
+
+
+def draw(state: State, targets: tuple[int, ...] = ()) -> list[str]:
+    """Two lines, travel direction to the right: the left lane on top, oncoming below.
+
+    ``A`` the AV, ``T`` a target, ``v`` another left-lane vehicle, ``o`` an oncoming one,
+    ``X`` a vehicle in the AV's cell. Cells outside the window are counted at the edges.
+    """
+    width = ROAD_CELLS + 1
+    rows = {Lane.LEFT: ["."] * width, Lane.RIGHT: ["."] * width}
+    outside = {Lane.LEFT: [0, 0], Lane.RIGHT: [0, 0]}
+    marks = [(Lane.LEFT, c, "T" if i in targets else "v") for i, c in enumerate(state.left_lane)]
+    marks += [(Lane.RIGHT, c, "o") for c in state.right_lane]
+    for lane, cell, mark in marks:
+        if 0 <= cell < width:
+            rows[lane][cell] = mark
+        else:
+            outside[lane][cell >= width] += 1
+    here = rows[state.lane][AV_CELL]
+    rows[state.lane][AV_CELL] = "A" if here == "." else "X"
+    return [f"{lane.value:>5} {outside[lane][0]:>2}< {''.join(rows[lane])} >{outside[lane][1]:<2}" for lane in Lane]

@@ -1,0 +1,121 @@
+"""Properties of the planners over generated valid scenarios."""
+
+from __future__ import annotations
+
+from hypothesis import given
+from hypothesis import strategies as st
+
+from oracle import bitplan, search
+from oracle.answer import Status
+from oracle.interpreter import collision_in, enabled_actions, problem_goal, step, validate
+from oracle.planner import plan
+from spec.actions import Action
+from spec.models import ModelKind
+from spec.scenario import Collision, Problem, Scenario, State, problem_for
+from tests.strategies import scenarios
+
+MODELS = st.sampled_from(list(ModelKind))
+
+
+def all_plans(problem: Problem, max_len: int) -> list[tuple[Action, ...]]:
+    """Every plan of at most ``max_len`` actions, in the action order, by brute-force enumeration.
+
+    A prefix that collides or meets the goal cannot be extended into a plan, so the tree
+    of action sequences is cut there; nothing else is pruned (no visited set).
+    """
+    start = problem.scenario.initial_state()
+    if collision_in(start, problem.rules, 0):
+        return []
+    found: list[tuple[Action, ...]] = []
+
+    def walk(state: State, prefix: tuple[Action, ...]) -> None:
+        if problem_goal(problem, state):
+            found.append(prefix)
+            return
+        if len(prefix) == min(max_len, problem.horizon):
+            return
+        for action in enabled_actions(state, problem.rules):
+            nxt = step(state, action, problem.rules)
+            if not isinstance(nxt, Collision):
+                walk(nxt, (*prefix, action))
+
+    walk(start, ())
+    return found
+
+
+@given(scenarios(horizon=6, max_left=4, span=25), MODELS)
+def test_shortest_is_truly_shortest_and_first_in_order_by_enumeration(scenario: Scenario, model: ModelKind) -> None:
+    problem = problem_for(scenario, model)
+    plans = all_plans(problem, 6)
+    result = bitplan.shortest(problem)
+    if not plans:
+        assert result.status is not Status.PLAN
+        return
+    best = min(len(p) for p in plans)
+    first = min((p for p in plans if len(p) == best), key=lambda p: [list(Action).index(a) for a in p])
+    assert result.status is Status.PLAN and result.actions == first
+
+
+@given(scenarios(), MODELS)
+def test_every_returned_plan_validates_and_never_passes_the_goal_early(scenario: Scenario, model: ModelKind) -> None:
+    problem = problem_for(scenario, model)
+    for result in (search.sensible(problem), bitplan.shortest(problem)):
+        if result.status is Status.PLAN:
+            verdict = validate(problem, result.actions)
+            assert verdict.valid, verdict.reason
+            assert not any(problem_goal(problem, s) for s in verdict.states[:-1])
+
+
+@given(scenarios(), MODELS)
+def test_validate_reproduces_the_planners_states_exactly(scenario: Scenario, model: ModelKind) -> None:
+    problem = problem_for(scenario, model)
+    for result in (search.sensible(problem), bitplan.shortest(problem), search.shortest_reference(problem)):
+        if result.status is Status.PLAN:
+            assert validate(problem, result.actions).states == result.states
+
+
+@given(scenarios(), MODELS)
+def test_shortest_is_never_longer_than_sensible_and_they_agree_on_existence(
+    scenario: Scenario, model: ModelKind
+) -> None:
+    problem = problem_for(scenario, model)
+    dfs, bfs = search.sensible(problem), bitplan.shortest(problem)
+    assert (dfs.status is Status.PLAN) == (bfs.status is Status.PLAN)
+    if bfs.status is Status.PLAN:
+        assert len(bfs.actions) <= len(dfs.actions)
+
+
+@given(scenarios(span=30), MODELS)
+def test_bitset_planner_equals_the_reference_bfs(scenario: Scenario, model: ModelKind) -> None:
+    problem = problem_for(scenario, model)
+    fast, ref = bitplan.shortest(problem), search.shortest_reference(problem)
+    assert (fast.status is Status.PLAN) == (ref.status is Status.PLAN)
+    assert fast.actions == ref.actions
+
+
+@given(scenarios(span=25), MODELS)
+def test_no_plan_of_any_length_is_sound(scenario: Scenario, model: ModelKind) -> None:
+    problem = problem_for(scenario, model)
+    if bitplan.shortest(problem).status is Status.NO_PLAN:
+        longer = problem_for(scenario, model, horizon=45)
+        assert bitplan.shortest(longer).status is not Status.PLAN
+
+
+@given(scenarios(), st.sampled_from(["sensible", "shortest"]))
+def test_pipeline_tries_final_then_preparations(scenario: Scenario, strategy: str) -> None:
+    answer = plan(scenario, strategy)
+    final = problem_for(scenario, ModelKind.FINAL)
+    final_has_plan = bitplan.shortest(final).status is Status.PLAN
+    assert answer.stages[0][0] is ModelKind.FINAL
+    if final_has_plan:
+        assert answer.status is Status.PLAN and answer.model is ModelKind.FINAL
+    elif answer.status is Status.PLAN:
+        assert answer.model is ModelKind.PREPARATIONS
+
+
+def test_incomplete_when_the_state_limit_is_hit() -> None:
+    from spec.scenario import make_scenario
+
+    problem = problem_for(make_scenario("left", [12, 14, 16], [40], 3), ModelKind.FINAL)
+    assert search.sensible(problem, max_states=5).status is Status.INCOMPLETE
+    assert search.shortest_reference(problem, max_states=5).status is Status.INCOMPLETE

@@ -1,0 +1,30 @@
+"""Every built-in scenario gives its expected outcome, on every registered engine and strategy."""
+
+from __future__ import annotations
+
+import pytest
+
+from oracle.engines import load_engines
+from oracle.planner import plan
+from spec.library import BUILTINS, SCENARIO_DIR
+
+CASES = [(b, e, s) for b in BUILTINS for e in load_engines().values() for s in e.strategies
+         if s in ("sensible", "shortest")]
+
+
+def test_every_scenario_file_is_listed() -> None:
+    assert sorted(p.stem for p in SCENARIO_DIR.glob("*.toml")) == sorted(b.name for b in BUILTINS)
+
+
+@pytest.mark.parametrize(("builtin", "engine", "strategy"), CASES,
+                         ids=[f"{b.name}-{e.name}-{s}" for b, e, s in CASES])
+def test_builtin_expected_outcome(builtin, engine, strategy: str) -> None:
+    if engine.name == "spin":
+        pytest.importorskip("shutil").which("spin") or pytest.skip("spin not installed")
+    answer = plan(builtin.load(), strategy, engine=engine)
+    expected = builtin.expected
+    assert (answer.status.value, answer.model.value if answer.model else None) == (expected.status, expected.model)
+    if strategy == "sensible":
+        assert tuple(a.value for a in answer.actions) == expected.sensible
+    else:
+        assert len(answer.actions) == expected.shortest_length
