@@ -55,6 +55,10 @@ class BitSpace:
         self.lanes = [scenario.lane if lc % 2 == 0 else scenario.lane.other for lc in range(rules.max_lane_changes + 1)]
         left_free = self._rows(lambda l: all(c + l != AV_CELL for c in scenario.left_lane))
         col_safe = [all(abs(c - o - AV_CELL) > rules.danger_radius for c in scenario.right_lane) for o in range(width)]
+        right_safe = {
+            t: self._cols([o >= t and all(col_safe[o - k] for k in range(t + 1)) for o in range(width)])
+            for t in {rule.oncoming_ticks for rule in ACTION_RULES.values()}
+        }
         self.moves: list[list[_Move]] = [[] for _ in self.lanes]
         for lc, lane in enumerate(self.lanes):
             for action in ACTION_ORDER:
@@ -65,12 +69,9 @@ class BitSpace:
                 if lc_dst > rules.max_lane_changes:
                     continue
                 t, drow = rule.oncoming_ticks, rule.left_shift_cells
-                if self.lanes[lc_dst] is Lane.LEFT:
-                    safe = left_free
-                else:
-                    cols = [o >= t and all(col_safe[o - k] for k in range(t + 1)) for o in range(width)]
-                    safe = self._cols(cols)
+                safe = left_free if self.lanes[lc_dst] is Lane.LEFT else right_safe[t]
                 self.moves[lc].append(_Move(action, lc, lc_dst, drow, t, drow * width + t, safe))
+        self.flat = [[self._flat_move(m) for m in moves] for moves in self.moves]
         self.over = self._cols([o > self.sat for o in range(width)])
         self.col_sat = self._cols([o == self.sat for o in range(width)])
         self.goals = [self._goal_mask(lane) for lane in self.lanes]
@@ -127,12 +128,19 @@ class BitSpace:
 
     def image(self, move: _Move, x: int) -> int:
         """The positions ``move`` reaches from the set ``x`` without a collision."""
-        y = (x << move.shift if move.shift >= 0 else x >> -move.shift) & move.safe
+        _, shift, safe, stay_row, ticks = self._flat_move(move)
+        y = (x << shift if shift >= 0 else x >> -shift) & safe
+        if stay_row:
+            y |= ((x & stay_row) << ticks) & safe
+        return self.finish(y)
+
+    def _flat_move(self, move: _Move) -> tuple[int, int, int, int, int]:
+        """A move as plain ints; on the merged grid, the end row a shift may also stay in."""
+        stay_row = 0
         if self.merged and move.drow:
             end_row = 1 if move.drow > 0 else self.rows - 2
-            y |= ((x & (self.row_bits << (end_row * self.width))) << move.ticks) & move.safe
-        y = self._saturate(y)
-        return self._merge_ends(y) if self.merged else y
+            stay_row = self.row_bits << (end_row * self.width)
+        return move.lc_dst, move.shift, move.safe, stay_row, move.ticks
 
     def preimage(self, move: _Move, y: int) -> int:
         """The positions from which ``move`` lands in ``y`` (bounded grid only)."""
@@ -143,13 +151,22 @@ class BitSpace:
         return y >> move.shift if move.shift >= 0 else y << -move.shift
 
     def advance(self, layer: list[int]) -> list[int]:
-        """The next layer: every move from every lane-change count."""
+        """The next layer: every move from every lane-change count (the hot loop, kept flat)."""
         out = [0] * len(layer)
         for lc, x in enumerate(layer):
-            if x:
-                for move in self.moves[lc]:
-                    out[move.lc_dst] |= self.image(move, x)
-        return out
+            if not x:
+                continue
+            for lc_dst, shift, safe, stay_row, ticks in self.flat[lc]:
+                y = (x << shift if shift >= 0 else x >> -shift) & safe
+                if stay_row:
+                    y |= ((x & stay_row) << ticks) & safe
+                out[lc_dst] |= y
+        return [self.finish(y) for y in out]
+
+    def finish(self, y: int) -> int:
+        """Saturate ``o`` and, on the merged grid, fold the padding rows into the end rows."""
+        y = self._saturate(y)
+        return self._merge_ends(y) if self.merged else y
 
     def hits_goal(self, layer: list[int]) -> bool:
         """Whether any position of the layer meets the goal."""
@@ -184,10 +201,10 @@ def shortest(problem: Problem) -> SearchResult:
             return SearchResult(Status.PLAN, actions, explored, states=states)
         if not any(layer):
             return SearchResult(Status.NO_PLAN, (), explored, "every path collides")
-    return beyond_horizon(problem, explored)
+    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), explored, f"no plan within {problem.horizon} actions")
 
 
-def beyond_horizon(problem: Problem, explored: int) -> SearchResult:
+def beyond_horizon(problem: Problem, explored: int = 0) -> SearchResult:
     """After an exhaustive bounded search: is there no plan at all, or none within the horizon?"""
     scenario, goal = problem.scenario, problem.goal
     points = [0] + [AV_CELL - c for c in scenario.left_lane]

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from oracle import bitplan, search
-from oracle.answer import SearchResult, Status
+from oracle.answer import SearchResult
 from spec.errors import ScenarioError
 from spec.scenario import Problem
 
@@ -26,6 +26,8 @@ class Engine:
     strategies: tuple[str, ...]
     solve: Solver
     description: str
+    #: Given a problem with no plan within the horizon, proves (NO_PLAN) or not that none exists at all.
+    prove_beyond: Callable[[Problem], SearchResult] | None = None
 
 
 ENGINES: dict[str, Engine] = {}
@@ -70,12 +72,10 @@ def _interpreter(problem: Problem, strategy: str, max_states: int = search.DEFAU
     """The reference engine: explicit DFS for sensible, bitset BFS for shortest."""
     if strategy == "shortest":
         return bitplan.shortest(problem)
-    result = search.sensible(problem, max_states)
-    if result.status is Status.NO_PLAN_WITHIN_HORIZON:
-        return bitplan.beyond_horizon(problem, result.states_explored)
-    return result
+    return search.sensible(problem, max_states)
 
 
 INTERPRETER = register(
-    Engine("interpreter", ("sensible", "shortest"), _interpreter, "Python reference interpreter and planners")
+    Engine("interpreter", ("sensible", "shortest"), _interpreter, "Python reference interpreter and planners",
+           bitplan.beyond_horizon)
 )

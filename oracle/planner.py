@@ -40,6 +40,8 @@ def plan(
         states = _checked_states(eng, problem, result)
         return Answer(Status.PLAN, kind, eng.name, strategy, result.actions, states, explored, elapsed_ms,
                       result.detail, tuple(stages), result.extra)
+    if result.status is not Status.INCOMPLETE:
+        _prove_beyond(eng, scenario, horizon, stages)
     status = _combined(stages)
     return Answer(status, kind, eng.name, strategy, (), (), explored, elapsed_ms, _summary(stages), tuple(stages),
                   result.extra)
@@ -54,6 +56,24 @@ def _checked_states(engine: Engine, problem: Problem, result: SearchResult) -> t
         n = next((i for i, (a, b) in enumerate(zip(result.states, verdict.states)) if a != b), len(result.states))
         raise EngineError(f"engine {engine.name}: its state after step {n} differs from the interpreter's")
     return verdict.states
+
+
+def _prove_beyond(engine: Engine, scenario: Scenario, horizon: int | None,
+                  stages: list[tuple[ModelKind, Status, str]]) -> None:
+    """Upgrade stages to "no plan of any length" where the engine can prove it, last stage first.
+
+    The pipeline's answer is "no plan" only if every stage proves it, so the first stage
+    that cannot be proved ends the work; the stages before it keep their (true) bounded answer.
+    """
+    if engine.prove_beyond is None:
+        return
+    for i in reversed(range(len(stages))):
+        kind, status, _ = stages[i]
+        if status is Status.NO_PLAN_WITHIN_HORIZON:
+            proved = engine.prove_beyond(problem_for(scenario, kind, horizon))
+            stages[i] = (kind, proved.status, proved.detail)
+            if proved.status is not Status.NO_PLAN:
+                return
 
 
 def _combined(stages: list[tuple[ModelKind, Status, str]]) -> Status:
