@@ -53,7 +53,7 @@ class BitSpace:
         self.row_bits = (1 << width) - 1
         self.rep = ((1 << (rows * width)) - 1) // self.row_bits  # bit 0 of every row
         self.lanes = [scenario.lane if lc % 2 == 0 else scenario.lane.other for lc in range(rules.max_lane_changes + 1)]
-        left_free = self._rows(lambda l: all(c + l != AV_CELL for c in scenario.left_lane))
+        left_free = self._rows(lambda off: all(c + off != AV_CELL for c in scenario.left_lane))
         col_safe = [all(abs(c - o - AV_CELL) > rules.danger_radius for c in scenario.right_lane) for o in range(width)]
         right_safe = {
             t: self._cols([o >= t and all(col_safe[o - k] for k in range(t + 1)) for o in range(width)])
@@ -97,10 +97,10 @@ class BitSpace:
         targets = [scenario.left_lane[i] for i in scenario.target_indices]
         mask = (1 << (self.rows * self.width)) - 1
         if goal.targets_behind and targets:
-            mask &= self._rows(lambda l: max(targets) + l < AV_CELL)
+            mask &= self._rows(lambda off: max(targets) + off < AV_CELL)
         if goal.nearest_target_offset is not None:
             offset = goal.nearest_target_offset
-            mask &= self._rows(lambda l: bool(targets) and min(targets) + l == AV_CELL + offset)
+            mask &= self._rows(lambda off: bool(targets) and min(targets) + off == AV_CELL + offset)
         if goal.oncoming_passed and scenario.right_lane:
             threshold = max(scenario.right_lane) - AV_CELL
             mask &= self._cols([o >= threshold for o in range(self.width)])

@@ -218,7 +218,7 @@ def main() -> None:
     except SuiteError as err:
         click.echo(f"overtake: error: {err}", err=True)
         sys.exit(err.exit_code)
-    except Exception as err:  # noqa: BLE001 - last resort: one line, never a traceback
+    except Exception as err:
         if os.environ.get("OVERTAKE_DEBUG"):
             raise
         click.echo(f"overtake: internal error: {type(err).__name__}: {err} (set OVERTAKE_DEBUG=1 for details)",

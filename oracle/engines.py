@@ -7,8 +7,8 @@ when an engine skips a strategy it claims.
 from __future__ import annotations
 
 import importlib
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 from oracle import bitplan, search
 from oracle.answer import SearchResult

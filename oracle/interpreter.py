@@ -6,8 +6,8 @@ never mutating its input.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import Sequence
 
 from spec.actions import ACTION_RULES, Action
 from spec.constants import AV_CELL

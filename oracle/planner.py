@@ -87,4 +87,5 @@ def _combined(stages: list[tuple[ModelKind, Status, str]]) -> Status:
 
 
 def _summary(stages: list[tuple[ModelKind, Status, str]]) -> str:
-    return "; ".join(f"{kind.value}: {status.value}" + (f" ({detail})" if detail else "") for kind, status, detail in stages)
+    parts = (f"{kind.value}: {status.value}" + (f" ({detail})" if detail else "") for kind, status, detail in stages)
+    return "; ".join(parts)

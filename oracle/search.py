@@ -7,7 +7,7 @@ shorter prefix could still complete within the horizon: both searches are exhaus
 from __future__ import annotations
 
 from collections import deque
-from typing import Iterator
+from collections.abc import Iterator
 
 from oracle.answer import SearchResult, Status
 from oracle.interpreter import collision_in, enabled_actions, problem_goal, step

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass
+from typing import TypeVar
 
 from spec.constants import AV_CELL, DEFAULT_HORIZON, MAX_HORIZON, ROAD_CELLS
 from spec.errors import ScenarioError
@@ -17,6 +19,8 @@ from spec.models import (
     goal_kind,
     models_for,
 )
+
+E = TypeVar("E", bound=enum.Enum)
 
 
 @dataclass(frozen=True, slots=True)
@@ -110,10 +114,10 @@ def make_scenario(
     return scenario
 
 
-def _check_enum(kind: type, key: str, value: object) -> object:
+def _check_enum(kind: type[E], key: str, value: object) -> E:
     if isinstance(value, kind):
         return value
-    allowed = [m.value for m in kind]  # type: ignore[attr-defined]
+    allowed = [m.value for m in kind]
     if not isinstance(value, str) or value not in allowed:
         raise ScenarioError(key, value, f"must be one of {', '.join(map(repr, allowed))}")
     return kind(value)

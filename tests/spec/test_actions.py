@@ -45,5 +45,5 @@ def test_lane_changes_are_guarded_by_lane() -> None:
 
 
 def test_unknown_action_is_rejected_with_the_known_names() -> None:
-    with pytest.raises(ActionError, match="unknown action 'fly'.*accelerate"):
+    with pytest.raises(ActionError, match=r"unknown action 'fly'.*accelerate"):
         parse_action("fly")

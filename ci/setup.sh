@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# Install what the suite needs: Spin and gcc from Debian when missing, then this package and its
+# Python dependencies from PyPI (editable, with the dev tools ruff and mypy).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+if ! command -v spin >/dev/null 2>&1 || ! command -v gcc >/dev/null 2>&1; then
+  SUDO=""; [ "$(id -u)" = 0 ] || SUDO="sudo"
+  echo "setup: installing spin and gcc with apt-get" >&2
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq spin gcc >/dev/null
+fi
+python3 -m pip install -q --disable-pip-version-check --root-user-action=ignore -e '.[dev]'
