@@ -10,7 +10,7 @@ import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from oracle import bitplan, search
+from oracle import bitplan, offsets, search
 from oracle.answer import SearchResult
 from spec.errors import ScenarioError
 from spec.scenario import Problem
@@ -69,10 +69,10 @@ def check_strategy(engine: Engine, strategy: str) -> None:
 
 
 def _interpreter(problem: Problem, strategy: str, max_states: int = search.DEFAULT_MAX_STATES) -> SearchResult:
-    """The reference engine: explicit DFS for sensible, bitset BFS for shortest."""
+    """The reference engine: DFS over offsets for sensible, bitset BFS for shortest."""
     if strategy == "shortest":
         return bitplan.shortest(problem)
-    return search.sensible(problem, max_states)
+    return offsets.sensible(problem, max_states)
 
 
 INTERPRETER = register(

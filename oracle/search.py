@@ -28,7 +28,7 @@ def _successors(problem: Problem, state: State) -> Iterator[tuple[Action, State]
             yield action, nxt
 
 
-def _trivial(problem: Problem) -> SearchResult | None:
+def trivial_answer(problem: Problem) -> SearchResult | None:
     """The answer when the initial state already decides: a collision or the goal."""
     start = problem.scenario.initial_state()
     hit = collision_in(start, problem.rules, 0)
@@ -40,8 +40,11 @@ def _trivial(problem: Problem) -> SearchResult | None:
 
 
 def sensible(problem: Problem, max_states: int = DEFAULT_MAX_STATES) -> SearchResult:
-    """Depth-first search in the action order with visited-state pruning (Spin's default search)."""
-    trivial = _trivial(problem)
+    """Depth-first search in the action order with visited-state pruning (Spin's default search).
+
+    The readable reference; ``oracle.offsets.sensible`` is the same search on integers.
+    """
+    trivial = trivial_answer(problem)
     if trivial is not None:
         return trivial
     start = problem.scenario.initial_state()
@@ -67,7 +70,7 @@ def sensible(problem: Problem, max_states: int = DEFAULT_MAX_STATES) -> SearchRe
             path.pop()
             if plan:
                 plan.pop()
-    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(visited))
+    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(visited), f"no plan within {problem.horizon} actions")
 
 
 def shortest_reference(problem: Problem, max_states: int = DEFAULT_MAX_STATES) -> SearchResult:
@@ -75,7 +78,7 @@ def shortest_reference(problem: Problem, max_states: int = DEFAULT_MAX_STATES) -
 
     Slow but plain; the fast planner in ``oracle.bitplan`` is checked against it.
     """
-    trivial = _trivial(problem)
+    trivial = trivial_answer(problem)
     if trivial is not None:
         return trivial
     start = problem.scenario.initial_state()
@@ -93,7 +96,7 @@ def shortest_reference(problem: Problem, max_states: int = DEFAULT_MAX_STATES) -
             if len(parent) >= max_states:
                 return SearchResult(Status.INCOMPLETE, (), len(parent), f"state limit {max_states} reached")
             queue.append(nxt)
-    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(parent))
+    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(parent), f"no plan within {problem.horizon} actions")
 
 
 def _path(

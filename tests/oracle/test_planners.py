@@ -5,7 +5,7 @@ from __future__ import annotations
 from hypothesis import given
 from hypothesis import strategies as st
 
-from oracle import bitplan, search
+from oracle import bitplan, offsets, search
 from oracle.answer import Status
 from oracle.interpreter import collision_in, enabled_actions, problem_goal, step, validate
 from oracle.planner import plan
@@ -59,7 +59,7 @@ def test_shortest_is_truly_shortest_and_first_in_order_by_enumeration(scenario: 
 @given(scenarios(), MODELS)
 def test_every_returned_plan_validates_and_never_passes_the_goal_early(scenario: Scenario, model: ModelKind) -> None:
     problem = problem_for(scenario, model)
-    for result in (search.sensible(problem), bitplan.shortest(problem)):
+    for result in (offsets.sensible(problem), bitplan.shortest(problem)):
         if result.status is Status.PLAN:
             verdict = validate(problem, result.actions)
             assert verdict.valid, verdict.reason
@@ -83,6 +83,14 @@ def test_shortest_is_never_longer_than_sensible_and_they_agree_on_existence(
     assert (dfs.status is Status.PLAN) == (bfs.status is Status.PLAN)
     if bfs.status is Status.PLAN:
         assert len(bfs.actions) <= len(dfs.actions)
+
+
+@given(scenarios(span=30), MODELS)
+def test_offset_dfs_equals_the_state_dfs(scenario: Scenario, model: ModelKind) -> None:
+    problem = problem_for(scenario, model)
+    fast, ref = offsets.sensible(problem), search.sensible(problem)
+    assert (fast.status, fast.actions, fast.states, fast.states_explored) == (
+        ref.status, ref.actions, ref.states, ref.states_explored)
 
 
 @given(scenarios(span=30), MODELS)
