@@ -25,6 +25,20 @@ class Status(enum.Enum):
 
 
 @dataclass(frozen=True, slots=True)
+class Limits:
+    """Bounds on one search: past either, the engine answers ``incomplete``."""
+
+    max_states: int = 2_000_000  # stored states (explicit-state searches)
+    timeout_s: float | None = None  # wall-clock seconds for the whole pipeline
+
+    def remaining(self, started: float, now: float) -> Limits:
+        """The same limits with the time already spent taken off."""
+        if self.timeout_s is None:
+            return self
+        return Limits(self.max_states, max(0.0, self.timeout_s - (now - started)))
+
+
+@dataclass(frozen=True, slots=True)
 class SearchResult:
     """What one search of one model returns."""
 

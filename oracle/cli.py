@@ -17,7 +17,7 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from oracle.answer import Answer, state_to_json
+from oracle.answer import Answer, Limits, state_to_json
 from oracle.engines import load_engines
 from oracle.interpreter import Validation, validate
 from oracle.planner import plan as run_plan
@@ -79,11 +79,16 @@ def cli() -> None:
 @click.option("--model", type=click.Choice(MODELS), default=None, help="Default: the scenario's (auto).")
 @click.option("--horizon", type=int, default=None, help="Maximum plan length (default: the scenario's, 30).")
 @click.option("--engine", default="interpreter", show_default=True, help="An engine name (see `overtake engines`).")
+@click.option("--max-states", type=click.IntRange(min=1), default=Limits().max_states, show_default=True,
+              help="Stored states before the search gives up (answer: incomplete).")
+@click.option("--timeout", type=click.FloatRange(min=0), default=None, help="Seconds before giving up (incomplete).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
-def plan(file: str, strategy: str, model: str | None, horizon: int | None, engine: str, as_json: bool) -> None:
+def plan(file: str, strategy: str, model: str | None, horizon: int | None, engine: str, max_states: int,
+         timeout: float | None, as_json: bool) -> None:
     """Plan an overtake for a scenario FILE (.json/.toml) or a built-in scenario name."""
     scenario = _scenario(file)
-    answer = run_plan(scenario, strategy, ModelChoice(model) if model else None, _horizon(horizon), engine)
+    answer = run_plan(scenario, strategy, ModelChoice(model) if model else None, _horizon(horizon), engine,
+                      Limits(max_states, timeout))
     if as_json:
         _print_json(answer.to_json())
     else:
@@ -209,8 +214,12 @@ def main() -> None:
         cli.main(standalone_mode=False)
     except click.exceptions.Exit as done:
         sys.exit(done.exit_code)
+    except click.UsageError as err:
+        command = err.ctx.command_path if err.ctx else "overtake"
+        click.echo(f"overtake: error: {err.format_message()} (see `{command} --help`)", err=True)
+        sys.exit(2)
     except click.ClickException as err:
-        err.show()
+        click.echo(f"overtake: error: {err.format_message()}", err=True)
         sys.exit(err.exit_code)
     except click.exceptions.Abort:
         click.echo("overtake: interrupted", err=True)

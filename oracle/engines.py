@@ -10,12 +10,12 @@ import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from oracle import bitplan, offsets, search
-from oracle.answer import SearchResult
+from oracle import bitplan, offsets
+from oracle.answer import Limits, SearchResult
 from spec.errors import ScenarioError
 from spec.scenario import Problem
 
-Solver = Callable[[Problem, str], SearchResult]
+Solver = Callable[[Problem, str, Limits], SearchResult]
 
 
 @dataclass(frozen=True, slots=True)
@@ -68,11 +68,15 @@ def check_strategy(engine: Engine, strategy: str) -> None:
         )
 
 
-def _interpreter(problem: Problem, strategy: str, max_states: int = search.DEFAULT_MAX_STATES) -> SearchResult:
-    """The reference engine: DFS over offsets for sensible, bitset BFS for shortest."""
+def _interpreter(problem: Problem, strategy: str, limits: Limits) -> SearchResult:
+    """The reference engine: DFS over offsets for sensible, bitset BFS for shortest.
+
+    The bitset search is bounded by the horizon (at most a few milliseconds), so only
+    the depth-first search watches the limits.
+    """
     if strategy == "shortest":
         return bitplan.shortest(problem)
-    return offsets.sensible(problem, max_states)
+    return offsets.sensible(problem, limits.max_states, limits.timeout_s)
 
 
 INTERPRETER = register(

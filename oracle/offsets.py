@@ -9,6 +9,7 @@ that on generated scenarios. Collisions become set look-ups.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 from oracle.answer import SearchResult, Status
@@ -89,11 +90,12 @@ class OffsetModel:
         return out
 
 
-def sensible(problem: Problem, max_states: int = DEFAULT_MAX_STATES) -> SearchResult:
+def sensible(problem: Problem, max_states: int = DEFAULT_MAX_STATES, timeout_s: float | None = None) -> SearchResult:
     """Depth-first search in the action order with visited-state pruning (Spin's default search)."""
     trivial = trivial_answer(problem)
     if trivial is not None:
         return trivial
+    deadline = None if timeout_s is None else time.monotonic() + timeout_s
     model = OffsetModel(problem)
     start: Key = (0, 0, 0, 0)
     visited = {start}
@@ -109,6 +111,8 @@ def sensible(problem: Problem, max_states: int = DEFAULT_MAX_STATES) -> SearchRe
                 return SearchResult(Status.PLAN, tuple(plan), len(visited), states=_states(problem, plan))
             if len(visited) >= max_states:
                 return SearchResult(Status.INCOMPLETE, (), len(visited), f"state limit {max_states} reached")
+            if deadline is not None and len(visited) % 1024 == 0 and time.monotonic() > deadline:
+                return SearchResult(Status.INCOMPLETE, (), len(visited), f"time limit {timeout_s} s reached")
             stack.append(iter(model.successors(nxt)))
             break
         else:

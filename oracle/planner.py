@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 
-from oracle.answer import Answer, SearchResult, Status
+from oracle.answer import Answer, Limits, SearchResult, Status
 from oracle.engines import Engine, check_strategy, get_engine
 from oracle.interpreter import validate
 from spec.errors import EngineError
@@ -18,6 +18,7 @@ def plan(
     model: ModelChoice | None = None,
     horizon: int | None = None,
     engine: str | Engine = "interpreter",
+    limits: Limits | None = None,
 ) -> Answer:
     """Plan for ``scenario`` with one engine; every plan returned has been validated."""
     eng = engine if isinstance(engine, Engine) else get_engine(engine)
@@ -30,7 +31,7 @@ def plan(
     kind = models_for(choice)[0]
     for kind in models_for(choice):
         problem = problem_for(scenario, kind, horizon)
-        result = eng.solve(problem, strategy)
+        result = eng.solve(problem, strategy, (limits or Limits()).remaining(started, time.perf_counter()))
         explored += result.states_explored
         stages.append((kind, result.status, result.detail))
         if result.status in (Status.PLAN, Status.INCOMPLETE):

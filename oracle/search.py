@@ -9,13 +9,13 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Iterator
 
-from oracle.answer import SearchResult, Status
+from oracle.answer import Limits, SearchResult, Status
 from oracle.interpreter import collision_in, enabled_actions, problem_goal, step
 from spec.actions import Action
 from spec.scenario import Collision, Problem, State
 
 #: Default bound on stored states before a search reports ``incomplete``.
-DEFAULT_MAX_STATES = 2_000_000
+DEFAULT_MAX_STATES = Limits().max_states
 
 
 def _successors(problem: Problem, state: State) -> Iterator[tuple[Action, State]]:

@@ -44,6 +44,13 @@ def test_plan_exit_one_without_a_plan(name: str, code: int, status: str) -> None
     assert done.returncode == code and json.loads(done.stdout)["status"] == status
 
 
+def test_plan_exit_three_when_a_limit_is_hit() -> None:
+    done = run("plan", "three_targets", "--max-states", "5", "--json")
+    answer = json.loads(done.stdout)
+    assert done.returncode == 3 and answer["status"] == "incomplete" and "state limit 5" in answer["detail"]
+    assert answer["actions"] == []
+
+
 def test_validate_valid_and_invalid(tmp_path: Path) -> None:
     path = write(tmp_path, "s.json", '{"lane": "left", "left_lane": [12], "right_lane": [], "targets": 1}')
     ok = run("validate", path, "--actions", "accelerate,right_lane_change,accelerate,accelerate,left_lane_change",
@@ -98,6 +105,10 @@ def test_missing_file_and_unknown_action_and_engine(tmp_path: Path) -> None:
         (("validate", "one_target", "--actions", "fly"), "unknown action 'fly'"),
         (("plan", "one_target", "--engine", "quantum"), "unknown engine"),
         (("plan", "one_target", "--horizon", "9999"), "--horizon"),
+        (("plan", "one_target", "--strategy", "fastest"), "--strategy"),
+        (("plan", "one_target", "--max-states", "0"), "--max-states"),
+        (("plan",), "Missing argument"),
+        (("fly",), "No such command"),
     ]:
         done = run(*args)
         assert done.returncode == 2 and needle in done.stderr and len(done.stderr.strip().splitlines()) == 1
