@@ -18,7 +18,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from oracle.answer import SearchResult, Status
-from oracle.interpreter import collision_in, problem_goal, step
+from oracle.interpreter import problem_goal, step
+from oracle.search import trivial_answer
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.constants import AV_CELL
 from spec.errors import EngineError
@@ -183,12 +184,9 @@ def saturation(problem: Problem) -> int:
 
 def shortest(problem: Problem) -> SearchResult:
     """The first shortest plan in the action order, or a proof that none exists."""
-    start_state = problem.scenario.initial_state()
-    hit = collision_in(start_state, problem.rules, 0)
-    if hit is not None:
-        return SearchResult(Status.NO_PLAN, (), 1, f"initial state: {hit.describe()}")
-    if problem_goal(problem, start_state):
-        return SearchResult(Status.PLAN, (), 1, "goal holds in the initial state", (start_state,))
+    trivial = trivial_answer(problem)
+    if trivial is not None:
+        return trivial
     space = BitSpace(problem, -problem.horizon, problem.horizon)
     layers = [[space.start()] + [0] * (len(space.lanes) - 1)]
     explored = 1

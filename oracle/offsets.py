@@ -9,12 +9,11 @@ that on generated scenarios. Collisions become set look-ups.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 from oracle.answer import SearchResult, Status
 from oracle.interpreter import step
-from oracle.search import DEFAULT_MAX_STATES, trivial_answer
+from oracle.search import DEFAULT_MAX_STATES, depth_first, trivial_answer
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.constants import AV_CELL
 from spec.errors import EngineError
@@ -95,34 +94,17 @@ def sensible(problem: Problem, max_states: int = DEFAULT_MAX_STATES, timeout_s: 
     trivial = trivial_answer(problem)
     if trivial is not None:
         return trivial
-    deadline = None if timeout_s is None else time.monotonic() + timeout_s
     model = OffsetModel(problem)
     start: Key = (0, 0, 0, 0)
-    visited = {start}
-    plan: list[Action] = []
-    stack = [iter(model.successors(start))]
-    while stack:
-        for action, nxt in stack[-1]:
-            if nxt in visited:
-                continue
-            visited.add(nxt)
-            plan.append(action)
-            if model.goal(nxt):
-                return SearchResult(Status.PLAN, tuple(plan), len(visited), states=_states(problem, plan))
-            if len(visited) >= max_states:
-                return SearchResult(Status.INCOMPLETE, (), len(visited), f"state limit {max_states} reached")
-            if deadline is not None and len(visited) % 1024 == 0 and time.monotonic() > deadline:
-                return SearchResult(Status.INCOMPLETE, (), len(visited), f"time limit {timeout_s} s reached")
-            stack.append(iter(model.successors(nxt)))
-            break
-        else:
-            stack.pop()
-            if plan:
-                plan.pop()
-    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(visited), f"no plan within {problem.horizon} actions")
+    status, actions, _, explored, detail = depth_first(start, model.successors, model.goal, max_states, timeout_s)
+    if status is Status.PLAN:
+        return SearchResult(status, actions, explored, detail, _states(problem, actions))
+    if status is Status.NO_PLAN_WITHIN_HORIZON:
+        detail = f"no plan within {problem.horizon} actions"
+    return SearchResult(status, actions, explored, detail)
 
 
-def _states(problem: Problem, plan: list[Action]) -> tuple[State, ...]:
+def _states(problem: Problem, plan: tuple[Action, ...]) -> tuple[State, ...]:
     """The interpreter's states along the plan; a collision means the two representations disagree."""
     states = [problem.scenario.initial_state()]
     for n, action in enumerate(plan, start=1):

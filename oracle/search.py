@@ -6,13 +6,17 @@ shorter prefix could still complete within the horizon: both searches are exhaus
 
 from __future__ import annotations
 
+import time
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Callable, Hashable, Iterable, Iterator
+from typing import TypeVar
 
 from oracle.answer import Limits, SearchResult, Status
 from oracle.interpreter import collision_in, enabled_actions, problem_goal, step
 from spec.actions import Action
 from spec.scenario import Collision, Problem, State
+
+K = TypeVar("K", bound=Hashable)
 
 #: Default bound on stored states before a search reports ``incomplete``.
 DEFAULT_MAX_STATES = Limits().max_states
@@ -39,6 +43,47 @@ def trivial_answer(problem: Problem) -> SearchResult | None:
     return None
 
 
+def depth_first(
+    start: K,
+    successors: Callable[[K], Iterable[tuple[Action, K]]],
+    is_goal: Callable[[K], bool],
+    max_states: int = DEFAULT_MAX_STATES,
+    timeout_s: float | None = None,
+) -> tuple[Status, tuple[Action, ...], tuple[K, ...], int, str]:
+    """Depth-first search in successor order with visited-state pruning, stopping at the first goal.
+
+    Generic over the state representation, so that the readable search over interpreter
+    states and the fast one over integer offsets are the same algorithm. Returns
+    (status, actions, states along the plan, states stored, detail).
+    """
+    deadline = None if timeout_s is None else time.monotonic() + timeout_s
+    visited = {start}
+    plan: list[Action] = []
+    path = [start]
+    stack = [iter(successors(start))]
+    while stack:
+        for action, nxt in stack[-1]:
+            if nxt in visited:
+                continue
+            visited.add(nxt)
+            plan.append(action)
+            path.append(nxt)
+            if is_goal(nxt):
+                return Status.PLAN, tuple(plan), tuple(path), len(visited), ""
+            if len(visited) >= max_states:
+                return Status.INCOMPLETE, (), (), len(visited), f"state limit {max_states} reached"
+            if deadline is not None and len(visited) % 1024 == 0 and time.monotonic() > deadline:
+                return Status.INCOMPLETE, (), (), len(visited), f"time limit {timeout_s} s reached"
+            stack.append(iter(successors(nxt)))
+            break
+        else:
+            stack.pop()
+            path.pop()
+            if plan:
+                plan.pop()
+    return Status.NO_PLAN_WITHIN_HORIZON, (), (), len(visited), ""
+
+
 def sensible(problem: Problem, max_states: int = DEFAULT_MAX_STATES) -> SearchResult:
     """Depth-first search in the action order with visited-state pruning (Spin's default search).
 
@@ -47,30 +92,12 @@ def sensible(problem: Problem, max_states: int = DEFAULT_MAX_STATES) -> SearchRe
     trivial = trivial_answer(problem)
     if trivial is not None:
         return trivial
-    start = problem.scenario.initial_state()
-    visited = {start}
-    plan: list[Action] = []
-    path = [start]
-    stack = [_successors(problem, start)]
-    while stack:
-        for action, nxt in stack[-1]:
-            if nxt in visited:
-                continue
-            visited.add(nxt)
-            plan.append(action)
-            path.append(nxt)
-            if problem_goal(problem, nxt):
-                return SearchResult(Status.PLAN, tuple(plan), len(visited), states=tuple(path))
-            if len(visited) >= max_states:
-                return SearchResult(Status.INCOMPLETE, (), len(visited), f"state limit {max_states} reached")
-            stack.append(_successors(problem, nxt))
-            break
-        else:
-            stack.pop()
-            path.pop()
-            if plan:
-                plan.pop()
-    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(visited), f"no plan within {problem.horizon} actions")
+    status, actions, states, explored, detail = depth_first(
+        problem.scenario.initial_state(), lambda s: _successors(problem, s), lambda s: problem_goal(problem, s),
+        max_states)
+    if status is Status.NO_PLAN_WITHIN_HORIZON:
+        detail = f"no plan within {problem.horizon} actions"
+    return SearchResult(status, actions, explored, detail, states)
 
 
 def shortest_reference(problem: Problem, max_states: int = DEFAULT_MAX_STATES) -> SearchResult:
