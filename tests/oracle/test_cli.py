@@ -115,11 +115,27 @@ def test_missing_file_and_unknown_action_and_engine(tmp_path: Path) -> None:
 
 
 def test_unreadable_file_is_bad_input(tmp_path: Path) -> None:
-    done = run("plan", str(tmp_path))  # a directory: exists but cannot be read as a file
-    assert done.returncode == 2 and "unknown format" in done.stderr
+    folder = tmp_path / "scenario.json"
+    folder.mkdir()  # exists, has the right suffix, but cannot be read as a file
+    done = run("plan", str(folder))
+    assert done.returncode == 2 and "cannot read" in done.stderr and str(folder) in done.stderr
 
 
 def test_demo_runs_every_builtin_and_matches_expectations() -> None:
     done = run("demo", "--engine", "interpreter")
     assert done.returncode == 0, done.stdout + done.stderr
     assert "all answers as expected" in done.stdout
+
+
+def test_scenarios_lists_the_library_with_expectations() -> None:
+    done = run("scenarios", "--json")
+    listed = {s["name"]: s for s in json.loads(done.stdout)}
+    assert done.returncode == 0 and listed["prep_case_a"]["model"] == "preparations"
+    assert all(Path(s["path"]).exists() for s in listed.values())
+
+
+def test_engines_lists_every_registered_engine() -> None:
+    from oracle.engines import load_engines
+
+    done = run("engines")
+    assert done.returncode == 0 and all(name in done.stdout for name in load_engines())
