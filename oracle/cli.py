@@ -17,7 +17,8 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from oracle.answer import Answer, Limits, state_to_json
+from oracle.answer import Answer, Limits, Status, state_to_json
+from oracle.conform import disagreements
 from oracle.engines import load_engines
 from oracle.interpreter import Validation, validate
 from oracle.planner import plan as run_plan
@@ -31,6 +32,8 @@ from spec.models import ModelChoice, models_for
 from spec.scenario import Scenario, problem_for
 
 STRATEGIES = ("sensible", "shortest", "optimal")
+#: Exit code when engines asked side by side (``--engine all``) disagree.
+DISAGREE_EXIT = 6
 MODELS = [m.value for m in ModelChoice]
 
 out = Console(highlight=False, width=None if sys.stdout.isatty() else 120)
@@ -87,13 +90,37 @@ def plan(file: str, strategy: str, model: str | None, horizon: int | None, engin
          timeout: float | None, as_json: bool) -> None:
     """Plan an overtake for a scenario FILE (.json/.toml) or a built-in scenario name."""
     scenario = _scenario(file)
-    answer = run_plan(scenario, strategy, ModelChoice(model) if model else None, _horizon(horizon), engine,
-                      Limits(max_states, timeout))
+    choice, limits = ModelChoice(model) if model else None, Limits(max_states, timeout)
+    if engine == "all":
+        sys.exit(_plan_all(scenario, strategy, choice, _horizon(horizon), limits, as_json))
+    answer = run_plan(scenario, strategy, choice, _horizon(horizon), engine, limits)
     if as_json:
         _print_json(answer.to_json())
     else:
         _print_answer(scenario, answer)
     sys.exit(answer.status.exit_code)
+
+
+def _plan_all(scenario: Scenario, strategy: str, model: ModelChoice | None, horizon: int | None, limits: Limits,
+              as_json: bool) -> int:
+    """Run every engine that answers ``strategy``, side by side, and say whether they agree."""
+    engines = [e for e in load_engines().values() if strategy in e.strategies]
+    answers = [run_plan(scenario, strategy, model, horizon, e, limits) for e in engines]
+    problems = disagreements(answers)
+    if as_json:
+        _print_json({"strategy": strategy, "answers": [a.to_json() for a in answers], "agree": not problems,
+                     "disagreements": problems})
+    else:
+        table = Table(title=f"every engine, strategy {strategy}")
+        for col in ("engine", "status", "model", "length", "plan", "ms"):
+            table.add_column(col, overflow="fold")
+        for a in answers:
+            table.add_row(a.engine, a.status.value, a.model.value if a.model else "-", str(len(a.actions)),
+                          _abbrev(a), f"{a.elapsed_ms:.1f}")
+        out.print(table)
+        out.print(f"agreement: all {len(answers)} engines agree" if not problems
+                  else "DISAGREEMENT: " + "; ".join(problems))
+    return DISAGREE_EXIT if problems else answers[0].status.exit_code
 
 
 def _print_answer(scenario: Scenario, answer: Answer) -> None:
@@ -171,29 +198,40 @@ def engines() -> None:
 @click.option("--strategy", type=click.Choice(STRATEGIES), default="sensible", show_default=True)
 @click.option("--engine", "engine_names", multiple=True, help="Engines to run (default: every registered one).")
 def demo(strategy: str, engine_names: tuple[str, ...]) -> None:
-    """Plan every built-in scenario and print a table; exit 1 if any answer differs from its expectation."""
-    names = engine_names or tuple(load_engines())
+    """Plan every built-in scenario with every engine, side by side; exit 1 on any unexpected answer."""
+    registry = load_engines()
+    for name in engine_names:
+        if name not in registry:
+            raise ScenarioError("--engine", name, f"unknown engine (known: {', '.join(registry)})")
+    engines = [registry[n] for n in engine_names or registry if strategy in registry[n].strategies]
     table = Table(title=f"overtake demo: built-in scenarios, strategy {strategy}")
-    for col in ("scenario", "engine", "status", "model", "plan", "length", "ms", "expected"):
-        table.add_column(col, overflow="fold")
-    mismatches = 0
+    table.add_column("scenario", no_wrap=True)
+    table.add_column("expected")
+    for engine in engines:
+        table.add_column(f"{engine.name}: plan (length) ms", overflow="fold")
+    table.add_column("agree")
+    unexpected = 0
     for b in BUILTINS:
-        for name in names:
-            engine = load_engines().get(name)
-            if engine is None:
-                raise ScenarioError("--engine", name, f"unknown engine (known: {', '.join(load_engines())})")
-            if strategy not in engine.strategies:
-                continue
-            answer = run_plan(b.load(), strategy, engine=engine)
-            ok = _matches(answer, b.expected, strategy)
-            mismatches += not ok
-            table.add_row(b.name, name, answer.status.value, answer.model.value if answer.model else "-",
-                          " ".join(_short(a) for a in answer.actions) or "-", str(len(answer.actions)),
-                          f"{answer.elapsed_ms:.1f}", "ok" if ok else f"EXPECTED {b.expected.status}")
+        answers = [run_plan(b.load(), strategy, engine=e) for e in engines]
+        cells = []
+        for a in answers:
+            ok = _matches(a, b.expected, strategy)
+            unexpected += not ok
+            cells.append(f"{_abbrev(a)} ({len(a.actions)}) {a.elapsed_ms:.1f}" + ("" if ok else " UNEXPECTED"))
+        expected = f"{b.expected.status}, {b.expected.model}"
+        table.add_row(b.name, expected, *cells, "yes" if not disagreements(answers) else "NO")
     out.print(table)
-    out.print("actions: L left_lane_change, A accelerate, R right_lane_change, D drive, B brake")
-    out.print(f"{'all answers as expected' if not mismatches else f'{mismatches} answer(s) differ from expectation'}")
-    sys.exit(1 if mismatches else 0)
+    out.print("plans: L left_lane_change, A accelerate, R right_lane_change, D drive, B brake; "
+              "(n) actions; ms per plan, whole pipeline")
+    out.print("all answers as expected" if not unexpected else f"{unexpected} answer(s) differ from expectation")
+    sys.exit(1 if unexpected else 0)
+
+
+def _abbrev(answer: Answer) -> str:
+    """A plan as letters, or the status when there is none."""
+    if answer.status is not Status.PLAN:
+        return answer.status.value
+    return " ".join(_short(a) for a in answer.actions) or "(empty)"
 
 
 def _short(action: Action) -> str:
