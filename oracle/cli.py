@@ -19,10 +19,12 @@ from rich.table import Table
 
 from oracle.answer import Answer, Limits, Status, state_to_json
 from oracle.conform import disagreements
-from oracle.engines import load_engines
+from oracle.engines import check_strategy, get_engine, load_engines
 from oracle.interpreter import Validation, validate
 from oracle.planner import plan as run_plan
 from oracle.render import draw
+from oracle.shrink import engines_disagree, to_toml
+from oracle.shrink import shrink as shrink_scenario
 from spec.actions import Action, parse_action
 from spec.constants import MAX_HORIZON
 from spec.errors import ScenarioError, SuiteError
@@ -232,6 +234,37 @@ def _abbrev(answer: Answer) -> str:
     if answer.status is not Status.PLAN:
         return answer.status.value
     return " ".join(_short(a) for a in answer.actions) or "(empty)"
+
+
+@cli.command()
+@click.argument("file")
+@click.option("--engine", "engine_names", multiple=True, required=True,
+              help="Two or more engines to compare (repeat the option).")
+@click.option("--strategy", type=click.Choice(STRATEGIES), default="sensible", show_default=True)
+@click.option("--out", type=click.Path(dir_okay=False, writable=True), default=None,
+              help="Write the reproducer here (TOML) instead of printing it.")
+def shrink(file: str, engine_names: tuple[str, ...], strategy: str, out: str | None) -> None:
+    """Shrink a scenario on which engines disagree to a minimal reproducer."""
+    scenario = _scenario(file)
+    engines = [get_engine(n) for n in engine_names]
+    if len(engines) < 2:
+        raise ScenarioError("--engine", engine_names, "name at least two engines to compare")
+    for engine in engines:
+        check_strategy(engine, strategy)
+    fails = engines_disagree(engines, strategy)
+    if not fails(scenario):
+        click.echo(f"engines {', '.join(engine_names)} agree on {file}: nothing to shrink")
+        sys.exit(0)
+    small, checks = shrink_scenario(scenario, fails)
+    answers = [run_plan(small, strategy, engine=e) for e in engines]
+    why = "; ".join(disagreements(answers))
+    text = to_toml(small, f"minimal reproducer from {file} ({checks} checks), strategy {strategy}:\n{why}")
+    if out:
+        Path(out).write_text(text)
+        click.echo(f"wrote {out}: {why}")
+    else:
+        click.echo(text, nl=False)
+    sys.exit(DISAGREE_EXIT)
 
 
 def _short(action: Action) -> str:
