@@ -1,0 +1,108 @@
+"""Conformance campaign: registered engines must agree on generated scenarios, plan for plan.
+
+Usage: python -m ci.conform --engines interpreter,spin --strategy sensible --count 500 --seed 7 --out out/conform
+
+Every scenario's verdict is appended to ``OUT/results.jsonl`` as it is decided, so an
+interrupted campaign resumes where it stopped (same seed, same scenarios). Each
+disagreement is shrunk to a minimal reproducer ``OUT/repro-N.toml``. Exit 0 when all
+agree, 6 on any disagreement, 2 on bad arguments.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import json
+import sys
+from pathlib import Path
+
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+from ci.gen import random_scenarios
+from oracle.answer import Limits
+from oracle.conform import disagreements
+from oracle.engines import check_strategy, get_engine
+from oracle.planner import plan
+from oracle.shrink import engines_disagree, shrink, to_toml
+from spec.errors import SuiteError
+from spec.files import scenario_to_dict
+
+DISAGREE_EXIT = 6
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--engines", default="interpreter", help="comma-separated; the first is the reference")
+    parser.add_argument("--strategy", default="sensible")
+    parser.add_argument("--count", type=int, default=500)
+    parser.add_argument("--seed", type=int, default=7)
+    parser.add_argument("--horizon", type=int, default=30)
+    parser.add_argument("--timeout", type=float, default=None, help="seconds per scenario and engine")
+    parser.add_argument("--out", default="out/conform")
+    args = parser.parse_args(argv)
+    console = Console(stderr=True)
+    try:
+        engines = [get_engine(name.strip()) for name in args.engines.split(",")]
+        for engine in engines:
+            check_strategy(engine, args.strategy)
+    except SuiteError as err:
+        console.print(f"conform: error: {err}")
+        return err.exit_code
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    results = out / "results.jsonl"
+    done = _done(results, args)
+    console.print(f"seed {args.seed}; {args.count} scenarios; engines {args.engines}; strategy {args.strategy}; "
+                  f"resuming after {len(done)}" if done else
+                  f"seed {args.seed}; {args.count} scenarios; engines {args.engines}; strategy {args.strategy}")
+    limits = Limits(timeout_s=args.timeout)
+    scenarios = itertools.islice(random_scenarios(args.seed, horizon=args.horizon), args.count)
+    bad = sum(1 for r in done.values() if r["disagreements"])
+    columns = (TextColumn("conform"), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[bad]} disagree"),
+               TimeRemainingColumn())
+    with Progress(*columns, console=console) as progress, results.open("a") as log:
+        if results.stat().st_size and not results.read_bytes().endswith(b"\n"):
+            log.write("\n")  # an interrupted run left half a line: start afresh after it
+        task = progress.add_task("conform", total=args.count, completed=len(done), bad=bad)
+        for index, scenario in enumerate(scenarios):
+            if index in done:
+                continue
+            answers = [plan(scenario, args.strategy, engine=e, limits=limits) for e in engines]
+            problems = disagreements(answers)
+            record = {"index": index, "seed": args.seed, "strategy": args.strategy, "engines": args.engines,
+                      "scenario": scenario_to_dict(scenario), "statuses": [a.status.value for a in answers],
+                      "disagreements": problems}
+            if problems:
+                bad += 1
+                small, _ = shrink(scenario, engines_disagree(engines, args.strategy, limits))
+                repro = out / f"repro-{index}.toml"
+                repro.write_text(to_toml(small, f"seed {args.seed}, scenario {index}: " + "; ".join(problems)))
+                record["reproducer"] = str(repro)
+            log.write(json.dumps(record) + "\n")
+            log.flush()
+            progress.update(task, advance=1, bad=bad)
+    console.print(f"conform: {args.count} scenarios, {bad} disagreement(s); results in {results}")
+    print(f"{args.count - bad} passed, {bad} failed")
+    return DISAGREE_EXIT if bad else 0
+
+
+def _done(results: Path, args: argparse.Namespace) -> dict[int, dict[str, object]]:
+    """Verdicts already recorded by an earlier run of the same campaign (same seed, engines, strategy)."""
+    if not results.exists():
+        return {}
+    done = {}
+    for line in results.read_text().splitlines():
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError:
+            continue  # a line cut short by an interruption: decide that scenario again
+        same = (record.get("seed"), record.get("engines"), record.get("strategy")) == (
+            args.seed, args.engines, args.strategy)
+        if same and isinstance(record.get("index"), int):
+            done[record["index"]] = record
+    return done
+
+
+if __name__ == "__main__":
+    sys.exit(main())
