@@ -24,6 +24,7 @@ from oracle import search
 from oracle.answer import Status
 from oracle.engines import Engine, register
 from oracle.planner import plan
+from spec.constants import DEFAULT_HORIZON
 from spec.library import BUILTINS
 from spec.scenario import Scenario
 
@@ -57,7 +58,7 @@ def main() -> None:
     args = parser.parse_args()
     console = Console(width=120)
     console.print(f"seed {args.seed}; {args.count} generated scenarios (<= 5 left, <= 2 oncoming), half without "
-                  f"a plan; horizon 30; {platform.processor() or platform.machine()}, "
+                  f"a plan; horizon {DEFAULT_HORIZON}; {platform.processor() or platform.machine()}, "
                   f"python {platform.python_version()}, {time.strftime('%Y-%m-%d')}")
 
     def has_plan(s: Scenario) -> bool:

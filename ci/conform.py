@@ -25,6 +25,7 @@ from oracle.conform import disagreements
 from oracle.engines import check_strategy, get_engine
 from oracle.planner import plan
 from oracle.shrink import engines_disagree, shrink, to_toml
+from spec.constants import DEFAULT_HORIZON
 from spec.errors import SuiteError
 from spec.files import scenario_to_dict
 
@@ -37,7 +38,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--strategy", default="sensible")
     parser.add_argument("--count", type=int, default=500)
     parser.add_argument("--seed", type=int, default=7)
-    parser.add_argument("--horizon", type=int, default=30)
+    parser.add_argument("--horizon", type=int, default=DEFAULT_HORIZON)
     parser.add_argument("--timeout", type=float, default=None, help="seconds per scenario and engine")
     parser.add_argument("--out", default="out/conform")
     args = parser.parse_args(argv)

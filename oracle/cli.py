@@ -26,7 +26,7 @@ from oracle.render import draw
 from oracle.shrink import engines_disagree, to_toml
 from oracle.shrink import shrink as shrink_scenario
 from spec.actions import Action, parse_action
-from spec.constants import MAX_HORIZON
+from spec.constants import DEFAULT_HORIZON, MAX_HORIZON
 from spec.errors import ScenarioError, SuiteError
 from spec.files import load_scenario
 from spec.library import BUILTINS, builtin
@@ -82,7 +82,8 @@ def cli() -> None:
 @click.argument("file")
 @click.option("--strategy", type=click.Choice(STRATEGIES), default="sensible", show_default=True)
 @click.option("--model", type=click.Choice(MODELS), default=None, help="Default: the scenario's (auto).")
-@click.option("--horizon", type=int, default=None, help="Maximum plan length (default: the scenario's, 30).")
+@click.option("--horizon", type=int, default=None,
+              help=f"Maximum plan length (default: the scenario's, else {DEFAULT_HORIZON}).")
 @click.option("--engine", default="interpreter", show_default=True, help="An engine name (see `overtake engines`).")
 @click.option("--max-states", type=click.IntRange(min=1), default=Limits().max_states, show_default=True,
               help="Stored states before the search gives up (answer: incomplete).")
