@@ -1,0 +1,205 @@
+"""Run Spin: render, compile (once, cached), search with pan, replay the trail into actions and states.
+
+Every run works in its own temporary directory, so concurrent runs never share a
+``pan.c`` or a trail, and no trail from an earlier run can be replayed by mistake.
+pan's own words decide the answer: an assertion violation with a trail is a plan;
+"errors: 0" with a complete search is "no plan within the horizon"; a depth or memory
+limit or a time-out is "incomplete"; anything else is an engine error.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+
+from oracle.answer import SearchResult, Status
+from promela.render import ENV_VAR, Shape, render, render_for, scenario_values, shape_of
+from spec.actions import Action
+from spec.errors import EngineError, ToolMissing
+from spec.lanes import Lane
+from spec.scenario import Problem, State
+
+MODEL_FILE = "model.pml"
+#: gcc flags: SAFETY (no cycle detection needed), a memory bound pan reports, no optimisation
+#: for the compile-every-time pipeline would be unfair to it, so both modes use -O2.
+CFLAGS = ("-O2", "-DSAFETY", "-DMEMLIM=2048", "-w")
+HASH_BITS = 16  # pan's default table (-w24) costs ~130 ms to clear; these models are small
+COMPILE_TIMEOUT_S = 300.0
+INSTALL_HINT = {"spin": "apt-get install spin", "gcc": "apt-get install gcc"}
+
+
+@dataclass(frozen=True, slots=True)
+class Verifier:
+    """A compiled pan binary and whether it came from the cache."""
+
+    path: Path
+    cached: bool
+
+
+def check_tools() -> None:
+    """Raise ToolMissing, with the install command, when spin or gcc is not on PATH."""
+    for tool in ("spin", "gcc"):
+        if shutil.which(tool) is None:
+            raise ToolMissing(f"{tool} not found on PATH: install it with `{INSTALL_HINT[tool]}` "
+                              f"(Spin needs gcc as its preprocessor and compiler)")
+
+
+@cache
+def tool_versions() -> str:
+    """Spin's and gcc's version lines: part of the cache key and of every answer."""
+    check_tools()
+    spin = _run(["spin", "-V"], timeout=30).stdout.strip().splitlines()
+    gcc = _run(["gcc", "--version"], timeout=30).stdout.strip().splitlines()
+    return f"{spin[0] if spin else 'spin ?'}; {gcc[0] if gcc else 'gcc ?'}"
+
+
+def cache_dir() -> Path:
+    """Where compiled verifiers live: $OVERTAKE_CACHE, else $XDG_CACHE_HOME/overtake, else ~/.cache/overtake."""
+    if os.environ.get("OVERTAKE_CACHE"):
+        return Path(os.environ["OVERTAKE_CACHE"])
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "overtake"
+
+
+def verifier(shape: Shape, strategy: str) -> Verifier:
+    """The compiled verifier for ``shape``: from the cache, or compiled once and cached."""
+    source = render(shape)
+    flags = _flags(strategy)
+    key = hashlib.sha256("\n".join([source, " ".join(flags), tool_versions()]).encode()).hexdigest()[:24]
+    target = cache_dir() / f"pan-{shape.model.value}-{shape.goal.value}-{strategy}-{key}"
+    if (target / "pan").exists():
+        return Verifier(target / "pan", True)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=target.parent, prefix=".build-") as build:
+        _compile(Path(build), source, flags)
+        try:
+            os.rename(build, target)  # atomic: a concurrent build of the same key wins or loses whole
+            os.mkdir(build)  # for TemporaryDirectory's clean-up
+        except OSError:
+            if not (target / "pan").exists():
+                raise
+    return Verifier(target / "pan", False)
+
+
+def _flags(strategy: str) -> list[str]:
+    return [*CFLAGS, "-DBFS"] if strategy == "shortest" else list(CFLAGS)
+
+
+def _compile(folder: Path, source: str, flags: list[str]) -> None:
+    (folder / MODEL_FILE).write_text(source)
+    spin = _run(["spin", "-a", MODEL_FILE], cwd=folder, timeout=COMPILE_TIMEOUT_S)
+    if spin.returncode != 0 or not (folder / "pan.c").exists():
+        raise EngineError(f"spin -a failed on the rendered model: {_last_line(spin)}")
+    gcc = _run(["gcc", *flags, "-o", "pan", "pan.c"], cwd=folder, timeout=COMPILE_TIMEOUT_S)
+    if gcc.returncode != 0:
+        raise EngineError(f"gcc failed on pan.c: {_last_line(gcc)}")
+
+
+def search(problem: Problem, strategy: str, timeout_s: float | None = None) -> SearchResult:
+    """Compile-once planning: the cached verifier, the scenario injected through the environment."""
+    check_tools()
+    started = time.perf_counter()
+    built = verifier(shape_of(problem), strategy)
+    env = {**os.environ, ENV_VAR: scenario_values(problem)}
+    with tempfile.TemporaryDirectory(prefix="overtake-spin-") as work:
+        folder = Path(work)
+        outcome = _pan(folder, [str(built.path)], problem, env, timeout_s, started)
+        if outcome is not None:
+            return _with_extra(outcome, built.cached, "compile-once")
+        replay = _run([str(built.path), "-r", f"-w{HASH_BITS}", f"-m{problem.horizon + 10}", f"{MODEL_FILE}.trail"],
+                      cwd=folder, env=env, timeout=60)
+        return _with_extra(_plan_from(replay.stdout, problem), built.cached, "compile-once")
+
+
+def search_compiling(problem: Problem, strategy: str, timeout_s: float | None = None) -> SearchResult:
+    """The paper's pipeline: write the scenario into the model, spin -a, gcc, pan, replay with spin -t."""
+    check_tools()
+    started = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="overtake-spin-") as work:
+        folder = Path(work)
+        _compile(folder, render_for(problem), _flags(strategy))
+        outcome = _pan(folder, ["./pan"], problem, dict(os.environ), timeout_s, started)
+        if outcome is not None:
+            return _with_extra(outcome, False, "compile-every-time")
+        replay = _run(["spin", "-t", MODEL_FILE], cwd=folder, timeout=60)
+        return _with_extra(_plan_from(replay.stdout, problem), False, "compile-every-time")
+
+
+def _pan(folder: Path, command: list[str], problem: Problem, env: dict[str, str], timeout_s: float | None,
+         started: float) -> SearchResult | None:
+    """Run pan; None when it found a plan (a trail to replay), else the answer it gives."""
+    remaining = None if timeout_s is None else max(0.01, timeout_s - (time.perf_counter() - started))
+    args = [*command, "-E", "-n", f"-m{problem.horizon + 10}", f"-w{HASH_BITS}"]
+    try:
+        done = _run(args, cwd=folder, env=env, timeout=remaining)
+    except subprocess.TimeoutExpired:
+        return SearchResult(Status.INCOMPLETE, detail=f"pan: time limit {timeout_s} s reached")
+    text = done.stdout + done.stderr
+    explored = _explored(text)
+    if "max search depth too small" in text:
+        return SearchResult(Status.INCOMPLETE, (), explored, "pan: max search depth too small")
+    if "-DMEMLIM" in text or "out of memory" in text:
+        return SearchResult(Status.INCOMPLETE, (), explored, "pan: memory limit reached")
+    if "assertion violated" in text and (folder / f"{MODEL_FILE}.trail").exists():
+        return None
+    if done.returncode == 0 and "errors: 0" in text:
+        return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), explored,
+                            f"no plan within {problem.horizon} actions (search completed)")
+    raise EngineError(f"pan failed (exit {done.returncode}): {_last_line(done)}")
+
+
+def _plan_from(replay: str, problem: Problem) -> SearchResult:
+    """Actions and states from the replay's INIT/STEP lines."""
+    actions: list[Action] = []
+    states: list[State] = []
+    for line in replay.splitlines():
+        words = line.split()
+        if not words or words[0] not in ("INIT", "STEP"):
+            continue
+        if words[0] == "STEP":
+            actions.append(Action(words[1]))
+            words = words[1:]
+        states.append(_state(words[1:]))
+    if not states:
+        raise EngineError("spin replay printed no states: the trail could not be replayed")
+    return SearchResult(Status.PLAN, tuple(actions), 0, "", tuple(states))
+
+
+def _state(words: list[str]) -> State:
+    """``lane lc steps | left... | right...`` as a State."""
+    head, left, right = " ".join(words).split("|")
+    lane, lc, steps = map(int, head.split())
+    return State(Lane.RIGHT if lane else Lane.LEFT, tuple(map(int, left.split())), tuple(map(int, right.split())),
+                 lc, steps)
+
+
+def _explored(text: str) -> int:
+    for line in text.splitlines():
+        if "states, stored" in line:
+            return int(line.split()[0])
+    return 0
+
+
+def _with_extra(result: SearchResult, cached: bool, mode: str) -> SearchResult:
+    extra = {"spin_version": tool_versions(), "verifier_cached": cached, "spin_mode": mode}
+    return SearchResult(result.status, result.actions, result.states_explored, result.detail, result.states, extra)
+
+
+def _run(args: list[str], cwd: Path | None = None, env: dict[str, str] | None = None,
+         timeout: float | None = None) -> subprocess.CompletedProcess[str]:
+    try:
+        return subprocess.run(args, cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
+    except FileNotFoundError as err:
+        raise ToolMissing(f"{args[0]} could not be run: {err.strerror}") from None
+
+
+def _last_line(done: subprocess.CompletedProcess[str]) -> str:
+    lines = (done.stderr.strip() or done.stdout.strip()).splitlines()
+    return lines[-1] if lines else f"exit code {done.returncode}"
