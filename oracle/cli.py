@@ -30,7 +30,7 @@ from spec.constants import DEFAULT_HORIZON, MAX_HORIZON
 from spec.errors import ScenarioError, SuiteError
 from spec.files import load_scenario
 from spec.library import BUILTINS, builtin
-from spec.models import ModelChoice, models_for
+from spec.models import ModelChoice, ModelKind, models_for
 from spec.scenario import Scenario, problem_for
 
 STRATEGIES = ("sensible", "shortest", "optimal")
@@ -184,6 +184,27 @@ def scenarios(as_json: bool) -> None:
     for b in BUILTINS:
         table.add_row(b.name, b.description, b.expected.status, b.expected.model)
     out.print(table)
+
+
+@cli.command()
+@click.argument("file")
+@click.option("--model", type=click.Choice([m.value for m in ModelKind]), default=None,
+              help="Default: the scenario's model, or the final model for auto.")
+@click.option("--horizon", type=int, default=None)
+@click.option("--out", type=click.Path(dir_okay=False, writable=True), default=None,
+              help="Write the model here instead of printing it.")
+def promela(file: str, model: str | None, horizon: int | None, out: str | None) -> None:
+    """Write the Promela model of a scenario, runnable by hand: spin -a; gcc -DSAFETY -o pan pan.c; ./pan -E."""
+    from promela.render import render_for  # Spin's renderer is only loaded when asked for
+
+    scenario = _scenario(file)
+    kind = ModelKind(model) if model else models_for(scenario.model)[0]
+    text = render_for(problem_for(scenario, kind, _horizon(horizon)))
+    if out:
+        Path(out).write_text(text)
+        click.echo(f"wrote {out} ({kind.value} model)")
+    else:
+        click.echo(text, nl=False)
 
 
 @cli.command()

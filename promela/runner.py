@@ -31,6 +31,8 @@ MODEL_FILE = "model.pml"
 #: for the compile-every-time pipeline would be unfair to it, so both modes use -O2.
 CFLAGS = ("-O2", "-DSAFETY", "-DMEMLIM=2048", "-w")
 HASH_BITS = 16  # pan's default table (-w24) costs ~130 ms to clear; these models are small
+#: pan's depth bound is the horizon plus this: the start takes two transitions, each action one.
+DEPTH_MARGIN = 10
 COMPILE_TIMEOUT_S = 300.0
 INSTALL_HINT = {"spin": "apt-get install spin", "gcc": "apt-get install gcc"}
 
@@ -113,7 +115,8 @@ def search(problem: Problem, strategy: str, timeout_s: float | None = None) -> S
         outcome = _pan(folder, [str(built.path)], problem, env, timeout_s, started)
         if outcome is not None:
             return _with_extra(outcome, built.cached, "compile-once")
-        replay = _run([str(built.path), "-r", f"-w{HASH_BITS}", f"-m{problem.horizon + 10}", f"{MODEL_FILE}.trail"],
+        replay = _run([str(built.path), "-r", f"-w{HASH_BITS}", f"-m{problem.horizon + DEPTH_MARGIN}",
+                       f"{MODEL_FILE}.trail"],
                       cwd=folder, env=env, timeout=60)
         return _with_extra(_plan_from(replay.stdout, problem), built.cached, "compile-once")
 
@@ -136,7 +139,7 @@ def _pan(folder: Path, command: list[str], problem: Problem, env: dict[str, str]
          started: float) -> SearchResult | None:
     """Run pan; None when it found a plan (a trail to replay), else the answer it gives."""
     remaining = None if timeout_s is None else max(0.01, timeout_s - (time.perf_counter() - started))
-    args = [*command, "-E", "-n", f"-m{problem.horizon + 10}", f"-w{HASH_BITS}"]
+    args = [*command, "-E", "-n", f"-m{problem.horizon + DEPTH_MARGIN}", f"-w{HASH_BITS}"]
     try:
         done = _run(args, cwd=folder, env=env, timeout=remaining)
     except subprocess.TimeoutExpired:
