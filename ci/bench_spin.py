@@ -1,0 +1,71 @@
+"""Per-plan latency of Spin compiling every time (the paper's pipeline), Spin compiled once, and the interpreter.
+
+Usage: python -m ci.bench_spin [--count 30] [--seed 2026] [--strategy sensible]
+
+All three run the whole pipeline (final model, then preparations) on the same
+scenarios (the built-in library plus generated ones) in one run; compile-once is timed
+with a warm cache (the verifiers are built before timing starts).
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import platform
+import time
+
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+from ci.bench import timed
+from ci.gen import random_scenarios
+from oracle.engines import Engine, get_engine, register
+from oracle.planner import plan
+from promela import runner
+from spec.library import BUILTINS
+
+COMPILING = Engine("spin-compiling", ("sensible", "shortest"),
+                   lambda p, s, limits: runner.search_compiling(p, s, limits.timeout_s),
+                   "Spin, model rendered with the scenario and compiled for every plan (benchmark only)")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--count", type=int, default=30, help="generated scenarios besides the library")
+    parser.add_argument("--seed", type=int, default=2026)
+    parser.add_argument("--strategy", default="sensible", choices=["sensible", "shortest"])
+    args = parser.parse_args()
+    console = Console(width=120)
+    scenarios = [b.load() for b in BUILTINS] + list(itertools.islice(random_scenarios(args.seed), args.count))
+    console.print(f"seed {args.seed}; {len(scenarios)} scenarios (library + generated); strategy {args.strategy}; "
+                  f"{runner.tool_versions()}; {platform.machine()}, python {platform.python_version()}, "
+                  f"{time.strftime('%Y-%m-%d')}")
+    register(COMPILING)
+    spin = get_engine("spin")
+    for scenario in scenarios:  # warm the cache: every verifier shape the pipeline will need
+        plan(scenario, args.strategy, engine=spin)
+    results = {
+        "spin, compile every time (spin -a, gcc -O2, pan, spin -t)":
+            timed(scenarios, lambda s: plan(s, args.strategy, engine=COMPILING)),
+        "spin, compiled once (cached pan, scenario injected, pan -r)":
+            timed(scenarios, lambda s: plan(s, args.strategy, engine=spin)),
+        "interpreter": timed(scenarios, lambda s: plan(s, args.strategy)),
+    }
+    once = results["spin, compiled once (cached pan, scenario injected, pan -r)"]
+    table = Table(title="per-plan latency (ms), whole pipeline, same scenarios")
+    for col in ("pipeline", "n", "median", "p99", "max", "median / compiled once"):
+        table.add_column(col, justify="left" if col == "pipeline" else "right")
+    for name, ms in results.items():
+        table.add_row(name, str(len(ms)), f"{np.median(ms):.2f}", f"{np.percentile(ms, 99):.2f}", f"{ms.max():.2f}",
+                      f"{np.median(ms) / np.median(once):.2f}x")
+    console.print(table)
+    every = results["spin, compile every time (spin -a, gcc -O2, pan, spin -t)"]
+    ratio = np.median(every) / np.median(once)
+    ok = np.median(once) <= 25 and ratio >= 150
+    console.print(f"target: compiled-once median <= 25 ms and >= 150x faster than compiling every time: "
+                  f"{'met' if ok else 'NOT met'} (median {np.median(once):.2f} ms, ratio {ratio:.0f}x)")
+
+
+if __name__ == "__main__":
+    main()
