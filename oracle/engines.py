@@ -33,7 +33,7 @@ class Engine:
 ENGINES: dict[str, Engine] = {}
 
 #: Modules that register further engines when imported (each issue adds its own line).
-ENGINE_MODULES: tuple[str, ...] = ("promela.engine",)
+ENGINE_MODULES: tuple[str, ...] = ("promela.engine", "oracle.bmc")
 
 
 def load_engines() -> dict[str, Engine]:

@@ -1,0 +1,275 @@
+"""The Z3 bounded encoding: k decision steps unrolled from spec/, solved incrementally.
+
+State per step: ``right`` (the AV's lane), ``lc`` (lane changes), ``l`` (left-lane
+offset: every left-lane vehicle sits at its initial cell + l) and ``o`` (oncoming ticks:
+every oncoming vehicle sits at its initial cell - o). All left-lane vehicles move
+together and so do all oncoming ones, so these four values are the whole state; each
+vehicle's collision and goal conditions are written on its own cell. Every intermediate
+oncoming tick gets its own collision check, as in the interpreter.
+
+``shortest`` adds one step at a time to one solver and asks, under push/pop, whether the
+goal holds at step k (having not held before): the first satisfiable k is the shortest
+length; all bounds unsatisfiable up to the horizon is a proof of "no plan within the
+horizon". ``optimal`` unrolls to the horizon with a symbolic length and minimises a
+lexicographic cost with ``z3.Optimize``. A solver time-out is "incomplete", never "no plan".
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import z3
+
+from oracle.answer import Limits, SearchResult, Status
+from oracle.engines import Engine, register
+from oracle.interpreter import step
+from spec.actions import ACTION_ORDER, ACTION_RULES, Action
+from spec.constants import AV_CELL
+from spec.errors import EngineError
+from spec.lanes import Lane
+from spec.scenario import Collision, Problem, State
+
+#: The cost ``optimal`` minimises, most important first (see COST_DOC).
+COST_TERMS = ("lane_changes", "right_lane_steps", "brakes", "length")
+COST_DOC = ("lexicographic: lane changes, then actions that end in the right lane, then brakes, "
+            "then plan length; over every plan of at most `horizon` actions")
+
+
+@dataclass(frozen=True, slots=True)
+class Step:
+    """The Z3 variables of one state."""
+
+    right: z3.BoolRef
+    lc: z3.ArithRef
+    l: z3.ArithRef  # noqa: E741  (the left-lane offset, named as in SPEC.md)
+    o: z3.ArithRef
+
+
+class Encoding:
+    """The transition system of one problem as Z3 terms; ``present`` guards each vehicle (explanations)."""
+
+    def __init__(self, problem: Problem, present: dict[tuple[Lane, int], z3.BoolRef] | None = None) -> None:
+        self.problem = problem
+        scenario = problem.scenario
+        self.present = present or {}
+        self.steps: list[Step] = []
+        self.actions: list[z3.ArithRef] = []
+        self.targets = list(scenario.target_indices)
+        self.left_hits = sorted({AV_CELL - c for c in scenario.left_lane})
+        ticks = {rule.oncoming_ticks for rule in ACTION_RULES.values()} | {0}
+        self.right_hits = {t: self._right_hits(t) for t in ticks}
+        start = self.new_step()
+        self.initial = z3.And(start.right == (scenario.lane is Lane.RIGHT), start.lc == 0, start.l == 0, start.o == 0,
+                              self.safe(start.right, start.l, start.o, 0))
+
+    def _here(self, lane: Lane, index: int) -> z3.BoolRef | bool:
+        return self.present.get((lane, index), True)
+
+    def new_step(self) -> Step:
+        k = len(self.steps)
+        s = Step(z3.Bool(f"right_{k}"), z3.Int(f"lc_{k}"), z3.Int(f"l_{k}"), z3.Int(f"o_{k}"))
+        self.steps.append(s)
+        return s
+
+    def bounds(self, k: int) -> z3.BoolRef:
+        """Invariants after k actions, implied by the rules but cheap for the solver to use."""
+        s, rules = self.steps[k], ACTION_RULES.values()
+        ticks = [r.oncoming_ticks for r in rules]
+        shifts = [r.left_shift_cells for r in rules]
+        return z3.And(s.lc >= 0, s.lc <= self.problem.rules.max_lane_changes,
+                      s.o >= min(ticks) * k, s.o <= max(ticks) * k,
+                      s.l >= min(shifts) * k, s.l <= max(shifts) * k)
+
+    def safe(self, right: z3.BoolRef, l_off: z3.ArithRef, o_start: z3.ArithRef, ticks: int) -> z3.BoolRef:
+        """No collision after the effect and after each of ``ticks`` oncoming ticks."""
+        if self.present:
+            return self._safe_per_vehicle(right, l_off, o_start, ticks)
+        left_ok = [l_off != v for v in self.left_hits]
+        right_ok = [z3.Or(o_start < lo, o_start > hi) for lo, hi in self.right_hits[ticks]]
+        return z3.If(right, z3.And(*right_ok, True), z3.And(*left_ok, True))
+
+    def _right_hits(self, ticks: int) -> list[tuple[int, int]]:
+        """Intervals of starting tick counts from which an action with ``ticks`` ticks meets a danger zone.
+
+        The vehicle at cell c is in the zone when o is in [c - AV_CELL - r, c - AV_CELL + r];
+        checked after the effect and after each tick, the start o collides when o + j does
+        for some j in 0..ticks.
+        """
+        radius = self.problem.rules.danger_radius
+        spans = sorted((c - AV_CELL - radius - ticks, c - AV_CELL + radius) for c in self.problem.scenario.right_lane)
+        merged: list[tuple[int, int]] = []
+        for lo, hi in spans:
+            if hi < 0:
+                continue  # o is never negative
+            if merged and lo <= merged[-1][1] + 1:
+                merged[-1] = (merged[-1][0], max(hi, merged[-1][1]))
+            else:
+                merged.append((lo, hi))
+        return merged
+
+    def _safe_per_vehicle(self, right: z3.BoolRef, l_off: z3.ArithRef, o_start: z3.ArithRef,
+                          ticks: int) -> z3.BoolRef:
+        """The same condition written per vehicle, each guarded by its presence literal (explanations)."""
+        scenario, radius = self.problem.scenario, self.problem.rules.danger_radius
+        left_ok = [z3.Implies(self._here(Lane.LEFT, i), c + l_off != AV_CELL)
+                   for i, c in enumerate(scenario.left_lane)]
+        right_ok = [z3.Implies(self._here(Lane.RIGHT, i), z3.Or(c - (o_start + j) > AV_CELL + radius,
+                                                                c - (o_start + j) < AV_CELL - radius))
+                    for i, c in enumerate(scenario.right_lane) for j in range(ticks + 1)]
+        return z3.If(right, z3.And(*right_ok, True), z3.And(*left_ok, True))
+
+    def transition(self, a: Step, action_var: z3.ArithRef, b: Step) -> z3.BoolRef:
+        """One decision step from ``a`` to ``b`` by the action numbered ``action_var`` (ACTION_ORDER)."""
+        rules, options = self.problem.rules, []
+        safe = {t: self.safe(b.right, b.l, a.o, t) for t in {r.oncoming_ticks for r in ACTION_RULES.values()}}
+        for index, action in enumerate(ACTION_ORDER):
+            rule = ACTION_RULES[action]
+            guard = [a.lc < rules.max_lane_changes] if rule.changes_lane else []
+            if rule.from_lane is not None:
+                guard.append(a.right == (rule.from_lane is Lane.RIGHT))
+            lane_after = (rule.to_lane is Lane.RIGHT) if rule.to_lane is not None else a.right
+            options.append(z3.And(action_var == index, *guard, b.right == lane_after,
+                                  b.lc == a.lc + int(rule.changes_lane), b.l == a.l + rule.left_shift_cells,
+                                  b.o == a.o + rule.oncoming_ticks, safe[rule.oncoming_ticks]))
+        return z3.Or(*options)
+
+    def goal(self, s: Step) -> z3.BoolRef:
+        """The problem's goal on the state ``s``, field by field from the GoalRule."""
+        goal, scenario, parts = self.problem.goal, self.problem.scenario, []
+        if goal.av_lane is not None:
+            parts.append(s.right == (goal.av_lane is Lane.RIGHT))
+        cells = scenario.left_lane
+        if goal.targets_behind:
+            parts += [z3.Implies(self._here(Lane.LEFT, i), cells[i] + s.l < AV_CELL) for i in self.targets]
+        if goal.nearest_target_offset is not None:
+            parts.append(self._nearest_at(s, AV_CELL + goal.nearest_target_offset))
+        if goal.oncoming_passed:
+            parts += [z3.Implies(self._here(Lane.RIGHT, i), c - s.o <= AV_CELL)
+                      for i, c in enumerate(scenario.right_lane)]
+        return z3.And(*parts, True)
+
+    def _nearest_at(self, s: Step, cell: int) -> z3.BoolRef | bool:
+        """The nearest present target is at ``cell``; false without one."""
+        result: z3.BoolRef | bool = False
+        for i in reversed(self.targets):
+            here = self._here(Lane.LEFT, i)
+            result = z3.If(here, self.problem.scenario.left_lane[i] + s.l == cell, result)
+        return result
+
+    def extend(self) -> z3.BoolRef:
+        """Add one decision step; return its transition constraint."""
+        a = self.steps[-1]
+        action_var = z3.Int(f"a_{len(self.actions) + 1}")
+        self.actions.append(action_var)
+        return self.transition(a, action_var, self.new_step())
+
+    def decode(self, model: z3.ModelRef, length: int) -> tuple[tuple[Action, ...], tuple[State, ...]]:
+        """The plan of ``length`` actions in ``model``, with the interpreter's states (a cross-check)."""
+        actions = tuple(ACTION_ORDER[model.eval(a, model_completion=True).as_long()] for a in self.actions[:length])
+        states = [self.problem.scenario.initial_state()]
+        for n, action in enumerate(actions, start=1):
+            nxt = step(states[-1], action, self.problem.rules)
+            if isinstance(nxt, Collision):
+                raise EngineError(f"z3: the interpreter finds a collision at step {n}: {nxt.describe()}")
+            states.append(nxt)
+        return actions, tuple(states)
+
+
+def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
+    """The smallest k whose bound is satisfiable, incrementally, or a proof that none is up to the horizon."""
+    enc = Encoding(problem)
+    solver = z3.SolverFor("QF_LIA")
+    _set_timeout(solver, limits)
+    solver.add(enc.initial)
+    for k in range(problem.horizon + 1):
+        reached = z3.Bool(f"goal_{k}")  # checked as an assumption, so learned lemmas carry over
+        solver.add(reached == enc.goal(enc.steps[k]))
+        verdict = solver.check(reached)
+        if verdict == z3.sat:
+            actions, states = enc.decode(solver.model(), k)
+            return SearchResult(Status.PLAN, actions, k + 1, f"shortest: bound {k} satisfiable", states)
+        if verdict == z3.unknown:
+            return SearchResult(Status.INCOMPLETE, (), k, f"z3: {solver.reason_unknown()} at bound {k}")
+        if k < problem.horizon:
+            solver.add(z3.Not(reached), enc.extend(), enc.bounds(k + 1))
+    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), problem.horizon + 1,
+                        f"proved: every bound up to {problem.horizon} is unsatisfiable")
+
+
+def bounded(enc: Encoding) -> tuple[z3.ArithRef, list[z3.BoolRef]]:
+    """Plans of any length up to the horizon: a symbolic length N; steps after N repeat the last state."""
+    horizon = enc.problem.horizon
+    length = z3.Int("length")
+    constraints = [enc.initial, length >= 0, length <= horizon]
+    for k in range(horizon + 1):
+        here = enc.steps[k]
+        constraints.append(z3.Implies(length == k, enc.goal(here)))
+        constraints.append(z3.Implies(k < length, z3.Not(enc.goal(here))))
+        if k < horizon:
+            move = enc.extend()
+            nxt = enc.steps[-1]
+            frozen = z3.And(nxt.right == here.right, nxt.lc == here.lc, nxt.l == here.l, nxt.o == here.o)
+            constraints.append(z3.If(k < length, move, frozen))
+    return length, constraints
+
+
+def cost_terms(enc: Encoding, length: z3.ArithRef) -> dict[str, z3.ArithRef]:
+    """The cost of a plan in the bounded encoding, term by term (COST_TERMS)."""
+    brake = ACTION_ORDER.index(Action.BRAKE)
+    live = list(range(1, len(enc.steps)))
+    return {
+        "lane_changes": enc.steps[-1].lc,
+        "right_lane_steps": z3.Sum([z3.If(z3.And(k <= length, enc.steps[k].right), 1, 0) for k in live] or [0]),
+        "brakes": z3.Sum([z3.If(z3.And(k <= length, enc.actions[k - 1] == brake), 1, 0) for k in live] or [0]),
+        "length": length,
+    }
+
+
+def plan_cost(problem: Problem, actions: tuple[Action, ...]) -> dict[str, int]:
+    """The same cost, computed from a plan by the interpreter: to compare any engine's plan."""
+    states = [problem.scenario.initial_state()]
+    for action in actions:
+        nxt = step(states[-1], action, problem.rules)
+        states.append(nxt if isinstance(nxt, State) else states[-1])
+    return {"lane_changes": states[-1].lane_changes,
+            "right_lane_steps": sum(1 for s in states[1:] if s.lane is Lane.RIGHT),
+            "brakes": sum(1 for a in actions if a is Action.BRAKE),
+            "length": len(actions)}
+
+
+def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
+    """The plan of least cost (COST_DOC) among all plans of at most ``horizon`` actions."""
+    enc = Encoding(problem)
+    length, constraints = bounded(enc)
+    opt = z3.Optimize()
+    _set_timeout(opt, limits)
+    opt.add(*constraints)
+    terms = cost_terms(enc, length)
+    for name in COST_TERMS:
+        opt.minimize(terms[name])
+    verdict = opt.check()
+    if verdict == z3.unknown:
+        return SearchResult(Status.INCOMPLETE, (), 0, f"z3: {opt.reason_unknown()}")
+    if verdict == z3.unsat:
+        return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 0,
+                            f"proved: no plan of at most {problem.horizon} actions")
+    model = opt.model()
+    n = model.eval(length).as_long()
+    actions, states = enc.decode(model, n)
+    cost = plan_cost(problem, actions)
+    return SearchResult(Status.PLAN, actions, 0, f"optimal under {COST_DOC}", states,
+                        {"cost": cost, "cost_order": list(COST_TERMS)})
+
+
+def _set_timeout(solver: z3.Solver | z3.Optimize, limits: Limits | None) -> None:
+    if limits is not None and limits.timeout_s is not None:
+        solver.set("timeout", max(1, int(limits.timeout_s * 1000)))
+
+
+def _solve(problem: Problem, strategy: str, limits: Limits) -> SearchResult:
+    """shortest: incremental bounds; optimal: z3.Optimize. sensible is left to the search engines."""
+    return optimal(problem, limits) if strategy == "optimal" else shortest(problem, limits)
+
+
+Z3 = register(Engine("z3", ("shortest", "optimal"), _solve,
+                     "Z3 bounded model checking: shortest lengths, optimal plans, proofs within the horizon"))
