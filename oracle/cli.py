@@ -28,7 +28,7 @@ from oracle.shrink import shrink as shrink_scenario
 from spec.actions import Action, parse_action
 from spec.constants import DEFAULT_HORIZON, MAX_HORIZON
 from spec.errors import ScenarioError, SuiteError
-from spec.files import load_scenario
+from spec.files import load_scenario, scenario_to_dict
 from spec.library import BUILTINS, builtin
 from spec.models import ModelChoice, ModelKind, models_for
 from spec.scenario import Scenario, problem_for
@@ -205,6 +205,41 @@ def promela(file: str, model: str | None, horizon: int | None, out: str | None) 
         click.echo(f"wrote {out} ({kind.value} model)")
     else:
         click.echo(text, nl=False)
+
+
+@cli.command()
+@click.argument("file")
+@click.option("--json", "as_json", is_flag=True)
+def explain(file: str, as_json: bool) -> None:
+    """Name a minimal set of vehicles that makes the overtake impossible (Z3 unsat core, minimised)."""
+    from oracle.explain import explain as explain_scenario  # loads Z3 only when asked for
+
+    scenario = _scenario(file)
+    result = explain_scenario(scenario)
+    if as_json:
+        _print_json({
+            "has_plan": result.has_plan,
+            "blocking": [{"lane": lane.value, "index": i, "name": result.name((lane, i))}
+                         for lane, i in result.blocking],
+            "reduced": scenario_to_dict(result.reduced) if result.reduced else None,
+            "removals": [{"removed": result.name(v), "status": a.status.value,
+                          "model": a.model.value if a.model else None, "plan": [x.value for x in a.actions]}
+                         for v, a in result.removals],
+        })
+        return
+    if result.has_plan:
+        out.print(f"{file} has a plan: nothing to explain (`overtake plan {file}` shows it). "
+                  "Which vehicle forced each wait or brake of a plan is not explained yet.")
+        return
+    if not result.blocking:
+        out.print(f"no plan for {file}, and no vehicle is to blame: the horizon of {scenario.horizon} is too short.")
+        return
+    out.print(f"no plan for {file}. These {len(result.blocking)} vehicle(s) alone make the overtake impossible, "
+              "and removing any one of them gives a plan:")
+    for vehicle, answer in result.removals:
+        plan_text = ", ".join(a.value for a in answer.actions) or "(the empty plan)"
+        out.print(f"  {result.name(vehicle)}: without it, {answer.model.value if answer.model else '-'} model: "
+                  f"{plan_text}")
 
 
 @cli.command()

@@ -1,0 +1,90 @@
+"""The Z3 engine against the interpreter: plan/no plan, shortest length, optimal cost, time-outs."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from oracle import bitplan, bmc, offsets
+from oracle.answer import Limits, Status
+from oracle.interpreter import validate
+from spec.library import BUILTINS
+from spec.models import ModelKind
+from spec.scenario import Scenario, make_scenario, problem_for
+from tests.strategies import scenarios
+
+MODELS = st.sampled_from(list(ModelKind))
+
+
+def check_shortest(scenario: Scenario, model: ModelKind) -> None:
+    problem = problem_for(scenario, model)
+    z, ours = bmc.shortest(problem), bitplan.shortest(problem)
+    assert (z.status is Status.PLAN) == (ours.status is Status.PLAN), (z, ours)
+    if z.status is Status.PLAN:
+        verdict = validate(problem, z.actions)
+        assert verdict.valid and verdict.states == z.states
+        assert len(z.actions) == len(ours.actions)
+    else:
+        assert z.status is Status.NO_PLAN_WITHIN_HORIZON and "proved" in z.detail
+
+
+def cost_key(problem, actions) -> tuple[int, ...]:
+    cost = bmc.plan_cost(problem, actions)
+    return tuple(cost[name] for name in bmc.COST_TERMS)
+
+
+def check_optimal(scenario: Scenario, model: ModelKind) -> None:
+    problem = problem_for(scenario, model)
+    best = bmc.optimal(problem)
+    shortest, sensible = bitplan.shortest(problem), offsets.sensible(problem)
+    assert (best.status is Status.PLAN) == (shortest.status is Status.PLAN)
+    if best.status is Status.PLAN:
+        assert validate(problem, best.actions).valid
+        assert cost_key(problem, best.actions) <= cost_key(problem, shortest.actions)
+        assert cost_key(problem, best.actions) <= cost_key(problem, sensible.actions)
+        assert best.extra["cost"] == bmc.plan_cost(problem, best.actions)
+
+
+@pytest.mark.parametrize("builtin", BUILTINS, ids=lambda b: b.name)
+def test_library_shortest_and_optimal_agree_with_the_interpreter(builtin) -> None:
+    for model in ModelKind:
+        check_shortest(builtin.load(), model)
+        check_optimal(builtin.load(), model)
+
+
+@settings(max_examples=60)
+@given(scenarios(), MODELS)
+def test_generated_shortest_lengths_equal_the_interpreters(scenario: Scenario, model: ModelKind) -> None:
+    check_shortest(scenario, model)
+
+
+@settings(max_examples=25)
+@given(scenarios(horizon=8), MODELS)
+def test_optimal_is_never_costlier_than_shortest_or_sensible(scenario: Scenario, model: ModelKind) -> None:
+    check_optimal(scenario, model)
+
+
+def test_optimal_prefers_fewer_steps_in_the_right_lane() -> None:
+    problem = problem_for(next(b for b in BUILTINS if b.name == "prep_case_a").load(), ModelKind.PREPARATIONS)
+    best = bmc.optimal(problem)
+    assert best.extra["cost"] == {"lane_changes": 1, "right_lane_steps": 1, "brakes": 1, "length": 3}
+    assert cost_key(problem, best.actions) < cost_key(problem, bitplan.shortest(problem).actions)
+
+
+def test_solver_time_out_is_incomplete_never_no_plan(monkeypatch: pytest.MonkeyPatch) -> None:
+    problem = problem_for(make_scenario("left", [12, 14, 16], [30, 45], 3), ModelKind.FINAL)
+
+    class GivingUp(bmc.z3.Solver):  # a solver that always runs out of time
+        def check(self, *assumptions):  # type: ignore[no-untyped-def]
+            return bmc.z3.unknown
+
+    monkeypatch.setattr(bmc.z3, "SolverFor", lambda logic: GivingUp())
+    result = bmc.shortest(problem, Limits(timeout_s=0.001))
+    assert result.status is Status.INCOMPLETE
+
+
+def test_real_time_out_gives_incomplete_or_an_answer_never_a_wrong_one() -> None:
+    problem = problem_for(make_scenario("right", [8, 9, 11, 12], [14, 30], 0, horizon=60), ModelKind.FINAL)
+    result = bmc.shortest(problem, Limits(timeout_s=0.001))
+    assert result.status in (Status.INCOMPLETE, bitplan.shortest(problem).status)
