@@ -11,6 +11,7 @@ table quotes medians, 99th percentiles and ratios from one run.
 from __future__ import annotations
 
 import argparse
+import itertools
 import platform
 import time
 from collections.abc import Callable
@@ -19,7 +20,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from ci.gen import balanced
+from ci.gen import balanced, random_scenarios
 from oracle import search
 from oracle.answer import Status
 from oracle.engines import Engine, register
@@ -42,6 +43,27 @@ def timed(scenarios: list[Scenario], run: Callable[[Scenario], object]) -> np.nd
         run(scenario)
         out.append((time.perf_counter() - started) * 1000)
     return np.array(out)
+
+
+def library_and_generated(seed: int, count: int) -> list[Scenario]:
+    """The built-in library followed by ``count`` generated scenarios."""
+    return [b.load() for b in BUILTINS] + list(itertools.islice(random_scenarios(seed), count))
+
+
+def machine() -> str:
+    """Where and when a benchmark ran, for its header line."""
+    return f"{platform.machine()}, python {platform.python_version()}, {time.strftime('%Y-%m-%d')}"
+
+
+def latency_table(title: str, first: str, results: dict[str, np.ndarray], base: np.ndarray, ratio: str) -> Table:
+    """Median, p99 and max per row, and each median as a multiple of ``base``'s."""
+    table = Table(title=title)
+    for col in (first, "n", "median", "p99", "max", ratio):
+        table.add_column(col, justify="left" if col == first else "right")
+    for name, ms in results.items():
+        table.add_row(name, str(len(ms)), f"{np.median(ms):.2f}", f"{np.percentile(ms, 99):.2f}", f"{ms.max():.2f}",
+                      f"{np.median(ms) / np.median(base):.2f}x")
+    return table
 
 
 def row(table: Table, name: str, ms: np.ndarray, base: np.ndarray | None) -> None:

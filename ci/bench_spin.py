@@ -10,20 +10,14 @@ with a warm cache (the verifiers are built before timing starts).
 from __future__ import annotations
 
 import argparse
-import itertools
-import platform
-import time
 
 import numpy as np
 from rich.console import Console
-from rich.table import Table
 
-from ci.bench import timed
-from ci.gen import random_scenarios
+from ci.bench import latency_table, library_and_generated, machine, timed
 from oracle.engines import Engine, get_engine, register
 from oracle.planner import plan
 from promela import runner
-from spec.library import BUILTINS
 
 COMPILING = Engine("spin-compiling", ("sensible", "shortest"),
                    lambda p, s, limits: runner.search_compiling(p, s, limits.timeout_s),
@@ -37,10 +31,9 @@ def main() -> None:
     parser.add_argument("--strategy", default="sensible", choices=["sensible", "shortest"])
     args = parser.parse_args()
     console = Console(width=120)
-    scenarios = [b.load() for b in BUILTINS] + list(itertools.islice(random_scenarios(args.seed), args.count))
-    console.print(f"seed {args.seed}; {len(scenarios)} scenarios (library + generated); strategy {args.strategy}; "
-                  f"{runner.tool_versions()}; {platform.machine()}, python {platform.python_version()}, "
-                  f"{time.strftime('%Y-%m-%d')}")
+    scenarios = library_and_generated(args.seed, args.count)
+    console.print(f"seed {args.seed}; {len(scenarios)} scenarios (library + generated); "
+                  f"strategy {args.strategy}; {runner.tool_versions()}; {machine()}")
     register(COMPILING)
     spin = get_engine("spin")
     for scenario in scenarios:  # warm the cache: every verifier shape the pipeline will need
@@ -53,12 +46,8 @@ def main() -> None:
         "interpreter": timed(scenarios, lambda s: plan(s, args.strategy)),
     }
     once = results["spin, compiled once (cached pan, scenario injected, pan -r)"]
-    table = Table(title="per-plan latency (ms), whole pipeline, same scenarios")
-    for col in ("pipeline", "n", "median", "p99", "max", "median / compiled once"):
-        table.add_column(col, justify="left" if col == "pipeline" else "right")
-    for name, ms in results.items():
-        table.add_row(name, str(len(ms)), f"{np.median(ms):.2f}", f"{np.percentile(ms, 99):.2f}", f"{ms.max():.2f}",
-                      f"{np.median(ms) / np.median(once):.2f}x")
+    table = latency_table("per-plan latency (ms), whole pipeline, same scenarios", "pipeline", results, once,
+                          "median / compiled once")
     console.print(table)
     every = results["spin, compile every time (spin -a, gcc -O2, pan, spin -t)"]
     ratio = np.median(every) / np.median(once)

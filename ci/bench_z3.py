@@ -8,20 +8,14 @@ Whole pipeline, horizon 30, the built-in library plus generated scenarios, in on
 from __future__ import annotations
 
 import argparse
-import itertools
-import platform
-import time
 
 import numpy as np
 import z3
 from rich.console import Console
-from rich.table import Table
 
-from ci.bench import timed
-from ci.gen import random_scenarios
+from ci.bench import latency_table, library_and_generated, machine, timed
 from oracle.planner import plan
 from spec.constants import DEFAULT_HORIZON
-from spec.library import BUILTINS
 
 
 def main() -> None:
@@ -30,22 +24,17 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=2026)
     args = parser.parse_args()
     console = Console(width=120)
-    scenarios = [b.load() for b in BUILTINS] + list(itertools.islice(random_scenarios(args.seed), args.count))
-    console.print(f"seed {args.seed}; {len(scenarios)} scenarios (library + generated); horizon {DEFAULT_HORIZON}; "
-                  f"z3 {z3.get_version_string()}; {platform.machine()}, python {platform.python_version()}, "
-                  f"{time.strftime('%Y-%m-%d')}")
+    scenarios = library_and_generated(args.seed, args.count)
+    console.print(f"seed {args.seed}; {len(scenarios)} scenarios (library + generated); "
+                  f"horizon {DEFAULT_HORIZON}; z3 {z3.get_version_string()}; {machine()}")
     results = {
         "interpreter, shortest (bitset BFS)": timed(scenarios, lambda s: plan(s, "shortest")),
         "z3, shortest (incremental bounds)": timed(scenarios, lambda s: plan(s, "shortest", engine="z3")),
         "z3, optimal (z3.Optimize, lexicographic cost)": timed(scenarios, lambda s: plan(s, "optimal", engine="z3")),
     }
     base = results["interpreter, shortest (bitset BFS)"]
-    table = Table(title="per-plan latency (ms), whole pipeline, same scenarios")
-    for col in ("engine, strategy", "n", "median", "p99", "max", "median vs interpreter"):
-        table.add_column(col, justify="left" if col == "engine, strategy" else "right")
-    for name, ms in results.items():
-        table.add_row(name, str(len(ms)), f"{np.median(ms):.2f}", f"{np.percentile(ms, 99):.2f}", f"{ms.max():.2f}",
-                      f"{np.median(ms) / np.median(base):.0f}x")
+    table = latency_table("per-plan latency (ms), whole pipeline, same scenarios", "engine, strategy", results, base,
+                          "median vs interpreter")
     console.print(table)
     short = results["z3, shortest (incremental bounds)"]
     console.print(f"aim: z3 shortest median < 100 ms: {'met' if np.median(short) < 100 else 'NOT met'} "
