@@ -1,0 +1,41 @@
+"""The world: one PyBullet client in DIRECT mode, gravity, and a flat road surface.
+
+Coordinates: x along the road in the AV's direction of travel, y to the AV's left; the
+AV's (left) lane is centred at y = +lane_width/2, the oncoming (right) lane at -lane_width/2.
+Each Simulator owns one Scene, so simulators never share a physics world.
+"""
+
+from __future__ import annotations
+
+import pybullet as p
+from pybullet_utils import bullet_client
+
+from spec.lanes import Lane
+from spec.physical import LOOP, ROAD
+
+
+class Scene:
+    """A private physics world with a road."""
+
+    def __init__(self, dt_s: float = LOOP.physics_dt_s) -> None:
+        self.client = bullet_client.BulletClient(connection_mode=p.DIRECT)
+        self.dt_s = dt_s
+        self.client.setGravity(0, 0, -9.81)
+        self.client.setTimeStep(dt_s)
+        ground = self.client.createCollisionShape(p.GEOM_PLANE)
+        self.ground = self.client.createMultiBody(0, ground)
+        self.client.changeDynamics(self.ground, -1, lateralFriction=1.0, restitution=0.0)
+
+    @staticmethod
+    def lane_y(lane: Lane) -> float:
+        """The y of a lane's centre line."""
+        half = ROAD.lane_width_m / 2
+        return half if lane is Lane.LEFT else -half
+
+    def step(self) -> None:
+        """One physics step of ``dt_s``."""
+        self.client.stepSimulation()
+
+    def close(self) -> None:
+        """Release the physics world."""
+        self.client.disconnect()

@@ -1,0 +1,228 @@
+"""One closed-loop drive: sense, discretise, plan, execute action by action, check against the prediction.
+
+Two clocks: decisions (one per action, 3 or 6 s) and physics (``LOOP.physics_dt_s``).
+Re-planning as in the paper: when a vehicle not in the current plan is sensed, when the
+plan runs out, and after ``replan_after_actions`` actions; and (``replan_on_violation``,
+on by default, not in the paper) as soon as a vehicle deviates from the prediction
+beyond the tolerance, since the plan's safety margins no longer hold. The world is re-centred on the
+AV every kilometre so coordinates stay small however far it drives.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO
+
+import numpy as np
+
+from oracle.answer import Status
+from oracle.planner import plan
+from sim.discretiser import discretise
+from sim.executor import Executor
+from sim.scene import Scene
+from sim.sensors import Reading, sweep
+from sim.tolerance import ToleranceReport
+from sim.traffic import Traffic
+from sim.vehicle import WheeledCar
+from spec.actions import Action
+from spec.constants import DEFAULT_SPEED_MPS
+from spec.errors import ScenarioError
+from spec.lanes import Lane
+from spec.physical import LOOP
+
+RECENTRE_M = 1000.0
+
+
+@dataclass(slots=True)
+class RunSummary:
+    """What one drive did."""
+
+    seed: int
+    km: float = 0.0
+    sim_time_s: float = 0.0
+    wall_s: float = 0.0
+    overtakes: int = 0
+    plans: int = 0
+    replans: int = 0
+    actions: int = 0
+    plan_ms: list[float] = field(default_factory=list)
+    collisions: list[str] = field(default_factory=list)
+    planner_failures: list[str] = field(default_factory=list)
+    sensing_failures: list[str] = field(default_factory=list)
+    tolerance: ToleranceReport = field(default_factory=ToleranceReport)
+
+    @property
+    def failure(self) -> str | None:
+        """The first failure, if the drive ended on one."""
+        for kind, items in (("collision", self.collisions), ("planner", self.planner_failures),
+                            ("sensing", self.sensing_failures)):
+            if items:
+                return f"{kind}: {items[0]}"
+        return None
+
+    def to_json(self) -> dict[str, object]:
+        ms = np.array(self.plan_ms) if self.plan_ms else np.zeros(1)
+        return {"seed": self.seed, "km": round(self.km, 3), "sim_time_s": round(self.sim_time_s, 1),
+                "wall_s": round(self.wall_s, 2), "overtakes": self.overtakes, "plans": self.plans,
+                "replans": self.replans, "actions": self.actions,
+                "plan_ms": {"median": round(float(np.median(ms)), 3), "p99": round(float(np.percentile(ms, 99)), 3)},
+                "collisions": self.collisions, "planner_failures": self.planner_failures,
+                "sensing_failures": self.sensing_failures,
+                "tolerance": {"checks": dict(self.tolerance.checks), "violations": len(self.tolerance.violations),
+                              "largest_step_deviation_cells": {k: round(v, 3)
+                                                               for k, v in self.tolerance.largest.items()}},
+                "failure": self.failure}
+
+
+class Simulator:
+    """A physics world, the AV, traffic, sensors and a planner, driven by one seeded generator."""
+
+    def __init__(self, seed: int, engine: str = "interpreter", strategy: str = "sensible",
+                 trace: IO[str] | None = None, replan_on_violation: bool = True) -> None:
+        self.replan_on_violation = replan_on_violation
+        self.rng = np.random.default_rng(seed)
+        self.engine, self.strategy, self.trace = engine, strategy, trace
+        self.scene = Scene()
+        self.car = WheeledCar(self.scene, 0.0, self.scene.lane_y(Lane.LEFT))
+        self.traffic = Traffic(self.scene, self.rng, 0.0)
+        self.executor = Executor(self.scene, self.car, Lane.LEFT)
+        self.summary = RunSummary(seed)
+        self.origin_km = 0.0
+        self._side = {car.body: car.x_m > 0 for car in self.traffic.left}
+
+    # -- the physics clock ------------------------------------------------------------------
+    def _tick(self, dt_s: float) -> bool:
+        """After each control step: move traffic, look for contacts, count overtakes, re-centre."""
+        self.summary.sim_time_s += dt_s
+        self.traffic.advance(dt_s)
+        x = self.car.pose().x_m
+        for car in self.traffic.cars():
+            if self.scene.client.getContactPoints(self.car.body, car.body):
+                lane = "left-lane" if car in self.traffic.left else "oncoming"
+                self.summary.collisions.append(f"with a {lane} vehicle at x={car.x_m - x:+.1f} m "
+                                               f"(t={self.summary.sim_time_s:.1f} s)")
+                return False
+        for car in self.traffic.left:
+            ahead = car.x_m > x
+            if self._side.get(car.body) and not ahead:
+                self.summary.overtakes += 1
+            self._side[car.body] = ahead
+        if self.traffic.respawn_behind(x):
+            self._side.update({car.body: car.x_m > x for car in self.traffic.left})
+        if x > RECENTRE_M:
+            self.origin_km += x / 1000
+            self.car.shift_x(-x)
+            self.traffic.shift_x(-x)
+            self.executor.x_ref_m -= x
+        self.summary.km = self.origin_km + self.car.pose().x_m / 1000
+        return True
+
+    # -- the decision clock ------------------------------------------------------------------
+    def drive(self, km: float, until_failure: bool = False) -> RunSummary:
+        """Drive ``km`` kilometres (or until the first failure); stop at any collision."""
+        started = time.perf_counter()
+        ok = self.executor.hold(4.0, DEFAULT_SPEED_MPS, self._tick)  # start-up: reach the common speed
+        while ok and self.summary.km < km:
+            ok = self._one_plan()
+            if until_failure and self.summary.failure:
+                break
+        self.summary.wall_s = time.perf_counter() - started
+        return self.summary
+
+    def _sense(self) -> tuple[Reading, ...]:
+        pose = self.car.pose()
+        return sweep(self.scene, pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming).seen
+
+    def _one_plan(self) -> bool:
+        seen = self._sense()
+        lane = Executor.lane_of(self.car.pose().y_m)
+        self.executor.lane = lane
+        try:
+            scenario = discretise(seen, lane)
+        except ScenarioError as err:
+            self.summary.sensing_failures.append(str(err))
+            return self.executor.hold(3.0, DEFAULT_SPEED_MPS, self._tick)
+        answer = plan(scenario, self.strategy, engine=self.engine)
+        self.summary.plans += 1
+        self.summary.plan_ms.append(answer.elapsed_ms)
+        if answer.status is not Status.PLAN:
+            self.summary.planner_failures.append(f"{answer.status.value} for {scenario}")
+            return self.executor.hold(3.0, DEFAULT_SPEED_MPS, self._tick)
+        if not answer.actions:  # nothing to overtake: drive on
+            return self.executor.run(Action.DRIVE, self._tick)
+        return self._execute(answer.actions, answer.states, seen)
+
+    def _execute(self, actions: tuple[Action, ...], states: tuple, seen: tuple[Reading, ...]) -> bool:
+        plan_id = self.summary.plans
+        self.executor.reset_reference()
+        tracked = self._tracked(seen, states[0])
+        deviation = dict.fromkeys(tracked, 0.0)
+        known = {r.body for r in seen}
+        violations_before = len(self.summary.tolerance.violations)
+        for k, action in enumerate(actions[: LOOP.replan_after_actions]):
+            if not self.executor.run(action, self._tick):
+                return False
+            self.summary.actions += 1
+            now = {car.body: car.x_m - self.car.pose().x_m for car in self.traffic.cars()}
+            for (lane, index, body), (start_dx, start_cell) in tracked.items():
+                cells = states[k + 1].left_lane if lane is Lane.LEFT else states[k + 1].right_lane
+                deviation[(lane, index, body)] = self.summary.tolerance.check(
+                    plan_id, k + 1, action.value, f"{lane.value}_lane[{index}]", cells[index] - start_cell,
+                    start_dx, now[body], deviation[(lane, index, body)])
+            self._trace(plan_id, k + 1, action, states[k + 1])
+            violated = len(self.summary.tolerance.violations) > violations_before
+            if self.replan_on_violation and violated:
+                self.summary.replans += 1
+                return True
+            if {r.body for r in self._sense()} - known:
+                self.summary.replans += 1
+                return True
+        return True
+
+    @staticmethod
+    def _tracked(seen: tuple[Reading, ...], start: object) -> dict[tuple[Lane, int, int], tuple[float, int]]:
+        """Each sensed vehicle in the window, keyed by its lane and index in the scenario, with its start."""
+        tracked = {}
+        for lane, cells in ((Lane.LEFT, start.left_lane), (Lane.RIGHT, start.right_lane)):  # type: ignore[attr-defined]
+            readings = sorted((r for r in seen if r.lane is lane), key=lambda r: r.dx_m)
+            from sim.discretiser import cell_of
+
+            inside = [r for r in readings if cell_of(r.dx_m) in cells]
+            for index, reading in enumerate(inside):
+                tracked[(lane, index, reading.body)] = (reading.dx_m, cells[index])
+        return tracked
+
+    def _trace(self, plan_id: int, step: int, action: Action, predicted: object) -> None:
+        if self.trace is None:
+            return
+        pose = self.car.pose()
+        self.trace.write(json.dumps({"t_s": round(self.summary.sim_time_s, 2), "km": round(self.summary.km, 4),
+                                     "plan": plan_id, "step": step, "action": action.value,
+                                     "av": {"x_m": round(pose.x_m, 2), "y_m": round(pose.y_m, 2),
+                                            "speed_mps": round(pose.speed_mps, 2)},
+                                     "traffic_dx_m": sorted(round(c.x_m - pose.x_m, 1)
+                                                            for c in self.traffic.cars()),
+                                     "predicted": {"left_lane": list(predicted.left_lane),  # type: ignore[attr-defined]
+                                                   "right_lane": list(predicted.right_lane)}}) + "\n")  # type: ignore[attr-defined]
+
+    def close(self) -> None:
+        self.scene.close()
+
+
+def run_drive(seed: int, km: float, until_failure: bool = False, engine: str = "interpreter",
+              strategy: str = "sensible", out_dir: str | None = None) -> RunSummary:
+    """One drive in a fresh simulator (the unit a worker process runs)."""
+    trace = None
+    if out_dir:
+        Path(out_dir).mkdir(parents=True, exist_ok=True)
+        trace = (Path(out_dir) / f"trace-seed{seed}.jsonl").open("w")
+    sim = Simulator(seed, engine, strategy, trace)
+    try:
+        return sim.drive(km, until_failure)
+    finally:
+        sim.close()
+        if trace:
+            trace.close()
