@@ -243,6 +243,61 @@ def explain(file: str, as_json: bool) -> None:
 
 
 @cli.command()
+@click.option("--km", type=click.FloatRange(min=0.01), default=5.0, show_default=True,
+              help="Kilometres per run (with --until-failure: the cap).")
+@click.option("--until-failure", is_flag=True, help="Stop each run at its first failure (capped by --km).")
+@click.option("--seed", type=int, default=1, show_default=True, help="Run i uses seed + i.")
+@click.option("--engine", default="interpreter", show_default=True)
+@click.option("--strategy", type=click.Choice(["sensible", "shortest"]), default="sensible", show_default=True)
+@click.option("--runs", type=click.IntRange(min=1), default=1, show_default=True)
+@click.option("--workers", type=click.IntRange(min=1), default=1, show_default=True, help="Processes.")
+@click.option("--out", "out_dir", default="out/sim", show_default=True, help="Traces (JSON lines) and plots.")
+@click.option("--paper-replanning", is_flag=True,
+              help="Re-plan only as the paper did (not when a deviation exceeds the tolerance).")
+@click.option("--json", "as_json", is_flag=True)
+def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: str, runs: int, workers: int,
+             out_dir: str, paper_replanning: bool, as_json: bool) -> None:
+    """Drive the PyBullet simulator closed-loop and check every action against the model's prediction."""
+    from rich.progress import Progress
+
+    from sim.campaign import simulate as run_campaign
+
+    check_strategy(get_engine(engine), strategy)
+    err = Console(stderr=True)
+    err.print(f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {km} km{' or until failure' if until_failure else ''}"
+              f"; engine {engine}; traces in {out_dir}")
+    with Progress(console=err, transient=True) as progress:
+        task = progress.add_task("simulating", total=runs)
+        results = run_campaign(runs, km, seed, until_failure, engine, strategy, workers, out_dir,
+                               not paper_replanning, lambda _summary: progress.advance(task))
+    if as_json:
+        _print_json([r.to_json() for r in results])
+    else:
+        _print_runs(results)
+    sys.exit(1 if any(r.collisions or r.planner_failures for r in results) else 0)
+
+
+def _print_runs(results: list[Any]) -> None:
+    table = Table(title="simulated drives")
+    for col in ("seed", "sim time", "overtakes", "km", "plans", "replans", "plan ms (median)", "failure"):
+        table.add_column(col, overflow="fold")
+    for r in results:
+        j = r.to_json()
+        table.add_row(str(r.seed), f"{r.sim_time_s / 60:.1f} min", str(r.overtakes), f"{r.km:.2f}", str(r.plans),
+                      str(r.replans), f"{j['plan_ms']['median']:.2f}", r.failure or "-")
+    out.print(table)
+    deviations = Table(title="largest deviation added by one action, per action type (cells)")
+    for col in ("action", "checks", "largest", "violations"):
+        deviations.add_column(col)
+    for action in sorted({a for r in results for a in r.tolerance.checks}):
+        checks = sum(r.tolerance.checks.get(action, 0) for r in results)
+        largest = max(r.tolerance.largest.get(action, 0.0) for r in results)
+        violations = sum(1 for r in results for v in r.tolerance.violations if v.action == action)
+        deviations.add_row(action, str(checks), f"{largest:.3f}", str(violations))
+    out.print(deviations)
+
+
+@cli.command()
 def engines() -> None:
     """List the registered engines and the strategies each answers."""
     table = Table(title="engines")
@@ -283,7 +338,21 @@ def demo(strategy: str, engine_names: tuple[str, ...]) -> None:
     out.print("plans: L left_lane_change, A accelerate, R right_lane_change, D drive, B brake; "
               "(n) actions; ms per plan, whole pipeline")
     out.print("all answers as expected" if not unexpected else f"{unexpected} answer(s) differ from expectation")
+    _demo_drive()
     sys.exit(1 if unexpected else 0)
+
+
+def _demo_drive(km: float = 1.0, seed: int = 1) -> None:
+    """A short closed-loop drive in the PyBullet simulator, summarised in two lines."""
+    from sim.simulator import run_drive  # PyBullet loads only when asked for
+
+    r = run_drive(seed, km)
+    largest = ", ".join(f"{a} {d:.2f}" for a, d in sorted(r.tolerance.largest.items()))
+    out.print(f"simulated drive (seed {seed}): {r.km:.2f} km in {r.sim_time_s / 60:.1f} simulated min "
+              f"({r.wall_s:.1f} s wall), {r.overtakes} overtakes, {r.plans} plans, "
+              f"{'no collision' if not r.collisions else r.collisions[0]}")
+    out.print(f"  largest deviation from the model per action (cells): {largest}; "
+              f"{len(r.tolerance.violations)} beyond tolerance (`overtake simulate` for more)")
 
 
 def _abbrev(answer: Answer) -> str:

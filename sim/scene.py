@@ -7,6 +7,11 @@ Each Simulator owns one Scene, so simulators never share a physics world.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
+from collections.abc import Iterator
+
 import pybullet as p
 from pybullet_utils import bullet_client
 
@@ -14,11 +19,26 @@ from spec.lanes import Lane
 from spec.physical import LOOP, ROAD
 
 
+@contextlib.contextmanager
+def _quiet_stdout() -> Iterator[None]:
+    """Silence file descriptor 1 (C-level prints) for the duration, keeping Python's stdout intact."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 1)
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
 class Scene:
     """A private physics world with a road."""
 
     def __init__(self, dt_s: float = LOOP.physics_dt_s) -> None:
-        self.client = bullet_client.BulletClient(connection_mode=p.DIRECT)
+        with _quiet_stdout():  # PyBullet's C code prints "argv[0]=" when it connects
+            self.client = bullet_client.BulletClient(connection_mode=p.DIRECT)
         self.dt_s = dt_s
         self.client.setGravity(0, 0, -9.81)
         self.client.setTimeStep(dt_s)

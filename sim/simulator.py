@@ -161,6 +161,8 @@ class Simulator:
         tracked = self._tracked(seen, states[0])
         deviation = dict.fromkeys(tracked, 0.0)
         known = {r.body for r in seen}
+        cars = {car.body: car for car in self.traffic.cars()}
+        generation = {body: cars[body].respawns for body in cars}
         violations_before = len(self.summary.tolerance.violations)
         for k, action in enumerate(actions[: LOOP.replan_after_actions]):
             if not self.executor.run(action, self._tick):
@@ -168,6 +170,8 @@ class Simulator:
             self.summary.actions += 1
             now = {car.body: car.x_m - self.car.pose().x_m for car in self.traffic.cars()}
             for (lane, index, body), (start_dx, start_cell) in tracked.items():
+                if cars[body].respawns != generation[body]:
+                    continue  # respawned ahead since the plan started: a different vehicle now
                 cells = states[k + 1].left_lane if lane is Lane.LEFT else states[k + 1].right_lane
                 deviation[(lane, index, body)] = self.summary.tolerance.check(
                     plan_id, k + 1, action.value, f"{lane.value}_lane[{index}]", cells[index] - start_cell,
@@ -213,13 +217,13 @@ class Simulator:
 
 
 def run_drive(seed: int, km: float, until_failure: bool = False, engine: str = "interpreter",
-              strategy: str = "sensible", out_dir: str | None = None) -> RunSummary:
+              strategy: str = "sensible", out_dir: str | None = None, replan_on_violation: bool = True) -> RunSummary:
     """One drive in a fresh simulator (the unit a worker process runs)."""
     trace = None
     if out_dir:
         Path(out_dir).mkdir(parents=True, exist_ok=True)
         trace = (Path(out_dir) / f"trace-seed{seed}.jsonl").open("w")
-    sim = Simulator(seed, engine, strategy, trace)
+    sim = Simulator(seed, engine, strategy, trace, replan_on_violation)
     try:
         return sim.drive(km, until_failure)
     finally:

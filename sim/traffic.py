@@ -65,11 +65,13 @@ class Traffic:
                 gap = left_gap_cells(self.rng, self.run, self.spec)
                 self.run = self.run + 1 if gap == 1 else 1
                 car.place(front + gap * SEGMENT_M)
+                car.respawns += 1
                 moved += 1
         for car in self.oncoming:
             if car.x_m < limit:
                 last = max(c.x_m for c in self.oncoming)
                 car.place(last + oncoming_gap_cells(self.rng, self.spec) * SEGMENT_M)
+                car.respawns += 1
                 moved += 1
         return moved
 

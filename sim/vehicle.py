@@ -100,6 +100,7 @@ class KinematicCar:
         shape = scene.client.createCollisionShape(p.GEOM_BOX, halfExtents=half)
         self.body = scene.client.createMultiBody(0, shape, basePosition=(x_m, y_m, spec.height_m / 2 + 0.05))
         self.x_m, self.y_m, self.z_m = x_m, y_m, spec.height_m / 2 + 0.05
+        self.respawns = 0  # a respawned car is a new vehicle: its old predictions no longer apply
 
     def place(self, x_m: float) -> None:
         self.x_m = x_m

@@ -32,3 +32,14 @@ def test_drives_are_reproducible_from_the_seed() -> None:
         run.pop("wall_s")
         run["plan_ms"] = None
     assert runs[0] == runs[1]
+
+
+def test_simulate_cli_json_trace_and_plot(tmp_path) -> None:
+    import json
+
+    from tests.oracle.test_cli import run
+
+    done = run("simulate", "--km", "0.3", "--seed", "3", "--out", str(tmp_path), "--json")
+    runs = json.loads(done.stdout)
+    assert done.returncode == 0 and runs[0]["seed"] == 3 and runs[0]["km"] >= 0.3
+    assert (tmp_path / "trace-seed3.jsonl").stat().st_size > 0 and (tmp_path / "spacetime-seed3.png").exists()
