@@ -28,7 +28,7 @@ from sim.tolerance import ToleranceReport
 from sim.traffic import Traffic
 from sim.vehicle import WheeledCar
 from spec.actions import Action
-from spec.constants import DEFAULT_SPEED_MPS
+from spec.constants import DEFAULT_SPEED_MPS, TIME_UNIT_S
 from spec.errors import ScenarioError
 from spec.lanes import Lane
 from spec.physical import LOOP
@@ -144,13 +144,13 @@ class Simulator:
             scenario = discretise(seen, lane)
         except ScenarioError as err:
             self.summary.sensing_failures.append(str(err))
-            return self.executor.hold(3.0, DEFAULT_SPEED_MPS, self._tick)
+            return self.executor.hold(TIME_UNIT_S, DEFAULT_SPEED_MPS, self._tick)
         answer = plan(scenario, self.strategy, engine=self.engine)
         self.summary.plans += 1
         self.summary.plan_ms.append(answer.elapsed_ms)
         if answer.status is not Status.PLAN:
             self.summary.planner_failures.append(f"{answer.status.value} for {scenario}")
-            return self.executor.hold(3.0, DEFAULT_SPEED_MPS, self._tick)
+            return self.executor.hold(TIME_UNIT_S, DEFAULT_SPEED_MPS, self._tick)
         if not answer.actions:  # nothing to overtake: drive on
             return self.executor.run(Action.DRIVE, self._tick)
         return self._execute(answer.actions, answer.states, seen)
