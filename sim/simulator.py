@@ -90,6 +90,7 @@ class Simulator:
         self.traffic = Traffic(self.scene, self.rng, 0.0)
         self.executor = Executor(self.scene, self.car, Lane.LEFT)
         self.summary = RunSummary(seed)
+        self.doing = "start-up"  # what the AV was executing: recorded with every collision
         self.origin_km = 0.0
         self._side = {car.body: car.x_m > 0 for car in self.traffic.left}
 
@@ -102,8 +103,8 @@ class Simulator:
         for car in self.traffic.cars():
             if self.scene.client.getContactPoints(self.car.body, car.body):
                 lane = "left-lane" if car in self.traffic.left else "oncoming"
-                self.summary.collisions.append(f"with a {lane} vehicle at x={car.x_m - x:+.1f} m "
-                                               f"(t={self.summary.sim_time_s:.1f} s)")
+                self.summary.collisions.append(f"with a {lane} vehicle at x={car.x_m - x:+.1f} m during "
+                                               f"{self.doing} (t={self.summary.sim_time_s:.1f} s)")
                 return False
         for car in self.traffic.left:
             ahead = car.x_m > x
@@ -144,14 +145,17 @@ class Simulator:
             scenario = discretise(seen, lane)
         except ScenarioError as err:
             self.summary.sensing_failures.append(str(err))
+            self.doing = "waiting after a sensing failure"
             return self.executor.hold(TIME_UNIT_S, DEFAULT_SPEED_MPS, self._tick)
         answer = plan(scenario, self.strategy, engine=self.engine)
         self.summary.plans += 1
         self.summary.plan_ms.append(answer.elapsed_ms)
         if answer.status is not Status.PLAN:
             self.summary.planner_failures.append(f"{answer.status.value} for {scenario}")
+            self.doing = "waiting without a plan"
             return self.executor.hold(TIME_UNIT_S, DEFAULT_SPEED_MPS, self._tick)
         if not answer.actions:  # nothing to overtake: drive on
+            self.doing = "drive (nothing to overtake)"
             return self.executor.run(Action.DRIVE, self._tick)
         return self._execute(answer.actions, answer.states, seen)
 
@@ -165,6 +169,7 @@ class Simulator:
         generation = {body: cars[body].respawns for body in cars}
         violations_before = len(self.summary.tolerance.violations)
         for k, action in enumerate(actions[: LOOP.replan_after_actions]):
+            self.doing = f"{action.value} (plan {plan_id}, step {k + 1} of {len(actions)})"
             if not self.executor.run(action, self._tick):
                 return False
             self.summary.actions += 1
