@@ -3,25 +3,61 @@
 Longitudinal: a position reference advancing at the action's speed (speed factor x the
 common speed); the speed command adds a correction towards that reference, and the car's
 wheel motors limit acceleration and braking. Lateral: a reference that stays on the lane
-centre, or moves one lane width over the action's time for a lane change (a smooth
-cosine profile), tracked by a PD law on the lateral position turned into a steering angle.
+centre, or for a lane change moves one lane width (a smooth cosine profile) within the
+first ``LOOP.lane_change_lateral_s`` of the action's time, since the model puts the AV in its
+new lane before any oncoming vehicle moves; tracked by a PD law on the lateral position turned into a steering angle.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 
 from sim.scene import Scene
 from sim.vehicle import WheeledCar
 from spec.actions import ACTION_RULES, Action
 from spec.constants import DEFAULT_SPEED_MPS
 from spec.lanes import Lane
-from spec.physical import LOOP
+from spec.physical import CAR, LOOP, CarSpec
 
 K_X = 0.8  # 1/s: speed correction per metre behind the position reference
 K_Y, K_VY = 3.0, 3.5  # lateral PD gains (1/s^2, 1/s)
 MAX_SPEED_FACTOR = 2.4
+RAMP_SHARE = 0.9  # reference ramps use this share of the car's limits, leaving some for the feedback
+
+
+def action_speed_mps(action: Action | None) -> float:
+    """The AV's speed during an action by the physical mapping; None (no action): the common speed."""
+    return DEFAULT_SPEED_MPS if action is None else float(ACTION_RULES[action].speed_factor) * DEFAULT_SPEED_MPS
+
+
+def ramp_s(v_from_mps: float, v_to_mps: float, spec: CarSpec = CAR) -> float:
+    """How long a speed change takes at RAMP_SHARE of the car's acceleration or braking limit."""
+    rate = spec.max_accel_mps2 if v_to_mps > v_from_mps else spec.max_brake_mps2
+    return abs(v_to_mps - v_from_mps) / (RAMP_SHARE * rate)
+
+
+@dataclass(frozen=True, slots=True)
+class SpeedProfile:
+    """The speed reference through one action: its own speed, with each change to a neighbour's speed
+    ramped symmetrically about the boundary, so the distance lost on one side is made up on the other and
+    the car is where the model puts it at every boundary (to within the ramp's area, dv^2 / 8a)."""
+
+    before_mps: float
+    speed_mps: float
+    after_mps: float
+    duration_s: float
+
+    def at(self, t_s: float) -> float:
+        half_in = ramp_s(self.before_mps, self.speed_mps) / 2
+        half_out = ramp_s(self.speed_mps, self.after_mps) / 2
+        if t_s < half_in:
+            return self.speed_mps + (self.before_mps - self.speed_mps) * (1 - t_s / half_in) / 2
+        if t_s > self.duration_s - half_out:
+            return self.speed_mps + (self.after_mps - self.speed_mps) * (t_s - self.duration_s + half_out) / (
+                2 * half_out)
+        return self.speed_mps
 
 
 class Executor:
@@ -32,23 +68,30 @@ class Executor:
         self.x_ref_m = car.pose().x_m
         self.dt_s = scene.dt_s * LOOP.control_every_steps
 
-    def reset_reference(self) -> None:
-        """Start the position reference at the car (a new plan starts from where the car is)."""
-        self.x_ref_m = self.car.pose().x_m
+    def reset_reference(self, ahead_m: float = 0.0) -> None:
+        """Start the position reference ``ahead_m`` in front of the car: where a new plan takes it to be."""
+        self.x_ref_m = self.car.pose().x_m + ahead_m
 
-    def run(self, action: Action, tick: Callable[[float], bool]) -> bool:
-        """Execute ``action`` for its duration; False as soon as ``tick`` reports a collision."""
+    def run(self, action: Action, tick: Callable[[float], bool], before: Action | None = None,
+            after: Action | None = None) -> bool:
+        """Execute ``action`` for its duration; False as soon as ``tick`` reports a collision.
+
+        ``before`` and ``after`` are the plan's neighbouring actions (None: the common speed):
+        the speed change towards each is a ramp at the car's limits centred on the boundary.
+        """
         rule = ACTION_RULES[action]
-        speed = float(rule.speed_factor) * DEFAULT_SPEED_MPS
+        speed = action_speed_mps(action)
         y_from = self.scene.lane_y(self.lane)
         to_lane = rule.to_lane or self.lane
         y_to = self.scene.lane_y(to_lane)
         steps = max(1, round(rule.duration_s / self.dt_s))
+        lateral_s = min(rule.duration_s, LOOP.lane_change_lateral_s)
+        profile = SpeedProfile(action_speed_mps(before), speed, action_speed_mps(after), rule.duration_s)
         for k in range(steps):
-            phase = (k + 1) / steps
+            phase = min(1.0, (k + 1) * self.dt_s / lateral_s)
             y_ref = y_from + (y_to - y_from) * (1 - math.cos(math.pi * phase)) / 2
-            vy_ref = (y_to - y_from) * math.pi * math.sin(math.pi * phase) / (2 * rule.duration_s)
-            if not self.control(speed, y_ref, vy_ref, tick):
+            vy_ref = (y_to - y_from) * math.pi * math.sin(math.pi * phase) / (2 * lateral_s)
+            if not self.control(profile.at(k * self.dt_s), y_ref, vy_ref, tick):
                 return False
         self.lane = to_lane
         return True

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import IO
 
@@ -20,18 +20,19 @@ import numpy as np
 
 from oracle.answer import Status
 from oracle.planner import plan
-from sim.discretiser import discretise
+from sim.discretiser import discretise, reading_cell
 from sim.executor import Executor
 from sim.scene import Scene
 from sim.sensors import Reading, sweep
 from sim.tolerance import ToleranceReport
 from sim.traffic import Traffic
-from sim.vehicle import WheeledCar
+from sim.vehicle import WheeledCar, settle_offset_m
 from spec.actions import Action
-from spec.constants import DEFAULT_SPEED_MPS, TIME_UNIT_S
+from spec.constants import DEFAULT_SPEED_MPS, ROAD_CELLS, TIME_UNIT_S
 from spec.errors import ScenarioError
 from spec.lanes import Lane
 from spec.physical import LOOP
+from spec.scenario import State
 
 RECENTRE_M = 1000.0
 
@@ -137,8 +138,18 @@ class Simulator:
         pose = self.car.pose()
         return sweep(self.scene, pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming).seen
 
+    def _settled_snapshot(self) -> tuple[tuple[Reading, ...], float]:
+        """What the sensors see, moved to where it will be once the AV is back at the common speed.
+
+        The model starts every action at the common speed, so a plan is made (and its
+        prediction checked) from that settled picture, and the executor's reference starts
+        there too; planning from the raw snapshot would ignore the AV's momentum.
+        """
+        ahead_m = settle_offset_m(self.car.pose().speed_mps)
+        return tuple(replace(r, dx_m=r.dx_m - ahead_m) for r in self._sense()), ahead_m
+
     def _one_plan(self) -> bool:
-        seen = self._sense()
+        seen, ahead_m = self._settled_snapshot()
         lane = Executor.lane_of(self.car.pose().y_m)
         self.executor.lane = lane
         try:
@@ -157,20 +168,24 @@ class Simulator:
         if not answer.actions:  # nothing to overtake: drive on
             self.doing = "drive (nothing to overtake)"
             return self.executor.run(Action.DRIVE, self._tick)
-        return self._execute(answer.actions, answer.states, seen)
+        return self._execute(answer.actions, answer.states, seen, ahead_m)
 
-    def _execute(self, actions: tuple[Action, ...], states: tuple, seen: tuple[Reading, ...]) -> bool:
+    def _execute(self, actions: tuple[Action, ...], states: tuple[State, ...], seen: tuple[Reading, ...],
+                 ahead_m: float) -> bool:
         plan_id = self.summary.plans
-        self.executor.reset_reference()
+        self.executor.reset_reference(ahead_m)
         tracked = self._tracked(seen, states[0])
         deviation = dict.fromkeys(tracked, 0.0)
         known = {r.body for r in seen}
         cars = {car.body: car for car in self.traffic.cars()}
         generation = {body: cars[body].respawns for body in cars}
         violations_before = len(self.summary.tolerance.violations)
-        for k, action in enumerate(actions[: LOOP.replan_after_actions]):
+        executed = actions[: LOOP.replan_after_actions]
+        for k, action in enumerate(executed):
             self.doing = f"{action.value} (plan {plan_id}, step {k + 1} of {len(actions)})"
-            if not self.executor.run(action, self._tick):
+            before = executed[k - 1] if k else None
+            after = executed[k + 1] if k + 1 < len(executed) else None
+            if not self.executor.run(action, self._tick, before, after):
                 return False
             self.summary.actions += 1
             now = {car.body: car.x_m - self.car.pose().x_m for car in self.traffic.cars()}
@@ -192,14 +207,12 @@ class Simulator:
         return True
 
     @staticmethod
-    def _tracked(seen: tuple[Reading, ...], start: object) -> dict[tuple[Lane, int, int], tuple[float, int]]:
+    def _tracked(seen: tuple[Reading, ...], start: State) -> dict[tuple[Lane, int, int], tuple[float, int]]:
         """Each sensed vehicle in the window, keyed by its lane and index in the scenario, with its start."""
         tracked = {}
-        for lane, cells in ((Lane.LEFT, start.left_lane), (Lane.RIGHT, start.right_lane)):  # type: ignore[attr-defined]
+        for lane, cells in ((Lane.LEFT, start.left_lane), (Lane.RIGHT, start.right_lane)):
             readings = sorted((r for r in seen if r.lane is lane), key=lambda r: r.dx_m)
-            from sim.discretiser import cell_of
-
-            inside = [r for r in readings if cell_of(r.dx_m) in cells]
+            inside = [r for r in readings if 0 <= reading_cell(r, start.lane) <= ROAD_CELLS]
             for index, reading in enumerate(inside):
                 tracked[(lane, index, reading.body)] = (reading.dx_m, cells[index])
         return tracked

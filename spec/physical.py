@@ -69,6 +69,9 @@ class LoopSpec:
     replan_after_actions: int = 10
     physics_dt_s: float = 1 / 60
     control_every_steps: int = 2  # the controller runs at physics rate / this
+    # A lane change's sideways move is done within this much of the action's time: the model
+    # flips the AV's lane before any oncoming tick, so the car must be in its new lane early.
+    lane_change_lateral_s: float = 2.0
     step_tolerance_cells: float = 0.25  # per action
     plan_tolerance_cells: float = 0.5  # accumulated since the plan started
 

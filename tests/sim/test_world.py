@@ -7,14 +7,17 @@ from collections import Counter
 import numpy as np
 import pytest
 
-from sim.discretiser import cell_of, discretise, targets
+from oracle.planner import plan
+from sim.discretiser import discretise
 from sim.scene import Scene
 from sim.sensors import Reading, sweep
 from sim.traffic import left_gap_cells, oncoming_gap_cells
 from sim.vehicle import KinematicCar
+from spec.actions import Action
 from spec.constants import AV_CELL, SEGMENT_M
 from spec.errors import ScenarioError
 from spec.lanes import Lane
+from spec.models import ModelKind
 from spec.physical import TRAFFIC
 
 SEED = 20261122
@@ -41,36 +44,45 @@ def test_left_respawn_is_uniform_and_never_makes_four_in_a_row() -> None:
 
 
 def test_discretiser_recovers_true_cells_from_random_placements() -> None:
+    """Left-lane vehicles anywhere within half a cell of a cell's centre, oncoming ones anywhere in the cell
+    beyond it (rounded towards the AV), come out in that cell."""
     rng = np.random.default_rng(SEED)
     for _ in range(500):
         lane = Lane.LEFT if rng.random() < 0.5 else Lane.RIGHT
         left = sorted(rng.choice([c for c in range(0, 40) if c != AV_CELL], size=rng.integers(0, 5), replace=False))
         right = sorted(rng.choice(range(12, 50), size=rng.integers(0, 3), replace=False))
-        noise = lambda: rng.uniform(-0.45, 0.45) * SEGMENT_M  # noqa: E731
-        readings = [Reading(Lane.LEFT, 0, (c - AV_CELL) * SEGMENT_M + noise()) for c in left]
-        readings += [Reading(Lane.RIGHT, 0, (c - AV_CELL) * SEGMENT_M + noise()) for c in right]
+        readings = [Reading(Lane.LEFT, 0, (c - AV_CELL + rng.uniform(-0.45, 0.45)) * SEGMENT_M) for c in left]
+        readings += [Reading(Lane.RIGHT, 0, (c - AV_CELL + rng.uniform(0.0, 0.95)) * SEGMENT_M) for c in right]
         scenario = discretise(tuple(readings), lane)
         assert list(scenario.left_lane) == [int(c) for c in left]
         assert list(scenario.right_lane) == [int(c) for c in right]
+
+
+def test_discretiser_drops_what_is_outside_the_window_and_keeps_the_rest() -> None:
+    far = (Reading(Lane.LEFT, 0, -11 * SEGMENT_M), Reading(Lane.LEFT, 1, 3 * SEGMENT_M),
+           Reading(Lane.RIGHT, 2, 45 * SEGMENT_M))
+    scenario = discretise(far, Lane.LEFT)
+    assert scenario.left_lane == (AV_CELL + 3,) and scenario.right_lane == () and scenario.targets == 1
 
 
 def test_own_lane_vehicle_is_never_put_in_the_avs_cell() -> None:
     assert discretise((Reading(Lane.LEFT, 0, -9.0),), Lane.LEFT).left_lane == (AV_CELL - 1,)
     assert discretise((Reading(Lane.LEFT, 0, 9.0),), Lane.LEFT).left_lane == (AV_CELL + 1,)
     assert discretise((Reading(Lane.LEFT, 0, 9.0),), Lane.RIGHT).left_lane == (AV_CELL,)
-    assert cell_of(-10.4) == AV_CELL and cell_of(10.6) == AV_CELL + 1
+
+
+def test_an_oncoming_vehicle_41_m_ahead_is_in_the_danger_zone_so_the_av_returns_at_once() -> None:
+    """41 m ahead is cell 11 (rounded towards the AV): inside the final model's danger zone, so only the
+    preparations model plans, and it sends the AV straight back to its lane."""
+    scenario = discretise((Reading(Lane.RIGHT, 0, 41.0),), Lane.RIGHT)
+    answer = plan(scenario, "sensible")
+    assert scenario.right_lane == (AV_CELL + 1,)
+    assert answer.model is ModelKind.PREPARATIONS and answer.actions == (Action.LEFT_LANE_CHANGE,)
 
 
 def test_two_vehicles_in_one_cell_is_a_sensing_failure() -> None:
     with pytest.raises(ScenarioError, match="two vehicles in one cell"):
         discretise((Reading(Lane.LEFT, 0, 40.0), Reading(Lane.LEFT, 1, 45.0)), Lane.LEFT)
-
-
-def test_targets_are_the_first_platoon_ahead() -> None:
-    assert targets([5, 11, 12, 13, 14], Lane.LEFT) == 3
-    assert targets([11, 13], Lane.LEFT) == 1
-    assert targets([10, 11, 20], Lane.RIGHT) == 2
-    assert targets([5], Lane.LEFT) == 0
 
 
 def test_sensors_keep_truth_apart_and_see_past_the_car_ahead_into_the_oncoming_lane() -> None:
