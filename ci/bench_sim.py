@@ -39,7 +39,7 @@ def main() -> None:
         rates.append(rate)
         table.add_row(str(seed), f"{r.km:.2f}", f"{r.sim_time_s / 60:.1f}", f"{r.wall_s:.1f}", f"{rate:.1f}",
                       f"{r.sim_time_s / r.wall_s:.0f}x", str(r.plans), f"{np.median(r.plan_ms):.2f}",
-                      r.failure or "-")
+                      r.failure.cause if r.failure else "-")
     console.print(table)
     console.print(f"target: >= 30 km per wall minute on one core: {'met' if min(rates) >= 30 else 'NOT met'} "
                   f"(median {np.median(rates):.1f})")

@@ -250,51 +250,57 @@ def explain(file: str, as_json: bool) -> None:
 @click.option("--engine", default="interpreter", show_default=True)
 @click.option("--strategy", type=click.Choice(["sensible", "shortest"]), default="sensible", show_default=True)
 @click.option("--runs", type=click.IntRange(min=1), default=1, show_default=True)
-@click.option("--workers", type=click.IntRange(min=1), default=1, show_default=True, help="Processes.")
-@click.option("--out", "out_dir", default="out/sim", show_default=True, help="Traces (JSON lines) and plots.")
+@click.option("--workers", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Local processes (with --executor dask and no --scheduler: the local cluster's workers).")
+@click.option("--executor", "executor_kind", type=click.Choice(["processes", "dask"]), default="processes",
+              show_default=True, help="Where runs go: local processes or a dask.distributed cluster.")
+@click.option("--scheduler", default=None, help="With --executor dask: a running scheduler's address.")
+@click.option("--out", "out_dir", default="out/sim", show_default=True,
+              help="Runs (runs.jsonl, resumable), traces (JSON lines) and plots.")
+@click.option("--fresh", is_flag=True, help="Forget the runs already recorded in --out instead of resuming.")
 @click.option("--paper-replanning", is_flag=True,
               help="Re-plan only as the paper did (not when a deviation exceeds the tolerance).")
 @click.option("--json", "as_json", is_flag=True)
 def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: str, runs: int, workers: int,
-             out_dir: str, paper_replanning: bool, as_json: bool) -> None:
+             executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool, paper_replanning: bool,
+             as_json: bool) -> None:
     """Drive the PyBullet simulator closed-loop and check every action against the model's prediction."""
-    from rich.progress import Progress
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+    from ci.executors import ExecutorChoice, check_executor
+    from sim.campaign import RUNS_FILE, Campaign
     from sim.campaign import simulate as run_campaign
+    from sim.tables import deviations_table, paper_table, runs_table, totals_table
 
     check_strategy(get_engine(engine), strategy)
+    executor = ExecutorChoice(executor_kind, workers, scheduler)
+    check_executor(executor)
+    campaign = Campaign(km, until_failure, engine, strategy, not paper_replanning)
     err = Console(stderr=True)
-    err.print(f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {km} km{' or until failure' if until_failure else ''}"
-              f"; engine {engine}; traces in {out_dir}")
-    with Progress(console=err, transient=True) as progress:
-        task = progress.add_task("simulating", total=runs)
-        results = run_campaign(runs, km, seed, until_failure, engine, strategy, workers, out_dir,
-                               not paper_replanning, lambda _summary: progress.advance(task))
+    limit = f"{km:g} km" + (" or until failure" if until_failure else "")
+    err.print(f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; engine {engine}, {strategy}; "
+              f"on {executor.describe()}; results in {Path(out_dir) / RUNS_FILE}")
+    columns = (TextColumn("simulate"), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[km]:.1f} km"),
+               TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn())
+    with Progress(*columns, console=err, transient=True) as progress:
+        task = progress.add_task("simulate", total=runs, km=0.0, failed=0)
+
+        def done(summary: Any, resumed: bool) -> None:
+            if resumed:
+                err.print(f"seed {summary.seed}: already in {RUNS_FILE} (resumed; --fresh runs it again)")
+            fields = progress.tasks[0].fields
+            progress.update(task, advance=1, km=fields["km"] + summary.km,
+                            failed=fields["failed"] + bool(summary.collisions or summary.planner_failures))
+
+        results = run_campaign(campaign, list(range(seed, seed + runs)), out_dir, executor, done, fresh)
     if as_json:
         _print_json([r.to_json() for r in results])
     else:
-        _print_runs(results)
+        for table in (runs_table(results), totals_table(results), deviations_table(results)):
+            out.print(table)
+        if until_failure:
+            out.print(paper_table(results, km))
     sys.exit(1 if any(r.collisions or r.planner_failures for r in results) else 0)
-
-
-def _print_runs(results: list[Any]) -> None:
-    table = Table(title="simulated drives")
-    for col in ("seed", "sim time", "overtakes", "km", "plans", "replans", "plan ms (median)", "failure"):
-        table.add_column(col, overflow="fold")
-    for r in results:
-        j = r.to_json()
-        table.add_row(str(r.seed), f"{r.sim_time_s / 60:.1f} min", str(r.overtakes), f"{r.km:.2f}", str(r.plans),
-                      str(r.replans), f"{j['plan_ms']['median']:.2f}", r.failure or "-")
-    out.print(table)
-    deviations = Table(title="largest deviation added by one action, per action type (cells)")
-    for col in ("action", "checks", "largest", "violations"):
-        deviations.add_column(col)
-    for action in sorted({a for r in results for a in r.tolerance.checks}):
-        checks = sum(r.tolerance.checks.get(action, 0) for r in results)
-        largest = max(r.tolerance.largest.get(action, 0.0) for r in results)
-        violations = sum(1 for r in results for v in r.tolerance.violations if v.action == action)
-        deviations.add_row(action, str(checks), f"{largest:.3f}", str(violations))
-    out.print(deviations)
 
 
 @cli.command()
@@ -350,7 +356,7 @@ def _demo_drive(km: float = 1.0, seed: int = 1) -> None:
     largest = ", ".join(f"{a} {d:.2f}" for a, d in sorted(r.tolerance.largest.items()))
     out.print(f"simulated drive (seed {seed}): {r.km:.2f} km in {r.sim_time_s / 60:.1f} simulated min "
               f"({r.wall_s:.1f} s wall), {r.overtakes} overtakes, {r.plans} plans, "
-              f"{'no collision' if not r.collisions else r.collisions[0]}")
+              f"{'no collision' if not r.collisions else r.collisions[0].cause + ', ' + r.collisions[0].detail}")
     out.print(f"  largest deviation from the model per action (cells): {largest}; "
               f"{len(r.tolerance.violations)} beyond tolerance (`overtake simulate` for more)")
 

@@ -1,42 +1,78 @@
-"""Several drives, on several cores: the unit later campaigns reuse. Each run's seed is printed.
+"""Several drives, resumable, run wherever ``ci.executors`` sends them. Each run's seed is printed.
 
-Runs go to a process pool (one simulator, one physics client and one generator per run);
-each leaves ``trace-seedS.jsonl`` and ``spacetime-seedS.png`` in the output folder.
+Every finished run is appended to ``OUT/runs.jsonl`` with the campaign's parameters, so an
+interrupted campaign started again with the same parameters and folder runs only the
+seeds it has no line for (a half-written last line is run again). Each run leaves
+``trace-seedS.jsonl`` and ``spacetime-seedS.png`` in the same folder.
 """
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from ci.executors import IN_PROCESS, ExecutorChoice, run_jobs
 from sim.report import plot_trace
-from sim.simulator import RunSummary, run_drive
+from sim.simulator import run_drive
+from sim.summary import RunSummary
+
+RUNS_FILE = "runs.jsonl"
 
 
-def simulate(runs: int, km: float, seed: int, until_failure: bool = False, engine: str = "interpreter",
-             strategy: str = "sensible", workers: int = 1, out_dir: str | None = None,
-             replan_on_violation: bool = True,
-             on_done: Callable[[RunSummary], None] | None = None) -> list[RunSummary]:
-    """Run ``runs`` drives with seeds ``seed .. seed + runs - 1``; results in seed order."""
-    jobs = [(seed + i, km, until_failure, engine, strategy, out_dir, replan_on_violation) for i in range(runs)]
-    results: list[RunSummary] = []
-    if workers <= 1:
-        for job in jobs:
-            results.append(run_drive(*job))
-            _finish(results[-1], out_dir, on_done)
-    else:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            for future in as_completed([pool.submit(run_drive, *job) for job in jobs]):
-                results.append(future.result())
-                _finish(results[-1], out_dir, on_done)
-    return sorted(results, key=lambda r: r.seed)
+@dataclass(frozen=True, slots=True)
+class Campaign:
+    """What every run of a campaign shares (the seeds differ)."""
+
+    km: float
+    until_failure: bool = False
+    engine: str = "interpreter"
+    strategy: str = "sensible"
+    replan_on_violation: bool = True
 
 
-def _finish(summary: RunSummary, out_dir: str | None, on_done: Callable[[RunSummary], None] | None) -> None:
-    if out_dir:
-        trace = Path(out_dir) / f"trace-seed{summary.seed}.jsonl"
-        if trace.exists() and trace.stat().st_size:
-            plot_trace(trace, Path(out_dir) / f"spacetime-seed{summary.seed}.png")
-    if on_done:
-        on_done(summary)
+def simulate(campaign: Campaign, seeds: list[int], out_dir: str, executor: ExecutorChoice = IN_PROCESS,
+             on_done: Callable[[RunSummary, bool], None] | None = None, fresh: bool = False) -> list[RunSummary]:
+    """Run every seed not already recorded in ``out_dir``; ``on_done(summary, resumed)`` after each; seed order."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    log = out / RUNS_FILE
+    if fresh:
+        log.unlink(missing_ok=True)
+    done = {seed: run for seed, run in recorded(log, campaign).items() if seed in seeds}
+    for summary in done.values():
+        if on_done:
+            on_done(summary, True)
+    todo = [s for s in seeds if s not in done]
+    jobs = [(s, campaign.km, campaign.until_failure, campaign.engine, campaign.strategy, str(out),
+             campaign.replan_on_violation) for s in todo]
+    with log.open("a") as lines:
+        if log.stat().st_size and not log.read_bytes().endswith(b"\n"):
+            lines.write("\n")  # an interrupted write left half a line: that run is done again
+        for _index, summary in run_jobs(run_drive, jobs, executor):
+            lines.write(json.dumps({"campaign": asdict(campaign), "run": summary.to_json()}) + "\n")
+            lines.flush()
+            done[summary.seed] = summary
+            trace = out / f"trace-seed{summary.seed}.jsonl"
+            if trace.exists() and trace.stat().st_size:
+                plot_trace(trace, out / f"spacetime-seed{summary.seed}.png")
+            if on_done:
+                on_done(summary, False)
+    return [done[s] for s in seeds]
+
+
+def recorded(log: Path, campaign: Campaign) -> dict[int, RunSummary]:
+    """Runs an earlier start of the same campaign finished, by seed."""
+    if not log.exists():
+        return {}
+    runs = {}
+    for line in log.read_text().splitlines():
+        try:
+            record = json.loads(line)
+            if record["campaign"] == asdict(campaign):
+                summary = RunSummary.from_json(record["run"])
+                runs[summary.seed] = summary
+        except (json.JSONDecodeError, KeyError, TypeError):
+            continue  # a line cut short by an interruption, or from another version: run that seed again
+    return runs

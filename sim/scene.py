@@ -12,32 +12,34 @@ import os
 import sys
 from collections.abc import Iterator
 
-import pybullet as p
-from pybullet_utils import bullet_client
-
 from spec.lanes import Lane
 from spec.physical import LOOP, ROAD
 
 
 @contextlib.contextmanager
-def _quiet_stdout() -> Iterator[None]:
-    """Silence file descriptor 1 (C-level prints) for the duration, keeping Python's stdout intact."""
-    sys.stdout.flush()
-    saved = os.dup(1)
+def _quiet(fd: int) -> Iterator[None]:
+    """Silence a file descriptor (1 or 2: C-level prints) for the duration, keeping Python's streams intact."""
+    (sys.stdout if fd == 1 else sys.stderr).flush()
+    saved = os.dup(fd)
     try:
         with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 1)
+            os.dup2(null.fileno(), fd)
         yield
     finally:
-        os.dup2(saved, 1)
+        os.dup2(saved, fd)
         os.close(saved)
+
+
+with _quiet(2):  # PyBullet's C code prints its build time on stderr when it loads
+    import pybullet as p
+    from pybullet_utils import bullet_client
 
 
 class Scene:
     """A private physics world with a road."""
 
     def __init__(self, dt_s: float = LOOP.physics_dt_s) -> None:
-        with _quiet_stdout():  # PyBullet's C code prints "argv[0]=" when it connects
+        with _quiet(1):  # PyBullet's C code prints "argv[0]=" when it connects
             self.client = bullet_client.BulletClient(connection_mode=p.DIRECT)
         self.dt_s = dt_s
         self.client.setGravity(0, 0, -9.81)

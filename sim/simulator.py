@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import IO
 
@@ -24,7 +24,8 @@ from sim.discretiser import discretise, reading_cell
 from sim.executor import Executor
 from sim.scene import Scene
 from sim.sensors import Reading, sweep
-from sim.tolerance import ToleranceReport
+from sim.summary import Failure, RunSummary
+from sim.tolerance import Violation
 from sim.traffic import Traffic
 from sim.vehicle import WheeledCar, settle_offset_m
 from spec.actions import Action
@@ -35,47 +36,6 @@ from spec.physical import LOOP
 from spec.scenario import State
 
 RECENTRE_M = 1000.0
-
-
-@dataclass(slots=True)
-class RunSummary:
-    """What one drive did."""
-
-    seed: int
-    km: float = 0.0
-    sim_time_s: float = 0.0
-    wall_s: float = 0.0
-    overtakes: int = 0
-    plans: int = 0
-    replans: int = 0
-    actions: int = 0
-    plan_ms: list[float] = field(default_factory=list)
-    collisions: list[str] = field(default_factory=list)
-    planner_failures: list[str] = field(default_factory=list)
-    sensing_failures: list[str] = field(default_factory=list)
-    tolerance: ToleranceReport = field(default_factory=ToleranceReport)
-
-    @property
-    def failure(self) -> str | None:
-        """The first failure, if the drive ended on one."""
-        for kind, items in (("collision", self.collisions), ("planner", self.planner_failures),
-                            ("sensing", self.sensing_failures)):
-            if items:
-                return f"{kind}: {items[0]}"
-        return None
-
-    def to_json(self) -> dict[str, object]:
-        ms = np.array(self.plan_ms) if self.plan_ms else np.zeros(1)
-        return {"seed": self.seed, "km": round(self.km, 3), "sim_time_s": round(self.sim_time_s, 1),
-                "wall_s": round(self.wall_s, 2), "overtakes": self.overtakes, "plans": self.plans,
-                "replans": self.replans, "actions": self.actions,
-                "plan_ms": {"median": round(float(np.median(ms)), 3), "p99": round(float(np.percentile(ms, 99)), 3)},
-                "collisions": self.collisions, "planner_failures": self.planner_failures,
-                "sensing_failures": self.sensing_failures,
-                "tolerance": {"checks": dict(self.tolerance.checks), "violations": len(self.tolerance.violations),
-                              "largest_step_deviation_cells": {k: round(v, 3)
-                                                               for k, v in self.tolerance.largest.items()}},
-                "failure": self.failure}
 
 
 class Simulator:
@@ -104,8 +64,8 @@ class Simulator:
         for car in self.traffic.cars():
             if self.scene.client.getContactPoints(self.car.body, car.body):
                 lane = "left-lane" if car in self.traffic.left else "oncoming"
-                self.summary.collisions.append(f"with a {lane} vehicle at x={car.x_m - x:+.1f} m during "
-                                               f"{self.doing} (t={self.summary.sim_time_s:.1f} s)")
+                self._fail("collision", f"collision with a{'n' if lane == 'oncoming' else ''} {lane} vehicle",
+                           f"{car.x_m - x:+.1f} m ahead, during {self.doing}")
                 return False
         for car in self.traffic.left:
             ahead = car.x_m > x
@@ -122,6 +82,10 @@ class Simulator:
         self.summary.km = self.origin_km + self.car.pose().x_m / 1000
         return True
 
+    def _fail(self, kind: str, cause: str, detail: str) -> None:
+        self.summary.failures.append(Failure(kind, cause, detail, round(self.summary.km, 3),
+                                             round(self.summary.sim_time_s, 1)))
+
     # -- the decision clock ------------------------------------------------------------------
     def drive(self, km: float, until_failure: bool = False) -> RunSummary:
         """Drive ``km`` kilometres (or until the first failure); stop at any collision."""
@@ -129,7 +93,7 @@ class Simulator:
         ok = self.executor.hold(4.0, DEFAULT_SPEED_MPS, self._tick)  # start-up: reach the common speed
         while ok and self.summary.km < km:
             ok = self._one_plan()
-            if until_failure and self.summary.failure:
+            if until_failure and self.summary.failures:
                 break
         self.summary.wall_s = time.perf_counter() - started
         return self.summary
@@ -155,14 +119,14 @@ class Simulator:
         try:
             scenario = discretise(seen, lane)
         except ScenarioError as err:
-            self.summary.sensing_failures.append(str(err))
+            self._fail("sensing", err.reason, str(err))
             self.doing = "waiting after a sensing failure"
             return self.executor.hold(TIME_UNIT_S, DEFAULT_SPEED_MPS, self._tick)
         answer = plan(scenario, self.strategy, engine=self.engine)
         self.summary.plans += 1
         self.summary.plan_ms.append(answer.elapsed_ms)
         if answer.status is not Status.PLAN:
-            self.summary.planner_failures.append(f"{answer.status.value} for {scenario}")
+            self._fail("planner", answer.status.value, f"{answer.status.value} for {scenario}")
             self.doing = "waiting without a plan"
             return self.executor.hold(TIME_UNIT_S, DEFAULT_SPEED_MPS, self._tick)
         if not answer.actions:  # nothing to overtake: drive on
@@ -179,7 +143,6 @@ class Simulator:
         known = {r.body for r in seen}
         cars = {car.body: car for car in self.traffic.cars()}
         generation = {body: cars[body].respawns for body in cars}
-        violations_before = len(self.summary.tolerance.violations)
         executed = actions[: LOOP.replan_after_actions]
         for k, action in enumerate(executed):
             self.doing = f"{action.value} (plan {plan_id}, step {k + 1} of {len(actions)})"
@@ -188,6 +151,7 @@ class Simulator:
             if not self.executor.run(action, self._tick, before, after):
                 return False
             self.summary.actions += 1
+            violations_before = len(self.summary.tolerance.violations)
             now = {car.body: car.x_m - self.car.pose().x_m for car in self.traffic.cars()}
             for (lane, index, body), (start_dx, start_cell) in tracked.items():
                 if cars[body].respawns != generation[body]:
@@ -196,9 +160,9 @@ class Simulator:
                 deviation[(lane, index, body)] = self.summary.tolerance.check(
                     plan_id, k + 1, action.value, f"{lane.value}_lane[{index}]", cells[index] - start_cell,
                     start_dx, now[body], deviation[(lane, index, body)])
-            self._trace(plan_id, k + 1, action, states[k + 1])
-            violated = len(self.summary.tolerance.violations) > violations_before
-            if self.replan_on_violation and violated:
+            new_violations = self.summary.tolerance.violations[violations_before:]
+            self._trace(plan_id, k + 1, action, states[k + 1], new_violations)
+            if self.replan_on_violation and new_violations:
                 self.summary.replans += 1
                 return True
             if {r.body for r in self._sense()} - known:
@@ -217,7 +181,8 @@ class Simulator:
                 tracked[(lane, index, reading.body)] = (reading.dx_m, cells[index])
         return tracked
 
-    def _trace(self, plan_id: int, step: int, action: Action, predicted: object) -> None:
+    def _trace(self, plan_id: int, step: int, action: Action, predicted: State,
+               violations: list[Violation]) -> None:
         if self.trace is None:
             return
         pose = self.car.pose()
@@ -227,8 +192,9 @@ class Simulator:
                                             "speed_mps": round(pose.speed_mps, 2)},
                                      "traffic_dx_m": sorted(round(c.x_m - pose.x_m, 1)
                                                             for c in self.traffic.cars()),
-                                     "predicted": {"left_lane": list(predicted.left_lane),  # type: ignore[attr-defined]
-                                                   "right_lane": list(predicted.right_lane)}}) + "\n")  # type: ignore[attr-defined]
+                                     "predicted": {"left_lane": list(predicted.left_lane),
+                                                   "right_lane": list(predicted.right_lane)},
+                                     "violations": [v.to_json() for v in violations]}) + "\n")
 
     def close(self) -> None:
         self.scene.close()

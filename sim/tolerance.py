@@ -10,7 +10,8 @@ plan may accumulate at most ``plan`` cells.
 from __future__ import annotations
 
 from collections import defaultdict
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
+from typing import Any
 
 from spec.constants import SEGMENT_M
 from spec.physical import LOOP
@@ -32,6 +33,9 @@ class Violation:
     def deviation(self) -> float:
         return self.measured_cells - self.predicted_cells
 
+    def to_json(self) -> dict[str, object]:
+        return {**asdict(self), "deviation_cells": round(self.deviation, 3)}
+
 
 @dataclass(slots=True)
 class ToleranceReport:
@@ -41,7 +45,8 @@ class ToleranceReport:
     plan_tolerance: float = LOOP.plan_tolerance_cells
     largest: dict[str, float] = field(default_factory=lambda: defaultdict(float))
     checks: dict[str, int] = field(default_factory=lambda: defaultdict(int))
-    violations: list[Violation] = field(default_factory=list)
+    violations: list[Violation] = field(default_factory=list)  # this process's, in full (the trace has them too)
+    violations_by_action: dict[str, int] = field(default_factory=lambda: defaultdict(int))
 
     def check(self, plan: int, step: int, action: str, vehicle: str, predicted_cells: float,
               start_dx_m: float, now_dx_m: float, previous_deviation: float) -> float:
@@ -51,8 +56,23 @@ class ToleranceReport:
         added = abs(deviation - previous_deviation)
         self.largest[action] = max(self.largest[action], added)
         self.checks[action] += 1
-        if added > self.step_tolerance:
-            self.violations.append(Violation(plan, step, action, vehicle, predicted_cells, measured, "step"))
-        elif abs(deviation) > self.plan_tolerance:
-            self.violations.append(Violation(plan, step, action, vehicle, predicted_cells, measured, "plan"))
+        kind = "step" if added > self.step_tolerance else "plan" if abs(deviation) > self.plan_tolerance else ""
+        if kind:
+            self.violations.append(Violation(plan, step, action, vehicle, predicted_cells, measured, kind))
+            self.violations_by_action[action] += 1
         return deviation
+
+    def to_json(self) -> dict[str, object]:
+        return {"step_tolerance_cells": self.step_tolerance, "plan_tolerance_cells": self.plan_tolerance,
+                "checks": dict(self.checks), "violations": sum(self.violations_by_action.values()),
+                "violations_by_action": dict(self.violations_by_action),
+                "largest_step_deviation_cells": {k: round(v, 3) for k, v in self.largest.items()}}
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> ToleranceReport:
+        """A report read back from ``to_json`` (counts and largest deviations; the violations are in the trace)."""
+        report = cls(data["step_tolerance_cells"], data["plan_tolerance_cells"])
+        report.checks.update(data["checks"])
+        report.largest.update(data["largest_step_deviation_cells"])
+        report.violations_by_action.update(data["violations_by_action"])
+        return report

@@ -10,9 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import pybullet as p
-
-from sim.scene import Scene
+from sim.scene import Scene, p
 from spec.constants import DEFAULT_SPEED_MPS
 from spec.physical import CAR, CarSpec
 

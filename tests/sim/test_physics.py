@@ -2,16 +2,18 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
-from sim.executor import Executor
+from sim.executor import Executor, SpeedProfile, action_speed_mps, ramp_s
 from sim.scene import Scene
-from sim.vehicle import KinematicCar, WheeledCar
+from sim.vehicle import KinematicCar, WheeledCar, settle_offset_m
 from spec.actions import ACTION_RULES, Action
 from spec.constants import DEFAULT_SPEED_MPS
 from spec.lanes import Lane
-from spec.physical import CAR
+from spec.physical import CAR, LOOP
 
 
 def no_traffic(_dt: float) -> bool:
@@ -103,3 +105,49 @@ def test_a_staged_crash_is_detected_as_a_contact(world) -> None:
         return not scene.client.getContactPoints(car.body, parked.body)
 
     assert not executor.hold(12.0, DEFAULT_SPEED_MPS, contact)
+
+
+def test_settle_offset_is_what_the_car_gains_or_loses_while_returning_to_the_common_speed() -> None:
+    assert settle_offset_m(DEFAULT_SPEED_MPS) == 0.0
+    assert settle_offset_m(2 * DEFAULT_SPEED_MPS) == pytest.approx(DEFAULT_SPEED_MPS**2 / (2 * CAR.max_brake_mps2))
+    assert settle_offset_m(DEFAULT_SPEED_MPS / 2) == pytest.approx(-(DEFAULT_SPEED_MPS / 2) ** 2
+                                                                   / (2 * CAR.max_accel_mps2))
+
+
+@pytest.mark.parametrize("plan", [(Action.DRIVE, Action.ACCELERATE, Action.ACCELERATE, Action.DRIVE),
+                                  (Action.DRIVE, Action.ACCELERATE, Action.BRAKE, Action.ACCELERATE),
+                                  (Action.DRIVE, Action.BRAKE, Action.DRIVE, Action.BRAKE)])
+def test_centred_ramps_put_the_reference_where_the_model_is_at_every_boundary(plan: tuple[Action, ...]) -> None:
+    """Each speed change inside a plan is a feasible ramp centred on its boundary, so at every boundary the
+    reference is off the model by at most one half ramp's area (dv * ramp / 8), and the offsets do not add up."""
+    dt = 0.01
+    speeds_mps = [action_speed_mps(a) for a in plan]
+    bound_m = max(abs(b - a) * ramp_s(a, b) / 8 for a, b in zip(speeds_mps, [*speeds_mps[1:], DEFAULT_SPEED_MPS]))
+    model_m = reference_m = 0.0
+    for k, action in enumerate(plan):
+        before = plan[k - 1] if k else None
+        after = plan[k + 1] if k + 1 < len(plan) else None
+        profile = SpeedProfile(action_speed_mps(before), action_speed_mps(action), action_speed_mps(after),
+                               ACTION_RULES[action].duration_s)
+        speeds = [profile.at(i * dt) for i in range(round(profile.duration_s / dt))]
+        assert all(abs(b - a) <= max(CAR.max_accel_mps2, CAR.max_brake_mps2) * dt * 1.001
+                   for a, b in itertools.pairwise(speeds))  # feasible: within the car's limits
+        reference_m += sum(speeds) * dt
+        model_m += action_speed_mps(action) * profile.duration_s
+        assert abs(reference_m - model_m) <= bound_m + 0.05
+
+
+def test_the_lateral_move_of_a_lane_change_is_done_early(world) -> None:
+    """The model puts the AV in its new lane before any oncoming tick: the car is there well before the end."""
+    scene, car, executor = world
+    executor.hold(4.0, DEFAULT_SPEED_MPS, no_traffic)
+    ys: list[float] = []
+
+    def record(_dt: float) -> bool:
+        ys.append(car.pose().y_m)
+        return True
+
+    assert executor.run(Action.RIGHT_LANE_CHANGE, record)
+    past_centre = next(i for i, y in enumerate(ys) if y < 0) * executor.dt_s
+    assert past_centre <= LOOP.lane_change_lateral_s * 0.75  # out of its old lane by 3/4 of the lateral time
+    assert abs(ys[-1] - scene.lane_y(Lane.RIGHT)) < 0.3

@@ -1,0 +1,93 @@
+"""Where a campaign's independent jobs run: this process, a pool of local processes, or a dask.distributed cluster.
+
+Campaigns hand ``run_jobs`` a picklable function and its argument tuples and get each
+``(index, result)`` back as soon as that job finishes, whatever runs it. For dask,
+``scheduler`` is the address of a running scheduler (``dask scheduler`` prints it; every
+worker needs this package installed) or None for a local cluster of ``workers`` processes.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from typing import Any, TypeVar
+
+from spec.errors import ScenarioError, ToolMissing
+
+R = TypeVar("R")
+KINDS = ("processes", "dask")
+CONNECT_TIMEOUT_S = 10
+
+
+@dataclass(frozen=True, slots=True)
+class ExecutorChoice:
+    """How to run a campaign's jobs."""
+
+    kind: str = "processes"  # one of KINDS
+    workers: int = 1  # local processes (for dask without a scheduler: the local cluster's workers)
+    scheduler: str | None = None  # dask only: a running scheduler's address
+
+    def describe(self) -> str:
+        if self.kind == "dask" and self.scheduler:
+            return f"dask scheduler {self.scheduler}"
+        if self.kind == "dask":
+            return f"local dask cluster, {self.workers} worker(s)"
+        return "this process" if self.workers <= 1 else f"{self.workers} processes"
+
+
+IN_PROCESS = ExecutorChoice()
+
+
+def check_executor(choice: ExecutorChoice) -> None:
+    """Reject a choice that cannot run, before any job starts."""
+    if choice.kind not in KINDS:
+        raise ScenarioError("--executor", choice.kind, f"unknown executor (known: {', '.join(KINDS)})")
+    if choice.scheduler and choice.kind != "dask":
+        raise ScenarioError("--scheduler", choice.scheduler, "a scheduler address goes with --executor dask")
+    if choice.workers < 1:
+        raise ScenarioError("--workers", choice.workers, "at least one worker is needed")
+
+
+def run_jobs(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: ExecutorChoice) -> Iterator[tuple[int, R]]:
+    """Run ``fn(*job)`` for every job; yield ``(index, result)`` in the order they finish."""
+    check_executor(choice)
+    if choice.kind == "dask":
+        yield from _dask(fn, jobs, choice)
+    elif choice.workers <= 1 or len(jobs) <= 1:
+        for index, job in enumerate(jobs):
+            yield index, fn(*job)
+    else:
+        with ProcessPoolExecutor(max_workers=min(choice.workers, len(jobs))) as pool:
+            futures = {pool.submit(fn, *job): index for index, job in enumerate(jobs)}
+            for future in as_completed(futures):
+                yield futures[future], future.result()
+
+
+def _dask(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: ExecutorChoice) -> Iterator[tuple[int, R]]:
+    try:
+        from distributed import Client, LocalCluster
+        from distributed import as_completed as dask_completed
+    except ImportError:
+        raise ToolMissing("dask.distributed is not installed: pip install 'distributed>=2024.1'") from None
+    cluster = None
+    try:
+        if choice.scheduler:
+            client = Client(choice.scheduler, timeout=CONNECT_TIMEOUT_S)
+        else:
+            cluster = LocalCluster(n_workers=choice.workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.ERROR)
+            client = Client(cluster)
+    except (OSError, TimeoutError) as err:
+        raise ToolMissing(f"no dask scheduler answered at {choice.scheduler} within {CONNECT_TIMEOUT_S} s "
+                          f"({type(err).__name__}); start one with `dask scheduler` and workers with "
+                          f"`dask worker ADDRESS`") from None
+    try:
+        futures = {client.submit(fn, *job, pure=False): index for index, job in enumerate(jobs)}
+        for future in dask_completed(list(futures)):
+            yield futures[future], future.result()
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

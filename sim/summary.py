@@ -1,0 +1,82 @@
+"""What one drive did: distances, counts, planning latency, failures and the tolerance report, as data.
+
+A summary goes to JSON and back unchanged (``to_json``/``from_json``), so a campaign can
+write each finished run as one line and resume from the lines it finds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from sim.tolerance import ToleranceReport
+
+#: Failure kinds, in the order a drive's first failure is reported.
+KINDS = ("collision", "planner", "sensing")
+
+
+@dataclass(frozen=True, slots=True)
+class Failure:
+    """One failure: its kind, a short cause for tables, the full story, and where it happened."""
+
+    kind: str  # one of KINDS
+    cause: str  # e.g. "collision with an oncoming vehicle", "no_plan"
+    detail: str
+    km: float
+    t_s: float
+
+
+@dataclass(slots=True)
+class RunSummary:
+    """What one drive did."""
+
+    seed: int
+    km: float = 0.0
+    sim_time_s: float = 0.0
+    wall_s: float = 0.0
+    overtakes: int = 0
+    plans: int = 0
+    replans: int = 0
+    actions: int = 0
+    plan_ms: list[float] = field(default_factory=list)
+    failures: list[Failure] = field(default_factory=list)
+    tolerance: ToleranceReport = field(default_factory=ToleranceReport)
+
+    def of_kind(self, kind: str) -> list[Failure]:
+        return [f for f in self.failures if f.kind == kind]
+
+    @property
+    def collisions(self) -> list[Failure]:
+        return self.of_kind("collision")
+
+    @property
+    def planner_failures(self) -> list[Failure]:
+        return self.of_kind("planner")
+
+    @property
+    def failure(self) -> Failure | None:
+        """The first failure of the most serious kind, if the drive had one."""
+        return next((f for kind in KINDS for f in self.of_kind(kind)), None)
+
+    def latency_ms(self) -> dict[str, float]:
+        ms = np.array(self.plan_ms) if self.plan_ms else np.zeros(1)
+        return {"median": round(float(np.median(ms)), 3), "p99": round(float(np.percentile(ms, 99)), 3),
+                "max": round(float(ms.max()), 3)}
+
+    def to_json(self) -> dict[str, Any]:
+        failure = self.failure
+        return {"seed": self.seed, "km": round(self.km, 3), "sim_time_s": round(self.sim_time_s, 1),
+                "wall_s": round(self.wall_s, 2), "overtakes": self.overtakes, "plans": self.plans,
+                "replans": self.replans, "actions": self.actions, "plan_ms": [round(m, 3) for m in self.plan_ms],
+                "plan_latency_ms": self.latency_ms(), "failures": [asdict(f) for f in self.failures],
+                "failure": asdict(failure) if failure else None, "tolerance": self.tolerance.to_json()}
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> RunSummary:
+        return cls(seed=data["seed"], km=data["km"], sim_time_s=data["sim_time_s"], wall_s=data["wall_s"],
+                   overtakes=data["overtakes"], plans=data["plans"], replans=data["replans"],
+                   actions=data["actions"], plan_ms=list(data["plan_ms"]),
+                   failures=[Failure(**f) for f in data["failures"]],
+                   tolerance=ToleranceReport.from_json(data["tolerance"]))

@@ -1,0 +1,82 @@
+"""A campaign's results as tables: per run, in total, deviation per action type, and beside the paper's Table 1."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+import numpy as np
+from rich.table import Table
+
+from sim.paper import MEDIAN_KM, MEDIAN_OVERTAKEN, TABLE_1
+from sim.summary import RunSummary
+
+
+def hours_minutes(seconds: float) -> str:
+    minutes = round(seconds / 60)
+    return f"{minutes // 60}h {minutes % 60:02d}m"
+
+
+def runs_table(results: list[RunSummary]) -> Table:
+    table = Table(title="simulated drives")
+    for col in ("seed", "sim time", "km", "overtakes", "plans", "replans", "plan ms median / p99", "violations",
+                "failure"):
+        table.add_column(col, overflow="fold")
+    for r in results:
+        latency = r.latency_ms()
+        failure = f"{r.failure.cause} at {r.failure.km:.2f} km" if r.failure else "-"
+        table.add_row(str(r.seed), hours_minutes(r.sim_time_s), f"{r.km:.2f}", str(r.overtakes), str(r.plans),
+                      str(r.replans), f"{latency['median']:.2f} / {latency['p99']:.2f}",
+                      str(sum(r.tolerance.violations_by_action.values())), failure)
+    return table
+
+
+def totals_table(results: list[RunSummary]) -> Table:
+    """The whole campaign in one column: distance, time, overtakes, plans, latency, failures by cause."""
+    ms = np.array([m for r in results for m in r.plan_ms]) if any(r.plan_ms for r in results) else np.zeros(1)
+    causes = Counter(f"{f.kind}: {f.cause}" for r in results for f in r.failures)
+    table = Table(title="campaign totals", show_header=False)
+    rows = [("runs", str(len(results))), ("km", f"{sum(r.km for r in results):.1f}"),
+            ("simulated time", hours_minutes(sum(r.sim_time_s for r in results))),
+            ("overtakes", str(sum(r.overtakes for r in results))), ("plans", str(sum(r.plans for r in results))),
+            ("re-plans", str(sum(r.replans for r in results))),
+            ("planning ms: median / p99 / max", f"{np.median(ms):.2f} / {np.percentile(ms, 99):.2f} / {ms.max():.2f}"),
+            ("collisions", str(sum(len(r.collisions) for r in results))),
+            ("planner failures", str(sum(len(r.planner_failures) for r in results))),
+            ("tolerance violations", str(sum(sum(r.tolerance.violations_by_action.values()) for r in results)))]
+    rows += [(f"  {cause}", str(n)) for cause, n in sorted(causes.items())]
+    for key, value in rows:
+        table.add_row(key, value)
+    return table
+
+
+def deviations_table(results: list[RunSummary]) -> Table:
+    step = results[0].tolerance.step_tolerance if results else 0.0
+    plan = results[0].tolerance.plan_tolerance if results else 0.0
+    table = Table(title=f"deviation from the model per action type (cells; tolerance {step} per action, {plan} "
+                        f"per plan)")
+    for col in ("action", "checks", "largest added by one action", "violations"):
+        table.add_column(col)
+    for action in sorted({a for r in results for a in r.tolerance.checks}):
+        table.add_row(action, str(sum(r.tolerance.checks.get(action, 0) for r in results)),
+                      f"{max(r.tolerance.largest.get(action, 0.0) for r in results):.3f}",
+                      str(sum(r.tolerance.violations_by_action.get(action, 0) for r in results)))
+    return table
+
+
+def paper_table(results: list[RunSummary], cap_km: float) -> Table:
+    """Our runs beside the paper's Table 1, row by row, with both medians between failures."""
+    table = Table(title=f"the paper's experiment: our runs (true sensor readings, cap {cap_km:g} km) beside Table 1")
+    for col in ("run", "sim time", "overtaken", "km", "failure", "paper: time", "overtaken", "km", "failure"):
+        table.add_column(col, overflow="fold")
+    for i in range(max(len(results), len(TABLE_1))):
+        ours = ["", "", "", ""]
+        if i < len(results):
+            r = results[i]
+            ours = [hours_minutes(r.sim_time_s), str(r.overtakes), f"{r.km:.1f}",
+                    r.failure.cause if r.failure else "none (cap)"]
+        paper = TABLE_1[i] if i < len(TABLE_1) else None
+        theirs = [paper.runtime, str(paper.overtaken), f"{paper.km:.1f}", paper.failure] if paper else [""] * 4
+        table.add_row(str(i + 1), *ours, *theirs)
+    table.add_row("median", "", f"{np.median([r.overtakes for r in results]):.1f}",
+                  f"{np.median([r.km for r in results]):.1f}", "", "", f"{MEDIAN_OVERTAKEN}", f"{MEDIAN_KM}", "")
+    return table

@@ -1,0 +1,44 @@
+"""ci/executors.py: every executor runs every job once and hands back the same results."""
+
+from __future__ import annotations
+
+import operator
+
+import pytest
+
+import ci.executors
+from ci.executors import ExecutorChoice, check_executor, run_jobs
+from spec.errors import ScenarioError, ToolMissing
+
+JOBS = [(i, i * i) for i in range(6)]
+EXPECTED = {i: i + i * i for i in range(6)}
+
+
+@pytest.mark.parametrize("choice", [ExecutorChoice(), ExecutorChoice("processes", 2), ExecutorChoice("dask", 2)],
+                         ids=["in-process", "processes", "dask-local"])
+def test_every_executor_runs_each_job_once_with_the_same_results(choice: ExecutorChoice) -> None:
+    results = list(run_jobs(operator.add, JOBS, choice))
+    assert sorted(i for i, _ in results) == list(range(len(JOBS)))
+    assert dict(results) == EXPECTED
+
+
+def test_dask_runs_on_a_scheduler_given_by_its_address() -> None:
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+        choice = ExecutorChoice("dask", scheduler=cluster.scheduler_address)
+        assert dict(run_jobs(operator.add, JOBS, choice)) == EXPECTED
+
+
+def test_an_unreachable_scheduler_is_a_missing_tool_not_a_traceback(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(ci.executors, "CONNECT_TIMEOUT_S", 1)
+    with pytest.raises(ToolMissing, match=r"no dask scheduler answered at tcp://127\.0\.0\.1:9"):
+        list(run_jobs(operator.add, JOBS, ExecutorChoice("dask", scheduler="tcp://127.0.0.1:9")))
+
+
+@pytest.mark.parametrize(("choice", "key"), [(ExecutorChoice("threads"), "--executor"),
+                                             (ExecutorChoice("processes", scheduler="tcp://x:1"), "--scheduler"),
+                                             (ExecutorChoice("processes", 0), "--workers")])
+def test_a_choice_that_cannot_run_is_bad_input_naming_the_option(choice: ExecutorChoice, key: str) -> None:
+    with pytest.raises(ScenarioError, match=key):
+        check_executor(choice)
