@@ -1,11 +1,13 @@
 """One controller per action: it follows the action's physical mapping from spec/ for its duration.
 
-Longitudinal: a position reference advancing at the action's speed (speed factor x the
-common speed); the speed command adds a correction towards that reference, and the car's
-wheel motors limit acceleration and braking. Lateral: a reference that stays on the lane
+Longitudinal: a position reference advancing along a speed profile (the action's speed, speed
+factor x the common speed, with feasible ramps to its neighbours' speeds); the speed command
+adds a correction towards that reference, and the car's wheel motors limit acceleration and
+braking. Lateral: a reference that stays on the lane
 centre, or for a lane change moves one lane width (a smooth cosine profile) within the
 first ``LOOP.lane_change_lateral_s`` of the action's time, since the model puts the AV in its
-new lane before any oncoming vehicle moves; tracked by a PD law on the lateral position turned into a steering angle.
+new lane before any oncoming vehicle moves; tracked by a PD law on the lateral position
+turned into a steering angle.
 """
 
 from __future__ import annotations
@@ -38,26 +40,49 @@ def ramp_s(v_from_mps: float, v_to_mps: float, spec: CarSpec = CAR) -> float:
     return abs(v_to_mps - v_from_mps) / (RAMP_SHARE * rate)
 
 
+def ramp_gain_m(v_from_mps: float, v_to_mps: float) -> float:
+    """How far a car ramping from one speed to another gets ahead (negative: behind) of one at the second all along."""
+    return (v_from_mps - v_to_mps) * ramp_s(v_from_mps, v_to_mps) / 2
+
+
 @dataclass(frozen=True, slots=True)
 class SpeedProfile:
-    """The speed reference through one action: its own speed, with each change to a neighbour's speed
-    ramped symmetrically about the boundary, so the distance lost on one side is made up on the other and
-    the car is where the model puts it at every boundary (to within the ramp's area, dv^2 / 8a)."""
+    """The speed reference through one action: its own speed, reached from the speed before it and left for
+    the speed after it by ramps within the car's limits.
+
+    Between two actions of a plan the ramp is centred on their boundary, so the distance lost on
+    one side is made up on the other and the car is where the model puts it at every boundary (to
+    within half the ramp's area). Into a plan's first action the ramp starts at the car's own speed
+    (``centred_in`` False): the plan's frame already counts what that ramp gains (``ramp_gain_m``).
+    """
 
     before_mps: float
     speed_mps: float
     after_mps: float
     duration_s: float
+    centred_in: bool = True
 
     def at(self, t_s: float) -> float:
-        half_in = ramp_s(self.before_mps, self.speed_mps) / 2
+        """The reference speed ``t_s`` into the action: the two ramps superposed, so where they overlap (a
+        plan's first ramp can be long) the speed stays continuous and each ramp keeps its area."""
+        ramp_in = ramp_s(self.before_mps, self.speed_mps) / (2 if self.centred_in else 1)
+        start = (self.before_mps + self.speed_mps) / 2 if self.centred_in else self.before_mps
         half_out = ramp_s(self.speed_mps, self.after_mps) / 2
-        if t_s < half_in:
-            return self.speed_mps + (self.before_mps - self.speed_mps) * (1 - t_s / half_in) / 2
+        speed = self.speed_mps
+        if t_s < ramp_in:
+            speed += (start - self.speed_mps) * (1 - t_s / ramp_in)
         if t_s > self.duration_s - half_out:
-            return self.speed_mps + (self.after_mps - self.speed_mps) * (t_s - self.duration_s + half_out) / (
-                2 * half_out)
-        return self.speed_mps
+            speed += (self.after_mps - self.speed_mps) * (t_s - self.duration_s + half_out) / (2 * half_out)
+        return speed
+
+
+def plan_profiles(actions: tuple[Action, ...], start_mps: float) -> list[SpeedProfile]:
+    """One profile per action of a plan: from the car's speed into the first, towards the common speed after
+    the last (the next plan's frame starts there)."""
+    speeds = [action_speed_mps(a) for a in actions]
+    return [SpeedProfile(speeds[k - 1] if k else start_mps, speed, speeds[k + 1] if k + 1 < len(speeds)
+                         else DEFAULT_SPEED_MPS, ACTION_RULES[action].duration_s, centred_in=k > 0)
+            for k, (action, speed) in enumerate(zip(actions, speeds))]
 
 
 class Executor:
@@ -68,25 +93,21 @@ class Executor:
         self.x_ref_m = car.pose().x_m
         self.dt_s = scene.dt_s * LOOP.control_every_steps
 
-    def reset_reference(self, ahead_m: float = 0.0) -> None:
-        """Start the position reference ``ahead_m`` in front of the car: where a new plan takes it to be."""
-        self.x_ref_m = self.car.pose().x_m + ahead_m
+    def reset_reference(self) -> None:
+        """Start the position reference at the car: a new plan starts from where the car is."""
+        self.x_ref_m = self.car.pose().x_m
 
-    def run(self, action: Action, tick: Callable[[float], bool], before: Action | None = None,
-            after: Action | None = None) -> bool:
-        """Execute ``action`` for its duration; False as soon as ``tick`` reports a collision.
-
-        ``before`` and ``after`` are the plan's neighbouring actions (None: the common speed):
-        the speed change towards each is a ramp at the car's limits centred on the boundary.
-        """
+    def run(self, action: Action, tick: Callable[[float], bool], profile: SpeedProfile | None = None) -> bool:
+        """Execute ``action`` for its duration along ``profile`` (default: its speed throughout); False as soon
+        as ``tick`` reports a collision."""
         rule = ACTION_RULES[action]
         speed = action_speed_mps(action)
+        profile = profile or SpeedProfile(speed, speed, speed, rule.duration_s)
         y_from = self.scene.lane_y(self.lane)
         to_lane = rule.to_lane or self.lane
         y_to = self.scene.lane_y(to_lane)
         steps = max(1, round(rule.duration_s / self.dt_s))
         lateral_s = min(rule.duration_s, LOOP.lane_change_lateral_s)
-        profile = SpeedProfile(action_speed_mps(before), speed, action_speed_mps(after), rule.duration_s)
         for k in range(steps):
             phase = min(1.0, (k + 1) * self.dt_s / lateral_s)
             y_ref = y_from + (y_to - y_from) * (1 - math.cos(math.pi * phase)) / 2

@@ -10,6 +10,7 @@ AV every kilometre so coordinates stay small however far it drives.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import time
 from dataclasses import replace
@@ -18,22 +19,22 @@ from typing import IO
 
 import numpy as np
 
-from oracle.answer import Status
+from oracle.answer import Answer, Status
 from oracle.planner import plan
 from sim.discretiser import discretise, reading_cell
-from sim.executor import Executor
+from sim.executor import Executor, action_speed_mps, plan_profiles, ramp_gain_m
 from sim.scene import Scene
 from sim.sensors import Reading, sweep
 from sim.summary import Failure, RunSummary
 from sim.tolerance import Violation
 from sim.traffic import Traffic
-from sim.vehicle import WheeledCar, settle_offset_m
+from sim.vehicle import WheeledCar
 from spec.actions import Action
 from spec.constants import DEFAULT_SPEED_MPS, ROAD_CELLS, TIME_UNIT_S
 from spec.errors import ScenarioError
 from spec.lanes import Lane
 from spec.physical import LOOP
-from spec.scenario import State
+from spec.scenario import Scenario, State
 
 RECENTRE_M = 1000.0
 
@@ -51,6 +52,7 @@ class Simulator:
         self.traffic = Traffic(self.scene, self.rng, 0.0)
         self.executor = Executor(self.scene, self.car, Lane.LEFT)
         self.summary = RunSummary(seed)
+        self.pending: tuple[Action, ...] = ()  # the rest of the plan under way when a re-plan starts
         self.doing = "start-up"  # what the AV was executing: recorded with every collision
         self.origin_km = 0.0
         self._side = {car.body: car.x_m > 0 for car in self.traffic.left}
@@ -102,53 +104,91 @@ class Simulator:
         pose = self.car.pose()
         return sweep(self.scene, pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming).seen
 
-    def _settled_snapshot(self) -> tuple[tuple[Reading, ...], float]:
-        """What the sensors see, moved to where it will be once the AV is back at the common speed.
+    def _frame(self, readings: tuple[Reading, ...], speed_mps: float, first_mps: float) -> tuple[Reading, ...]:
+        """The readings as the model's AV sees them: a car at the plan's first speed from the start.
 
-        The model starts every action at the common speed, so a plan is made (and its
-        prediction checked) from that settled picture, and the executor's reference starts
-        there too; planning from the raw snapshot would ignore the AV's momentum.
+        The model starts each action at its own speed; the real car gets there on a ramp, gaining
+        (or losing) ``ramp_gain_m`` on traffic meanwhile, so the plan is made, executed and checked in
+        the frame where that gain is already done. Planning from the raw snapshot would ignore the
+        AV's momentum (a re-plan right after an accelerate found it at 14 m/s beside a car).
         """
-        ahead_m = settle_offset_m(self.car.pose().speed_mps)
-        return tuple(replace(r, dx_m=r.dx_m - ahead_m) for r in self._sense()), ahead_m
+        gain_m = ramp_gain_m(speed_mps, first_mps)
+        return tuple(replace(r, dx_m=r.dx_m - gain_m) for r in readings)
+
+    def _decide(self, readings: tuple[Reading, ...], speed_mps: float,
+                lane: Lane) -> tuple[Answer, tuple[Reading, ...], Scenario]:
+        """Plan in the frame of a first action at the common speed; if the plan starts at another speed,
+        plan again in that speed's frame and keep the second plan when it starts at that speed too."""
+        seen = self._frame(readings, speed_mps, DEFAULT_SPEED_MPS)
+        scenario = discretise(seen, lane)
+        answer = plan(scenario, self.strategy, engine=self.engine)
+        first_mps = action_speed_mps(answer.actions[0]) if answer.actions else DEFAULT_SPEED_MPS
+        if answer.status is Status.PLAN and first_mps != DEFAULT_SPEED_MPS:
+            seen_again = self._frame(readings, speed_mps, first_mps)
+            with contextlib.suppress(ScenarioError):
+                scenario_again = discretise(seen_again, lane)
+                again = plan(scenario_again, self.strategy, engine=self.engine)
+                if again.status is Status.PLAN and again.actions and action_speed_mps(again.actions[0]) == first_mps:
+                    return replace(again, elapsed_ms=again.elapsed_ms + answer.elapsed_ms), seen_again, scenario_again
+        return answer, seen, scenario
 
     def _one_plan(self) -> bool:
-        seen, ahead_m = self._settled_snapshot()
-        lane = Executor.lane_of(self.car.pose().y_m)
+        pending, self.pending = self.pending, ()
+        pose = self.car.pose()
+        lane = Executor.lane_of(pose.y_m)
         self.executor.lane = lane
         try:
-            scenario = discretise(seen, lane)
+            answer, seen, scenario = self._decide(self._sense(), pose.speed_mps, lane)
         except ScenarioError as err:
+            if pending:
+                return self._keep(pending, f"snapshot unusable: {err.reason}")
             self._fail("sensing", err.reason, str(err))
             self.doing = "waiting after a sensing failure"
             return self.executor.hold(TIME_UNIT_S, DEFAULT_SPEED_MPS, self._tick)
-        answer = plan(scenario, self.strategy, engine=self.engine)
         self.summary.plans += 1
         self.summary.plan_ms.append(answer.elapsed_ms)
+        if answer.status is not Status.PLAN and pending:
+            return self._keep(pending, f"re-plan: {answer.status.value}")
         if answer.status is not Status.PLAN:
             self._fail("planner", answer.status.value, f"{answer.status.value} for {scenario}")
             self.doing = "waiting without a plan"
             return self.executor.hold(TIME_UNIT_S, DEFAULT_SPEED_MPS, self._tick)
         if not answer.actions:  # nothing to overtake: drive on
             self.doing = "drive (nothing to overtake)"
-            return self.executor.run(Action.DRIVE, self._tick)
-        return self._execute(answer.actions, answer.states, seen, ahead_m)
+            self.executor.reset_reference()
+            return self.executor.run(Action.DRIVE, self._tick, plan_profiles((Action.DRIVE,), pose.speed_mps)[0])
+        return self._execute(answer.actions, answer.states, seen, pose.speed_mps)
+
+    def _keep(self, pending: tuple[Action, ...], why: str) -> bool:
+        """A re-plan found no plan while a model-checked plan was under way: finish that plan.
+
+        A re-plan mid-manoeuvre sees a new snapshot, where a vehicle near a cell's edge may
+        round the other way; "no plan" there does not undo the plan being executed (the paper
+        warns that re-planning mid-manoeuvre abandons manoeuvres that would have succeeded).
+        Counted in ``kept_plans``; it is a failure only when no plan is under way.
+        """
+        self.summary.kept_plans += 1
+        self.executor.reset_reference()
+        for k, (action, profile) in enumerate(zip(pending, plan_profiles(pending, self.car.pose().speed_mps))):
+            self.doing = f"{action.value} (kept plan after {why}, step {k + 1} of {len(pending)})"
+            if not self.executor.run(action, self._tick, profile):
+                return False
+            self.summary.actions += 1
+        return True
 
     def _execute(self, actions: tuple[Action, ...], states: tuple[State, ...], seen: tuple[Reading, ...],
-                 ahead_m: float) -> bool:
+                 speed_mps: float) -> bool:
         plan_id = self.summary.plans
-        self.executor.reset_reference(ahead_m)
+        self.executor.reset_reference()
         tracked = self._tracked(seen, states[0])
         deviation = dict.fromkeys(tracked, 0.0)
         known = {r.body for r in seen}
         cars = {car.body: car for car in self.traffic.cars()}
         generation = {body: cars[body].respawns for body in cars}
         executed = actions[: LOOP.replan_after_actions]
-        for k, action in enumerate(executed):
+        for k, (action, profile) in enumerate(zip(executed, plan_profiles(executed, speed_mps))):
             self.doing = f"{action.value} (plan {plan_id}, step {k + 1} of {len(actions)})"
-            before = executed[k - 1] if k else None
-            after = executed[k + 1] if k + 1 < len(executed) else None
-            if not self.executor.run(action, self._tick, before, after):
+            if not self.executor.run(action, self._tick, profile):
                 return False
             self.summary.actions += 1
             violations_before = len(self.summary.tolerance.violations)
@@ -162,12 +202,11 @@ class Simulator:
                     start_dx, now[body], deviation[(lane, index, body)])
             new_violations = self.summary.tolerance.violations[violations_before:]
             self._trace(plan_id, k + 1, action, states[k + 1], new_violations)
-            if self.replan_on_violation and new_violations:
+            if (self.replan_on_violation and new_violations) or {r.body for r in self._sense()} - known:
                 self.summary.replans += 1
+                self.pending = actions[k + 1:]
                 return True
-            if {r.body for r in self._sense()} - known:
-                self.summary.replans += 1
-                return True
+        self.pending = actions[len(executed):]
         return True
 
     @staticmethod

@@ -39,6 +39,7 @@ class RunSummary:
     overtakes: int = 0
     plans: int = 0
     replans: int = 0
+    kept_plans: int = 0  # re-plans that found no plan while a plan was under way: that plan was finished
     actions: int = 0
     plan_ms: list[float] = field(default_factory=list)
     failures: list[Failure] = field(default_factory=list)
@@ -61,7 +62,8 @@ class RunSummary:
         return next((f for kind in KINDS for f in self.of_kind(kind)), None)
 
     def latency_ms(self) -> dict[str, float]:
-        ms = np.array(self.plan_ms) if self.plan_ms else np.zeros(1)
+        """Median, p99 and max planning time, from the samples as recorded (to the microsecond)."""
+        ms = np.round(np.array(self.plan_ms), 3) if self.plan_ms else np.zeros(1)
         return {"median": round(float(np.median(ms)), 3), "p99": round(float(np.percentile(ms, 99)), 3),
                 "max": round(float(ms.max()), 3)}
 
@@ -69,7 +71,8 @@ class RunSummary:
         failure = self.failure
         return {"seed": self.seed, "km": round(self.km, 3), "sim_time_s": round(self.sim_time_s, 1),
                 "wall_s": round(self.wall_s, 2), "overtakes": self.overtakes, "plans": self.plans,
-                "replans": self.replans, "actions": self.actions, "plan_ms": [round(m, 3) for m in self.plan_ms],
+                "replans": self.replans, "kept_plans": self.kept_plans, "actions": self.actions,
+                "plan_ms": [round(m, 3) for m in self.plan_ms],
                 "plan_latency_ms": self.latency_ms(), "failures": [asdict(f) for f in self.failures],
                 "failure": asdict(failure) if failure else None, "tolerance": self.tolerance.to_json()}
 
@@ -77,6 +80,7 @@ class RunSummary:
     def from_json(cls, data: dict[str, Any]) -> RunSummary:
         return cls(seed=data["seed"], km=data["km"], sim_time_s=data["sim_time_s"], wall_s=data["wall_s"],
                    overtakes=data["overtakes"], plans=data["plans"], replans=data["replans"],
+                   kept_plans=data["kept_plans"],
                    actions=data["actions"], plan_ms=list(data["plan_ms"]),
                    failures=[Failure(**f) for f in data["failures"]],
                    tolerance=ToleranceReport.from_json(data["tolerance"]))

@@ -39,6 +39,7 @@ def totals_table(results: list[RunSummary]) -> Table:
             ("simulated time", hours_minutes(sum(r.sim_time_s for r in results))),
             ("overtakes", str(sum(r.overtakes for r in results))), ("plans", str(sum(r.plans for r in results))),
             ("re-plans", str(sum(r.replans for r in results))),
+            ("re-plans without a plan (the plan under way was kept)", str(sum(r.kept_plans for r in results))),
             ("planning ms: median / p99 / max", f"{np.median(ms):.2f} / {np.percentile(ms, 99):.2f} / {ms.max():.2f}"),
             ("collisions", str(sum(len(r.collisions) for r in results))),
             ("planner failures", str(sum(len(r.planner_failures) for r in results))),

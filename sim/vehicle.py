@@ -11,7 +11,6 @@ import math
 from dataclasses import dataclass
 
 from sim.scene import Scene, p
-from spec.constants import DEFAULT_SPEED_MPS
 from spec.physical import CAR, CarSpec
 
 _WHEEL_AXIS_ROT = p.getQuaternionFromEuler((math.pi / 2, 0, 0))  # cylinder's axis from z to y
@@ -25,18 +24,6 @@ class Pose:
     y_m: float
     yaw_rad: float
     speed_mps: float  # along the vehicle's heading
-
-
-def settle_offset_m(speed_mps: float, spec: CarSpec = CAR) -> float:
-    """How far the AV gains (negative: loses) on common-speed traffic while its speed returns to the common speed.
-
-    The discrete model starts every action at the common speed; a car still carrying the
-    speed of an ``accelerate`` (or a ``brake``) reaches it only at its braking (acceleration)
-    limit, covering (v - v0)^2 / (2a) metres more (less) than traffic meanwhile.
-    """
-    excess = speed_mps - DEFAULT_SPEED_MPS
-    limit = spec.max_brake_mps2 if excess > 0 else spec.max_accel_mps2
-    return excess * abs(excess) / (2 * limit)
 
 
 class WheeledCar:

@@ -7,9 +7,9 @@ import itertools
 import numpy as np
 import pytest
 
-from sim.executor import Executor, SpeedProfile, action_speed_mps, ramp_s
+from sim.executor import RAMP_SHARE, Executor, SpeedProfile, action_speed_mps, plan_profiles, ramp_gain_m, ramp_s
 from sim.scene import Scene
-from sim.vehicle import KinematicCar, WheeledCar, settle_offset_m
+from sim.vehicle import KinematicCar, WheeledCar
 from spec.actions import ACTION_RULES, Action
 from spec.constants import DEFAULT_SPEED_MPS
 from spec.lanes import Lane
@@ -107,11 +107,17 @@ def test_a_staged_crash_is_detected_as_a_contact(world) -> None:
     assert not executor.hold(12.0, DEFAULT_SPEED_MPS, contact)
 
 
-def test_settle_offset_is_what_the_car_gains_or_loses_while_returning_to_the_common_speed() -> None:
-    assert settle_offset_m(DEFAULT_SPEED_MPS) == 0.0
-    assert settle_offset_m(2 * DEFAULT_SPEED_MPS) == pytest.approx(DEFAULT_SPEED_MPS**2 / (2 * CAR.max_brake_mps2))
-    assert settle_offset_m(DEFAULT_SPEED_MPS / 2) == pytest.approx(-(DEFAULT_SPEED_MPS / 2) ** 2
-                                                                   / (2 * CAR.max_accel_mps2))
+def test_ramp_gain_is_what_a_ramp_gains_or_loses_on_a_car_at_the_target_speed() -> None:
+    assert ramp_gain_m(DEFAULT_SPEED_MPS, DEFAULT_SPEED_MPS) == 0.0
+    assert ramp_gain_m(14.0, 7.0) == pytest.approx(7.0**2 / (2 * RAMP_SHARE * CAR.max_brake_mps2))
+    assert ramp_gain_m(7.0, 14.0) == pytest.approx(-(7.0**2) / (2 * RAMP_SHARE * CAR.max_accel_mps2))
+    profile = plan_profiles((Action.ACCELERATE,), 7.0)[0]  # a plan's first ramp starts at the car's speed
+    dt = 0.001
+    covered_m = sum(profile.at(i * dt) for i in range(round(profile.duration_s / dt))) * dt
+    assert covered_m == pytest.approx(14.0 * profile.duration_s + ramp_gain_m(7.0, 14.0)
+                                      - ramp_gain_m(14.0, 7.0) / 4, abs=0.05)  # - half the centred ramp out
+    speeds = [profile.at(i * dt) for i in range(round(profile.duration_s / dt))]
+    assert max(abs(b - a) for a, b in itertools.pairwise(speeds)) < 0.01  # continuous where the ramps overlap
 
 
 @pytest.mark.parametrize("plan", [(Action.DRIVE, Action.ACCELERATE, Action.ACCELERATE, Action.DRIVE),
