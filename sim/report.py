@@ -1,4 +1,4 @@
-"""What a drive leaves behind: a space-time plot of the measured paths with the predicted cells over them."""
+"""What a drive leaves behind: a space-time plot of the measured positions with the predicted cells over them."""
 
 from __future__ import annotations
 
@@ -12,21 +12,32 @@ import matplotlib.pyplot as plt
 
 from spec.constants import AV_CELL, SEGMENT_M
 
+LANES = (("left_lane", "tab:green", "left lane"), ("right_lane", "tab:red", "oncoming"))
+SHOWN_M = (-120.0, 400.0)
 
-def plot_trace(trace: Path, png: Path, max_points: int = 4000) -> Path:
-    """Distance of every vehicle from the AV over time (dots: measured), and the cells the model predicted (x)."""
-    records = [json.loads(line) for line in trace.read_text().splitlines()[:max_points]]
+
+def plot_trace(trace: Path, png: Path, window_s: float = 300.0) -> Path:
+    """Distance of every vehicle from the AV over the last ``window_s`` of the drive (for a failed drive: the
+    lead-up to the failure): measured at the end of each action (dots) and as the model predicted (x)."""
+    records = [json.loads(line) for line in trace.read_text().splitlines() if line.strip()]
+    end_s = records[-1]["t_s"] if records else 0.0
+    shown = [r for r in records if r["t_s"] >= end_s - window_s]
     fig, ax = plt.subplots(figsize=(11, 5))
-    for r in records:
-        measured = [d for d in r["traffic_dx_m"] if -120 <= d <= 400]
-        ax.scatter([r["t_s"]] * len(measured), measured, s=3, c="tab:blue")
-        for lane, colour in (("left_lane", "tab:green"), ("right_lane", "tab:red")):
-            predicted = [(c - AV_CELL) * SEGMENT_M for c in r["predicted"][lane]]
-            ax.scatter([r["t_s"]] * len(predicted), predicted, s=14, marker="x", c=colour)
+    for lane, colour, label in LANES:
+        measured = [(r["t_s"], d) for r in shown for d in r["measured_dx_m"][lane] if SHOWN_M[0] <= d <= SHOWN_M[1]]
+        predicted = [(r["t_s"], (c - AV_CELL) * SEGMENT_M) for r in shown for c in r["predicted"][lane]
+                     if SHOWN_M[0] <= (c - AV_CELL) * SEGMENT_M <= SHOWN_M[1]]
+        if measured:
+            ts, ds = zip(*measured)
+            ax.scatter(ts, ds, s=8, c=colour, alpha=0.45, label=f"{label}: measured")
+        if predicted:
+            ts, ds = zip(*predicted)
+            ax.scatter(ts, ds, s=30, marker="x", c=colour, label=f"{label}: predicted cell centre")
     ax.axhline(0, color="k", lw=0.8)
     ax.set_xlabel("simulated time (s)")
     ax.set_ylabel("distance ahead of the AV (m)")
-    ax.set_title("measured (dots) vs predicted cell centres (x: green left lane, red oncoming)")
+    ax.set_title(f"{trace.stem}: the last {window_s:.0f} s, measured vs predicted after every action")
+    ax.legend(loc="upper right", fontsize=8)
     fig.tight_layout()
     fig.savefig(png, dpi=110)
     plt.close(fig)

@@ -229,8 +229,9 @@ class Simulator:
                                      "plan": plan_id, "step": step, "action": action.value,
                                      "av": {"x_m": round(pose.x_m, 2), "y_m": round(pose.y_m, 2),
                                             "speed_mps": round(pose.speed_mps, 2)},
-                                     "traffic_dx_m": sorted(round(c.x_m - pose.x_m, 1)
-                                                            for c in self.traffic.cars()),
+                                     "measured_dx_m": {lane: sorted(round(c.x_m - pose.x_m, 1) for c in cars)
+                                                       for lane, cars in (("left_lane", self.traffic.left),
+                                                                          ("right_lane", self.traffic.oncoming))},
                                      "predicted": {"left_lane": list(predicted.left_lane),
                                                    "right_lane": list(predicted.right_lane)},
                                      "violations": [v.to_json() for v in violations]}) + "\n")
