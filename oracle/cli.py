@@ -258,12 +258,16 @@ def explain(file: str, as_json: bool) -> None:
 @click.option("--out", "out_dir", default="out/sim", show_default=True,
               help="Runs (runs.jsonl, resumable), traces (JSON lines) and plots.")
 @click.option("--fresh", is_flag=True, help="Forget the runs already recorded in --out instead of resuming.")
+@click.option("--step-tolerance", type=click.FloatRange(min=0.0, min_open=True), default=None,
+              help="Cells one action may add to a vehicle's deviation from the prediction [default: from spec/].")
+@click.option("--plan-tolerance", type=click.FloatRange(min=0.0, min_open=True), default=None,
+              help="Cells a vehicle may deviate over a plan [default: from spec/].")
 @click.option("--paper-replanning", is_flag=True,
               help="Re-plan only as the paper did (not when a deviation exceeds the tolerance).")
 @click.option("--json", "as_json", is_flag=True)
 def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: str, runs: int, workers: int,
-             executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool, paper_replanning: bool,
-             as_json: bool) -> None:
+             executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool, step_tolerance: float | None,
+             plan_tolerance: float | None, paper_replanning: bool, as_json: bool) -> None:
     """Drive the PyBullet simulator closed-loop and check every action against the model's prediction."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -271,11 +275,13 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: s
     from sim.campaign import RUNS_FILE, Campaign
     from sim.campaign import simulate as run_campaign
     from sim.tables import deviations_table, paper_table, runs_table, totals_table
+    from spec.physical import LOOP
 
     check_strategy(get_engine(engine), strategy)
     executor = ExecutorChoice(executor_kind, workers, scheduler)
     check_executor(executor)
-    campaign = Campaign(km, until_failure, engine, strategy, not paper_replanning)
+    campaign = Campaign(km, until_failure, engine, strategy, not paper_replanning,
+                        step_tolerance or LOOP.step_tolerance_cells, plan_tolerance or LOOP.plan_tolerance_cells)
     err = Console(stderr=True)
     limit = f"{km:g} km" + (" or until failure" if until_failure else "")
     err.print(f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; engine {engine}, {strategy}; "

@@ -17,6 +17,7 @@ from ci.executors import IN_PROCESS, ExecutorChoice, run_jobs
 from sim.report import plot_trace
 from sim.simulator import run_drive
 from sim.summary import RunSummary
+from spec.physical import LOOP
 
 RUNS_FILE = "runs.jsonl"
 
@@ -30,6 +31,8 @@ class Campaign:
     engine: str = "interpreter"
     strategy: str = "sensible"
     replan_on_violation: bool = True
+    step_tolerance_cells: float = LOOP.step_tolerance_cells
+    plan_tolerance_cells: float = LOOP.plan_tolerance_cells
 
 
 def simulate(campaign: Campaign, seeds: list[int], out_dir: str, executor: ExecutorChoice = IN_PROCESS,
@@ -46,7 +49,8 @@ def simulate(campaign: Campaign, seeds: list[int], out_dir: str, executor: Execu
             on_done(summary, True)
     todo = [s for s in seeds if s not in done]
     jobs = [(s, campaign.km, campaign.until_failure, campaign.engine, campaign.strategy, str(out),
-             campaign.replan_on_violation) for s in todo]
+             campaign.replan_on_violation, campaign.step_tolerance_cells, campaign.plan_tolerance_cells)
+            for s in todo]
     with log.open("a") as lines:
         if log.stat().st_size and not log.read_bytes().endswith(b"\n"):
             lines.write("\n")  # an interrupted write left half a line: that run is done again

@@ -26,7 +26,7 @@ from sim.executor import Executor, action_speed_mps, plan_profiles, ramp_gain_m
 from sim.scene import Scene
 from sim.sensors import Reading, sweep
 from sim.summary import Failure, RunSummary
-from sim.tolerance import Violation
+from sim.tolerance import ToleranceReport, Violation
 from sim.traffic import Traffic
 from sim.vehicle import WheeledCar
 from spec.actions import Action
@@ -43,7 +43,9 @@ class Simulator:
     """A physics world, the AV, traffic, sensors and a planner, driven by one seeded generator."""
 
     def __init__(self, seed: int, engine: str = "interpreter", strategy: str = "sensible",
-                 trace: IO[str] | None = None, replan_on_violation: bool = True) -> None:
+                 trace: IO[str] | None = None, replan_on_violation: bool = True,
+                 step_tolerance_cells: float = LOOP.step_tolerance_cells,
+                 plan_tolerance_cells: float = LOOP.plan_tolerance_cells) -> None:
         self.replan_on_violation = replan_on_violation
         self.rng = np.random.default_rng(seed)
         self.engine, self.strategy, self.trace = engine, strategy, trace
@@ -51,7 +53,7 @@ class Simulator:
         self.car = WheeledCar(self.scene, 0.0, self.scene.lane_y(Lane.LEFT))
         self.traffic = Traffic(self.scene, self.rng, 0.0)
         self.executor = Executor(self.scene, self.car, Lane.LEFT)
-        self.summary = RunSummary(seed)
+        self.summary = RunSummary(seed, tolerance=ToleranceReport(step_tolerance_cells, plan_tolerance_cells))
         self.pending: tuple[Action, ...] = ()  # the rest of the plan under way when a re-plan starts
         self.doing = "start-up"  # what the AV was executing: recorded with every collision
         self.origin_km = 0.0
@@ -241,13 +243,15 @@ class Simulator:
 
 
 def run_drive(seed: int, km: float, until_failure: bool = False, engine: str = "interpreter",
-              strategy: str = "sensible", out_dir: str | None = None, replan_on_violation: bool = True) -> RunSummary:
+              strategy: str = "sensible", out_dir: str | None = None, replan_on_violation: bool = True,
+              step_tolerance_cells: float = LOOP.step_tolerance_cells,
+              plan_tolerance_cells: float = LOOP.plan_tolerance_cells) -> RunSummary:
     """One drive in a fresh simulator (the unit a worker process runs)."""
     trace = None
     if out_dir:
         Path(out_dir).mkdir(parents=True, exist_ok=True)
         trace = (Path(out_dir) / f"trace-seed{seed}.jsonl").open("w")
-    sim = Simulator(seed, engine, strategy, trace, replan_on_violation)
+    sim = Simulator(seed, engine, strategy, trace, replan_on_violation, step_tolerance_cells, plan_tolerance_cells)
     try:
         return sim.drive(km, until_failure)
     finally:

@@ -39,7 +39,12 @@ def test_simulate_cli_json_trace_and_plot(tmp_path) -> None:
 
     from tests.oracle.test_cli import run
 
-    done = run("simulate", "--km", "0.3", "--seed", "3", "--out", str(tmp_path), "--json")
+    done = run("simulate", "--km", "0.3", "--seed", "3", "--out", str(tmp_path), "--step-tolerance", "0.05", "--json")
     runs = json.loads(done.stdout)
-    assert done.returncode == 0 and runs[0]["seed"] == 3 and runs[0]["km"] >= 0.3
+    assert done.returncode == 0 and runs[0]["seed"] == 3 and runs[0]["km"] >= 0.3 and runs[0]["failure"] is None
+    assert runs[0]["tolerance"]["step_tolerance_cells"] == 0.05 and runs[0]["tolerance"]["violations"] > 0
+    steps = [json.loads(line) for line in (tmp_path / "trace-seed3.jsonl").read_text().splitlines()]
+    recorded = [v for step in steps for v in step["violations"]]
+    assert len(recorded) == runs[0]["tolerance"]["violations"]  # every violation is in the trace, with its values
+    assert {"step", "action", "predicted_cells", "measured_cells"} <= set(recorded[0])
     assert (tmp_path / "trace-seed3.jsonl").stat().st_size > 0 and (tmp_path / "spacetime-seed3.png").exists()
