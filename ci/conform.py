@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import itertools
-import json
 import sys
 from pathlib import Path
 
@@ -20,6 +19,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
 from ci.gen import random_scenarios
+from ci.records import append, open_for_append, read_records
 from oracle.answer import Limits
 from oracle.conform import disagreements
 from oracle.engines import check_strategy, get_engine
@@ -62,9 +62,7 @@ def main(argv: list[str] | None = None) -> int:
     bad = sum(1 for r in done.values() if r["disagreements"])
     columns = (TextColumn("conform"), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[bad]} disagree"),
                TimeRemainingColumn())
-    with Progress(*columns, console=console) as progress, results.open("a") as log:
-        if results.stat().st_size and not results.read_bytes().endswith(b"\n"):
-            log.write("\n")  # an interrupted run left half a line: start afresh after it
+    with Progress(*columns, console=console) as progress, open_for_append(results) as log:
         task = progress.add_task("conform", total=args.count, completed=len(done), bad=bad)
         for index, scenario in enumerate(scenarios):
             if index in done:
@@ -80,8 +78,7 @@ def main(argv: list[str] | None = None) -> int:
                 repro = out / f"repro-{index}.toml"
                 repro.write_text(to_toml(small, f"seed {args.seed}, scenario {index}: " + "; ".join(problems)))
                 record["reproducer"] = str(repro)
-            log.write(json.dumps(record) + "\n")
-            log.flush()
+            append(log, record)
             progress.update(task, advance=1, bad=bad)
     console.print(f"conform: {args.count} scenarios, {bad} disagreement(s); results in {results}")
     print(f"{args.count - bad} passed, {bad} failed")
@@ -90,19 +87,10 @@ def main(argv: list[str] | None = None) -> int:
 
 def _done(results: Path, args: argparse.Namespace) -> dict[int, dict[str, object]]:
     """Verdicts already recorded by an earlier run of the same campaign (same seed, engines, strategy)."""
-    if not results.exists():
-        return {}
-    done = {}
-    for line in results.read_text().splitlines():
-        try:
-            record = json.loads(line)
-        except json.JSONDecodeError:
-            continue  # a line cut short by an interruption: decide that scenario again
-        same = (record.get("seed"), record.get("engines"), record.get("strategy")) == (
-            args.seed, args.engines, args.strategy)
-        if same and isinstance(record.get("index"), int):
-            done[record["index"]] = record
-    return done
+    return {record["index"]: record for record in read_records(results)
+            if (record.get("seed"), record.get("engines"), record.get("strategy")) == (args.seed, args.engines,
+                                                                                       args.strategy)
+            and isinstance(record.get("index"), int)}
 
 
 if __name__ == "__main__":

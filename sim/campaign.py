@@ -8,12 +8,13 @@ seeds it has no line for (a half-written last line is run again). Each run leave
 
 from __future__ import annotations
 
-import json
+import contextlib
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from ci.executors import IN_PROCESS, ExecutorChoice, run_jobs
+from ci.records import append, open_for_append, read_records
 from sim.report import plot_trace
 from sim.simulator import run_drive
 from sim.summary import RunSummary
@@ -51,12 +52,9 @@ def simulate(campaign: Campaign, seeds: list[int], out_dir: str, executor: Execu
     jobs = [(s, campaign.km, campaign.until_failure, campaign.engine, campaign.strategy, str(out),
              campaign.replan_on_violation, campaign.step_tolerance_cells, campaign.plan_tolerance_cells)
             for s in todo]
-    with log.open("a") as lines:
-        if log.stat().st_size and not log.read_bytes().endswith(b"\n"):
-            lines.write("\n")  # an interrupted write left half a line: that run is done again
+    with open_for_append(log) as lines:
         for _index, summary in run_jobs(run_drive, jobs, executor):
-            lines.write(json.dumps({"campaign": asdict(campaign), "run": summary.to_json()}) + "\n")
-            lines.flush()
+            append(lines, {"campaign": asdict(campaign), "run": summary.to_json()})
             done[summary.seed] = summary
             trace = out / f"trace-seed{summary.seed}.jsonl"
             if trace.exists() and trace.stat().st_size:
@@ -68,15 +66,11 @@ def simulate(campaign: Campaign, seeds: list[int], out_dir: str, executor: Execu
 
 def recorded(log: Path, campaign: Campaign) -> dict[int, RunSummary]:
     """Runs an earlier start of the same campaign finished, by seed."""
-    if not log.exists():
-        return {}
     runs = {}
-    for line in log.read_text().splitlines():
-        try:
-            record = json.loads(line)
-            if record["campaign"] == asdict(campaign):
-                summary = RunSummary.from_json(record["run"])
-                runs[summary.seed] = summary
-        except (json.JSONDecodeError, KeyError, TypeError):
-            continue  # a line cut short by an interruption, or from another version: run that seed again
+    for record in read_records(log):
+        if record.get("campaign") != asdict(campaign):
+            continue
+        with contextlib.suppress(KeyError, TypeError):  # a record of another version: run that seed again
+            summary = RunSummary.from_json(record["run"])
+            runs[summary.seed] = summary
     return runs
