@@ -8,7 +8,11 @@ worker needs this package installed) or None for a local cluster of ``workers`` 
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import logging
+import multiprocessing
+import threading
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
@@ -50,19 +54,49 @@ def check_executor(choice: ExecutorChoice) -> None:
         raise ScenarioError("--workers", choice.workers, "at least one worker is needed")
 
 
-def run_jobs(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: ExecutorChoice) -> Iterator[tuple[int, R]]:
-    """Run ``fn(*job)`` for every job; yield ``(index, result)`` in the order they finish."""
+def run_jobs(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: ExecutorChoice,
+             progress: Callable[[Any], None] | None = None) -> Iterator[tuple[int, R]]:
+    """Run ``fn(*job)`` for every job; yield ``(index, result)`` in the order they finish.
+
+    With ``progress``, each job also gets ``report=``: a function whose every call reaches
+    ``progress`` in this process while the job runs (in this process or local ones; on dask,
+    ``report`` is None and progress is per finished job). Jobs must not report None.
+    """
     check_executor(choice)
     if choice.kind == "dask":
-        yield from _dask(fn, jobs, choice)
+        extra: dict[str, Any] = {"report": None} if progress else {}
+        yield from _dask(functools.partial(fn, **extra), jobs, choice)
     elif choice.workers <= 1 or len(jobs) <= 1:
+        call = functools.partial(fn, report=progress) if progress else fn
         for index, job in enumerate(jobs):
-            yield index, fn(*job)
+            yield index, call(*job)
     else:
-        with ProcessPoolExecutor(max_workers=min(choice.workers, len(jobs))) as pool:
-            futures = {pool.submit(fn, *job): index for index, job in enumerate(jobs)}
+        with contextlib.ExitStack() as stack:
+            call = fn
+            if progress:
+                queue = stack.enter_context(multiprocessing.Manager()).Queue()
+                stack.enter_context(_drained(queue, progress))
+                call = functools.partial(fn, report=queue.put)
+            pool = stack.enter_context(ProcessPoolExecutor(max_workers=min(choice.workers, len(jobs))))
+            futures = {pool.submit(call, *job): index for index, job in enumerate(jobs)}
             for future in as_completed(futures):
                 yield futures[future], future.result()
+
+
+@contextlib.contextmanager
+def _drained(queue: Any, progress: Callable[[Any], None]) -> Iterator[None]:
+    """Hand every item the jobs put on ``queue`` to ``progress``, from a thread, until the block ends."""
+    def drain() -> None:
+        while (item := queue.get()) is not None:  # None ends it: a sentinel object would not survive pickling
+            progress(item)
+
+    thread = threading.Thread(target=drain, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        queue.put(None)
+        thread.join()
 
 
 def _dask(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: ExecutorChoice) -> Iterator[tuple[int, R]]:

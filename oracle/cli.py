@@ -269,7 +269,7 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: s
              executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool, step_tolerance: float | None,
              plan_tolerance: float | None, paper_replanning: bool, as_json: bool) -> None:
     """Drive the PyBullet simulator closed-loop and check every action against the model's prediction."""
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     from ci.executors import ExecutorChoice, check_executor
     from sim.campaign import RUNS_FILE, Campaign
@@ -286,19 +286,31 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: s
     limit = f"{km:g} km" + (" or until failure" if until_failure else "")
     err.print(f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; engine {engine}, {strategy}; "
               f"on {executor.describe()}; results in {Path(out_dir) / RUNS_FILE}")
-    columns = (TextColumn("simulate"), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[km]:.1f} km"),
-               TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn())
+    columns = (TextColumn("simulate"), BarColumn(), TextColumn("{task.fields[km]:.1f} of {task.total:.0f} km"),
+               TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(), TimeRemainingColumn())
     with Progress(*columns, console=err, transient=True) as progress:
-        task = progress.add_task("simulate", total=runs, km=0.0, failed=0)
+        task = progress.add_task("simulate", total=runs * km, km=0.0, failed=0)
+        km_by_seed: dict[int, float] = {}  # how far each run has driven
+        finished: set[int] = set()  # a finished run fills its share of the bar, wherever it stopped
+
+        def show() -> None:
+            share = sum(km if s in finished else min(d, km) for s, d in km_by_seed.items())
+            progress.update(task, completed=share, km=sum(km_by_seed.values()))
+
+        def moved(update: tuple[int, float]) -> None:
+            km_by_seed[update[0]] = update[1]
+            show()
 
         def done(summary: Any, resumed: bool) -> None:
             if resumed:
                 err.print(f"seed {summary.seed}: already in {RUNS_FILE} (resumed; --fresh runs it again)")
+            km_by_seed[summary.seed] = summary.km
+            finished.add(summary.seed)
             fields = progress.tasks[0].fields
-            progress.update(task, advance=1, km=fields["km"] + summary.km,
-                            failed=fields["failed"] + bool(summary.collisions or summary.planner_failures))
+            progress.update(task, failed=fields["failed"] + bool(summary.collisions or summary.planner_failures))
+            show()
 
-        results = run_campaign(campaign, list(range(seed, seed + runs)), out_dir, executor, done, fresh)
+        results = run_campaign(campaign, list(range(seed, seed + runs)), out_dir, executor, done, fresh, moved)
     if as_json:
         _print_json([r.to_json() for r in results])
     else:

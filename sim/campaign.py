@@ -37,8 +37,10 @@ class Campaign:
 
 
 def simulate(campaign: Campaign, seeds: list[int], out_dir: str, executor: ExecutorChoice = IN_PROCESS,
-             on_done: Callable[[RunSummary, bool], None] | None = None, fresh: bool = False) -> list[RunSummary]:
-    """Run every seed not already recorded in ``out_dir``; ``on_done(summary, resumed)`` after each; seed order."""
+             on_done: Callable[[RunSummary, bool], None] | None = None, fresh: bool = False,
+             on_km: Callable[[tuple[int, float]], None] | None = None) -> list[RunSummary]:
+    """Run every seed not already recorded in ``out_dir``; ``on_done(summary, resumed)`` after each, and
+    ``on_km((seed, km))`` after each kilometre of a run (not on dask); results in seed order."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     log = out / RUNS_FILE
@@ -53,7 +55,7 @@ def simulate(campaign: Campaign, seeds: list[int], out_dir: str, executor: Execu
              campaign.replan_on_violation, campaign.step_tolerance_cells, campaign.plan_tolerance_cells)
             for s in todo]
     with open_for_append(log) as lines:
-        for _index, summary in run_jobs(run_drive, jobs, executor):
+        for _index, summary in run_jobs(run_drive, jobs, executor, on_km):
             append(lines, {"campaign": asdict(campaign), "run": summary.to_json()})
             done[summary.seed] = summary
             trace = out / f"trace-seed{summary.seed}.jsonl"

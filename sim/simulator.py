@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import json
 import time
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 from typing import IO
@@ -45,7 +46,9 @@ class Simulator:
     def __init__(self, seed: int, engine: str = "interpreter", strategy: str = "sensible",
                  trace: IO[str] | None = None, replan_on_violation: bool = True,
                  step_tolerance_cells: float = LOOP.step_tolerance_cells,
-                 plan_tolerance_cells: float = LOOP.plan_tolerance_cells) -> None:
+                 plan_tolerance_cells: float = LOOP.plan_tolerance_cells,
+                 report: Callable[[tuple[int, float]], None] | None = None) -> None:
+        self.report, self._next_report_km = report, 1.0  # (seed, km) after every kilometre
         self.replan_on_violation = replan_on_violation
         self.rng = np.random.default_rng(seed)
         self.engine, self.strategy, self.trace = engine, strategy, trace
@@ -84,6 +87,9 @@ class Simulator:
             self.traffic.shift_x(-x)
             self.executor.x_ref_m -= x
         self.summary.km = self.origin_km + self.car.pose().x_m / 1000
+        if self.report and self.summary.km >= self._next_report_km:
+            self.report((self.summary.seed, self.summary.km))
+            self._next_report_km = int(self.summary.km) + 1
         return True
 
     def _fail(self, kind: str, cause: str, detail: str) -> None:
@@ -245,13 +251,15 @@ class Simulator:
 def run_drive(seed: int, km: float, until_failure: bool = False, engine: str = "interpreter",
               strategy: str = "sensible", out_dir: str | None = None, replan_on_violation: bool = True,
               step_tolerance_cells: float = LOOP.step_tolerance_cells,
-              plan_tolerance_cells: float = LOOP.plan_tolerance_cells) -> RunSummary:
-    """One drive in a fresh simulator (the unit a worker process runs)."""
+              plan_tolerance_cells: float = LOOP.plan_tolerance_cells,
+              report: Callable[[tuple[int, float]], None] | None = None) -> RunSummary:
+    """One drive in a fresh simulator (the unit a worker process runs); ``report`` hears (seed, km) every km."""
     trace = None
     if out_dir:
         Path(out_dir).mkdir(parents=True, exist_ok=True)
         trace = (Path(out_dir) / f"trace-seed{seed}.jsonl").open("w")
-    sim = Simulator(seed, engine, strategy, trace, replan_on_violation, step_tolerance_cells, plan_tolerance_cells)
+    sim = Simulator(seed, engine, strategy, trace, replan_on_violation, step_tolerance_cells, plan_tolerance_cells,
+                    report)
     try:
         return sim.drive(km, until_failure)
     finally:

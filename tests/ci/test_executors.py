@@ -42,3 +42,16 @@ def test_an_unreachable_scheduler_is_a_missing_tool_not_a_traceback(monkeypatch:
 def test_a_choice_that_cannot_run_is_bad_input_naming_the_option(choice: ExecutorChoice, key: str) -> None:
     with pytest.raises(ScenarioError, match=key):
         check_executor(choice)
+
+
+def report_twice(a: int, b: int, report=None) -> int:  # type: ignore[no-untyped-def]
+    report((a, 1))
+    report((a, 2))
+    return a + b
+
+
+@pytest.mark.parametrize("choice", [ExecutorChoice(), ExecutorChoice("processes", 2)], ids=["in-process", "processes"])
+def test_progress_reported_by_a_job_reaches_this_process_while_it_runs(choice: ExecutorChoice) -> None:
+    heard: list[tuple[int, int]] = []
+    assert dict(run_jobs(report_twice, JOBS, choice, heard.append)) == EXPECTED
+    assert sorted(heard) == sorted((i, k) for i in range(len(JOBS)) for k in (1, 2))

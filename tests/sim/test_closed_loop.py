@@ -9,12 +9,14 @@ from sim.simulator import Simulator
 
 @pytest.mark.parametrize("seed", [1, 3, 4])
 def test_one_kilometre_without_collision_and_every_plan_found(seed: int) -> None:
-    sim = Simulator(seed)
+    heard: list[tuple[int, float]] = []
+    sim = Simulator(seed, report=heard.append)
     try:
         summary = sim.drive(1.0)
     finally:
         sim.close()
     assert summary.km >= 1.0 and not summary.collisions and not summary.planner_failures
+    assert len(heard) == 1 and heard[0][0] == seed and 1.0 <= heard[0][1] < 1.01  # progress after the kilometre
     assert summary.overtakes >= 1 and summary.plans > 0
     assert summary.tolerance.checks["accelerate"] > 0  # deviations are measured per action type
     assert all(v.kind in ("step", "plan") for v in summary.tolerance.violations)
