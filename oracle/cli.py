@@ -1,8 +1,8 @@
 """The ``overtake`` command: plan, validate, list and demonstrate built-in scenarios.
 
 Every error reaches the user as one line on stderr with a documented exit code:
-0 plan / valid, 1 no plan / invalid, 2 bad input, 3 search incomplete,
-4 a tool is missing, 5 an engine failed.
+0 plan / valid, 1 no plan / invalid (simulate: a run collided or found no plan), 2 bad input,
+3 search incomplete, 4 a tool is missing, 5 an engine failed, 6 engines disagree, 130 interrupted.
 """
 
 from __future__ import annotations
