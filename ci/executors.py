@@ -79,8 +79,22 @@ def run_jobs(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: Exec
                 call = functools.partial(fn, report=queue.put)
             pool = stack.enter_context(ProcessPoolExecutor(max_workers=min(choice.workers, len(jobs))))
             futures = {pool.submit(call, *job): index for index, job in enumerate(jobs)}
-            for future in as_completed(futures):
-                yield futures[future], future.result()
+            try:
+                for future in as_completed(futures):
+                    yield futures[future], future.result()
+            except BaseException:  # an interrupt, a failed job, or a consumer that stopped: nothing queued starts
+                _stop(pool)
+                raise
+
+
+def _stop(pool: ProcessPoolExecutor) -> None:
+    """Cancel what has not started and end the workers still running: an interrupted campaign stops now
+    (what it finished is already recorded), instead of running every queued job and discarding it."""
+    workers = list((getattr(pool, "_processes", None) or {}).values())  # the executor's own handles
+    pool.shutdown(wait=False, cancel_futures=True)
+    for worker in workers:
+        if worker.is_alive():
+            worker.terminate()
 
 
 @contextlib.contextmanager
@@ -113,6 +127,8 @@ def _dask(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: Executo
             cluster = LocalCluster(n_workers=choice.workers, threads_per_worker=1, processes=True,
                                    dashboard_address=None, silence_logs=logging.ERROR)
             client = Client(cluster)
+    except ValueError as err:
+        raise ScenarioError("--scheduler", choice.scheduler, f"not a scheduler address ({err})") from None
     except (OSError, TimeoutError) as err:
         raise ToolMissing(f"no dask scheduler answered at {choice.scheduler} within {CONNECT_TIMEOUT_S} s "
                           f"({type(err).__name__}); start one with `dask scheduler` and workers with "

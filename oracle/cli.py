@@ -1,7 +1,7 @@
 """The ``overtake`` command: plan, validate, list and demonstrate built-in scenarios.
 
 Every error reaches the user as one line on stderr with a documented exit code:
-0 plan / valid, 1 no plan / invalid (simulate: a run collided or found no plan), 2 bad input,
+0 plan / valid, 1 no plan / invalid (simulate: a run failed), 2 bad input,
 3 search incomplete, 4 a tool is missing, 5 an engine failed, 6 engines disagree, 130 interrupted.
 """
 
@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -292,23 +293,26 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: s
         task = progress.add_task("simulate", total=runs * km, km=0.0, failed=0)
         km_by_seed: dict[int, float] = {}  # how far each run has driven
         finished: set[int] = set()  # a finished run fills its share of the bar, wherever it stopped
+        failed = [0]
+        lock = threading.Lock()  # kilometres arrive from a thread draining the workers' reports
 
         def show() -> None:
             share = sum(km if s in finished else min(d, km) for s, d in km_by_seed.items())
-            progress.update(task, completed=share, km=sum(km_by_seed.values()))
+            progress.update(task, completed=share, km=sum(km_by_seed.values()), failed=failed[0])
 
         def moved(update: tuple[int, float]) -> None:
-            km_by_seed[update[0]] = update[1]
-            show()
+            with lock:
+                km_by_seed[update[0]] = update[1]
+                show()
 
         def done(summary: Any, resumed: bool) -> None:
             if resumed:
                 err.print(f"seed {summary.seed}: already in {RUNS_FILE} (resumed; --fresh runs it again)")
-            km_by_seed[summary.seed] = summary.km
-            finished.add(summary.seed)
-            fields = progress.tasks[0].fields
-            progress.update(task, failed=fields["failed"] + bool(summary.collisions or summary.planner_failures))
-            show()
+            with lock:
+                km_by_seed[summary.seed] = summary.km
+                finished.add(summary.seed)
+                failed[0] += bool(summary.failures)
+                show()
 
         results = run_campaign(campaign, list(range(seed, seed + runs)), out_dir, executor, done, fresh, moved)
     if as_json:
@@ -318,7 +322,7 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: s
             out.print(table)
         if until_failure:
             out.print(paper_table(results, km))
-    sys.exit(1 if any(r.collisions or r.planner_failures for r in results) else 0)
+    sys.exit(1 if any(r.failures for r in results) else 0)
 
 
 @cli.command()

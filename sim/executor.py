@@ -46,43 +46,61 @@ def ramp_gain_m(v_from_mps: float, v_to_mps: float) -> float:
 
 
 @dataclass(frozen=True, slots=True)
-class SpeedProfile:
-    """The speed reference through one action: its own speed, reached from the speed before it and left for
-    the speed after it by ramps within the car's limits.
+class Ramp:
+    """A linear speed change of ``dv_mps`` from ``start_s`` on, over ``duration_s`` (times on a plan's clock)."""
 
-    Between two actions of a plan the ramp is centred on their boundary, so the distance lost on
-    one side is made up on the other and the car is where the model puts it at every boundary (to
-    within half the ramp's area). Into a plan's first action the ramp starts at the car's own speed
-    (``centred_in`` False): the plan's frame already counts what that ramp gains (``ramp_gain_m``).
-    """
-
-    before_mps: float
-    speed_mps: float
-    after_mps: float
+    start_s: float
     duration_s: float
-    centred_in: bool = True
+    dv_mps: float
 
     def at(self, t_s: float) -> float:
-        """The reference speed ``t_s`` into the action: the two ramps superposed, so where they overlap (a
-        plan's first ramp can be long) the speed stays continuous and each ramp keeps its area."""
-        ramp_in = ramp_s(self.before_mps, self.speed_mps) / (2 if self.centred_in else 1)
-        start = (self.before_mps + self.speed_mps) / 2 if self.centred_in else self.before_mps
-        half_out = ramp_s(self.speed_mps, self.after_mps) / 2
-        speed = self.speed_mps
-        if t_s < ramp_in:
-            speed += (start - self.speed_mps) * (1 - t_s / ramp_in)
-        if t_s > self.duration_s - half_out:
-            speed += (self.after_mps - self.speed_mps) * (t_s - self.duration_s + half_out) / (2 * half_out)
-        return speed
+        if t_s <= self.start_s:
+            return 0.0
+        if t_s >= self.start_s + self.duration_s:
+            return self.dv_mps
+        return self.dv_mps * (t_s - self.start_s) / self.duration_s
 
 
-def plan_profiles(actions: tuple[Action, ...], start_mps: float) -> list[SpeedProfile]:
-    """One profile per action of a plan: from the car's speed into the first, towards the common speed after
-    the last (the next plan's frame starts there)."""
+@dataclass(frozen=True, slots=True)
+class SpeedProfile:
+    """The speed reference through one action: a window onto its plan's reference, which is a starting
+    speed plus one ramp per boundary between speeds, superposed (so a long ramp may run on into the next
+    action, the speed stays continuous, and every ramp keeps its area)."""
+
+    start_mps: float
+    ramps: tuple[Ramp, ...]
+    offset_s: float = 0.0  # where this action starts on the plan's clock
+
+    def at(self, t_s: float) -> float:
+        """The reference speed ``t_s`` into the action."""
+        t = self.offset_s + t_s
+        return self.start_mps + sum(r.at(t) for r in self.ramps)
+
+
+def plan_profiles(actions: tuple[Action, ...], start_mps: float, frame_mps: float | None = None) -> list[SpeedProfile]:
+    """One profile per action of a plan, ending with a ramp towards the common speed centred on the plan's
+    end (the next plan's frame starts there).
+
+    Between two actions the ramp is centred on their boundary, so the distance lost on one side is
+    made up on the other and the car is where the model puts it at every boundary (to within half the
+    ramp's area). Into the first action: a ramp from the car's speed starting now, when the plan was made
+    in the frame of that action's speed (the default: the frame already counts what that ramp gains,
+    ``ramp_gain_m``); when it was made in another speed's frame (no plan was consistent with its own), a
+    ramp from that speed centred on the start, the reference starting where that frame puts the AV.
+    """
     speeds = [action_speed_mps(a) for a in actions]
-    return [SpeedProfile(speeds[k - 1] if k else start_mps, speed, speeds[k + 1] if k + 1 < len(speeds)
-                         else DEFAULT_SPEED_MPS, ACTION_RULES[action].duration_s, centred_in=k > 0)
-            for k, (action, speed) in enumerate(zip(actions, speeds))]
+    own_frame = frame_mps is None or frame_mps == speeds[0]
+    first_from = start_mps if frame_mps is None or own_frame else frame_mps
+    starts, t = [], 0.0
+    for action in actions:
+        starts.append(t)
+        t += ACTION_RULES[action].duration_s
+    edges = [(0.0, first_from, speeds[0], not own_frame)]
+    edges += [(starts[k], speeds[k - 1], speeds[k], True) for k in range(1, len(speeds))]
+    edges += [(t, speeds[-1], DEFAULT_SPEED_MPS, True)]
+    ramps = tuple(Ramp(at - (ramp_s(v0, v1) / 2 if centred else 0.0), ramp_s(v0, v1), v1 - v0)
+                  for at, v0, v1, centred in edges if v1 != v0)
+    return [SpeedProfile(first_from, ramps, start) for start in starts]
 
 
 class Executor:
@@ -93,16 +111,16 @@ class Executor:
         self.x_ref_m = car.pose().x_m
         self.dt_s = scene.dt_s * LOOP.control_every_steps
 
-    def reset_reference(self) -> None:
-        """Start the position reference at the car: a new plan starts from where the car is."""
-        self.x_ref_m = self.car.pose().x_m
+    def reset_reference(self, ahead_m: float = 0.0) -> None:
+        """Start the position reference ``ahead_m`` in front of the car: where the new plan's frame puts it."""
+        self.x_ref_m = self.car.pose().x_m + ahead_m
 
     def run(self, action: Action, tick: Callable[[float], bool], profile: SpeedProfile | None = None) -> bool:
         """Execute ``action`` for its duration along ``profile`` (default: its speed throughout); False as soon
         as ``tick`` reports a collision."""
         rule = ACTION_RULES[action]
         speed = action_speed_mps(action)
-        profile = profile or SpeedProfile(speed, speed, speed, rule.duration_s)
+        profile = profile or SpeedProfile(speed, ())
         y_from = self.scene.lane_y(self.lane)
         to_lane = rule.to_lane or self.lane
         y_to = self.scene.lane_y(to_lane)

@@ -10,7 +10,6 @@ AV every kilometre so coordinates stay small however far it drives.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import time
 from collections.abc import Callable
@@ -124,21 +123,31 @@ class Simulator:
         return tuple(replace(r, dx_m=r.dx_m - gain_m) for r in readings)
 
     def _decide(self, readings: tuple[Reading, ...], speed_mps: float,
-                lane: Lane) -> tuple[Answer, tuple[Reading, ...], Scenario]:
-        """Plan in the frame of a first action at the common speed; if the plan starts at another speed,
-        plan again in that speed's frame and keep the second plan when it starts at that speed too."""
+                lane: Lane) -> tuple[Answer, tuple[Reading, ...], Scenario, float]:
+        """A plan, the readings in the frame it was made in, its scenario, and that frame's speed.
+
+        Plan in the frame of a first action at the common speed; if the plan starts at another
+        speed, plan again in that speed's frame and keep the second plan when it starts at that
+        speed too. Otherwise the first plan stands, made in the common-speed frame (the executor
+        then follows that frame: see ``plan_profiles``).
+        """
         seen = self._frame(readings, speed_mps, DEFAULT_SPEED_MPS)
         scenario = discretise(seen, lane)
         answer = plan(scenario, self.strategy, engine=self.engine)
         first_mps = action_speed_mps(answer.actions[0]) if answer.actions else DEFAULT_SPEED_MPS
-        if answer.status is Status.PLAN and first_mps != DEFAULT_SPEED_MPS:
-            seen_again = self._frame(readings, speed_mps, first_mps)
-            with contextlib.suppress(ScenarioError):
-                scenario_again = discretise(seen_again, lane)
-                again = plan(scenario_again, self.strategy, engine=self.engine)
-                if again.status is Status.PLAN and again.actions and action_speed_mps(again.actions[0]) == first_mps:
-                    return replace(again, elapsed_ms=again.elapsed_ms + answer.elapsed_ms), seen_again, scenario_again
-        return answer, seen, scenario
+        if answer.status is not Status.PLAN or first_mps == DEFAULT_SPEED_MPS:
+            return answer, seen, scenario, DEFAULT_SPEED_MPS
+        seen_again = self._frame(readings, speed_mps, first_mps)
+        try:
+            scenario_again = discretise(seen_again, lane)
+        except ScenarioError:
+            return answer, seen, scenario, DEFAULT_SPEED_MPS
+        again = plan(scenario_again, self.strategy, engine=self.engine)
+        both_ms = again.elapsed_ms + answer.elapsed_ms
+        if again.status is Status.PLAN and again.actions and action_speed_mps(again.actions[0]) == first_mps:
+            return replace(again, elapsed_ms=both_ms), seen_again, scenario_again, first_mps
+        self.summary.frame_fallbacks += 1
+        return replace(answer, elapsed_ms=both_ms), seen, scenario, DEFAULT_SPEED_MPS
 
     def _one_plan(self) -> bool:
         pending, self.pending = self.pending, ()
@@ -146,17 +155,17 @@ class Simulator:
         lane = Executor.lane_of(pose.y_m)
         self.executor.lane = lane
         try:
-            answer, seen, scenario = self._decide(self._sense(), pose.speed_mps, lane)
+            answer, seen, scenario, frame_mps = self._decide(self._sense(), pose.speed_mps, lane)
         except ScenarioError as err:
             if pending:
-                return self._keep(pending, f"snapshot unusable: {err.reason}")
+                return self._keep(pending, "sensing", err.reason, str(err))
             self._fail("sensing", err.reason, str(err))
             self.doing = "waiting after a sensing failure"
             return self.executor.hold(TIME_UNIT_S, DEFAULT_SPEED_MPS, self._tick)
         self.summary.plans += 1
         self.summary.plan_ms.append(answer.elapsed_ms)
         if answer.status is not Status.PLAN and pending:
-            return self._keep(pending, f"re-plan: {answer.status.value}")
+            return self._keep(pending, "planner", answer.status.value, f"{answer.status.value} for {scenario}")
         if answer.status is not Status.PLAN:
             self._fail("planner", answer.status.value, f"{answer.status.value} for {scenario}")
             self.doing = "waiting without a plan"
@@ -165,36 +174,41 @@ class Simulator:
             self.doing = "drive (nothing to overtake)"
             self.executor.reset_reference()
             return self.executor.run(Action.DRIVE, self._tick, plan_profiles((Action.DRIVE,), pose.speed_mps)[0])
-        return self._execute(answer.actions, answer.states, seen, pose.speed_mps)
+        return self._execute(answer.actions, answer.states, seen, pose.speed_mps, frame_mps)
 
-    def _keep(self, pending: tuple[Action, ...], why: str) -> bool:
-        """A re-plan found no plan while a model-checked plan was under way: finish that plan.
+    def _keep(self, pending: tuple[Action, ...], kind: str, cause: str, detail: str) -> bool:
+        """A re-plan found no plan (or could not use its snapshot) while a model-checked plan was under way:
+        go on with that plan, for at most ``replan_after_actions`` actions, then plan again.
 
         A re-plan mid-manoeuvre sees a new snapshot, where a vehicle near a cell's edge may
         round the other way; "no plan" there does not undo the plan being executed (the paper
         warns that re-planning mid-manoeuvre abandons manoeuvres that would have succeeded).
-        Counted in ``kept_plans``; it is a failure only when no plan is under way.
+        Recorded in ``kept_plans`` with its cause; it is a failure only when no plan is under way.
         """
-        self.summary.kept_plans += 1
+        self.summary.kept_plans.append(Failure(kind, cause, detail, round(self.summary.km, 3),
+                                               round(self.summary.sim_time_s, 1)))
         self.executor.reset_reference()
-        for k, (action, profile) in enumerate(zip(pending, plan_profiles(pending, self.car.pose().speed_mps))):
-            self.doing = f"{action.value} (kept plan after {why}, step {k + 1} of {len(pending)})"
+        kept = pending[: LOOP.replan_after_actions]
+        for k, (action, profile) in enumerate(zip(kept, plan_profiles(kept, self.car.pose().speed_mps))):
+            self.doing = f"{action.value} (kept plan after {kind}: {cause}, step {k + 1} of {len(kept)})"
             if not self.executor.run(action, self._tick, profile):
                 return False
             self.summary.actions += 1
+        self.pending = pending[len(kept):]
         return True
 
     def _execute(self, actions: tuple[Action, ...], states: tuple[State, ...], seen: tuple[Reading, ...],
-                 speed_mps: float) -> bool:
+                 speed_mps: float, frame_mps: float) -> bool:
         plan_id = self.summary.plans
-        self.executor.reset_reference()
+        self.executor.reset_reference(ramp_gain_m(speed_mps, frame_mps) if frame_mps != action_speed_mps(
+            actions[0]) else 0.0)
         tracked = self._tracked(seen, states[0])
         deviation = dict.fromkeys(tracked, 0.0)
         known = {r.body for r in seen}
         cars = {car.body: car for car in self.traffic.cars()}
         generation = {body: cars[body].respawns for body in cars}
         executed = actions[: LOOP.replan_after_actions]
-        for k, (action, profile) in enumerate(zip(executed, plan_profiles(executed, speed_mps))):
+        for k, (action, profile) in enumerate(zip(executed, plan_profiles(executed, speed_mps, frame_mps))):
             self.doing = f"{action.value} (plan {plan_id}, step {k + 1} of {len(actions)})"
             if not self.executor.run(action, self._tick, profile):
                 return False

@@ -39,7 +39,8 @@ class RunSummary:
     overtakes: int = 0
     plans: int = 0
     replans: int = 0
-    kept_plans: int = 0  # re-plans that found no plan while a plan was under way: that plan was finished
+    kept_plans: list[Failure] = field(default_factory=list)  # re-plans without a plan while one was under way
+    frame_fallbacks: int = 0  # plans made in the common-speed frame: none was consistent with its own frame
     actions: int = 0
     plan_ms: list[float] = field(default_factory=list)
     failures: list[Failure] = field(default_factory=list)
@@ -71,7 +72,8 @@ class RunSummary:
         failure = self.failure
         return {"seed": self.seed, "km": round(self.km, 3), "sim_time_s": round(self.sim_time_s, 1),
                 "wall_s": round(self.wall_s, 2), "overtakes": self.overtakes, "plans": self.plans,
-                "replans": self.replans, "kept_plans": self.kept_plans, "actions": self.actions,
+                "replans": self.replans, "kept_plans": [asdict(f) for f in self.kept_plans],
+                "frame_fallbacks": self.frame_fallbacks, "actions": self.actions,
                 "plan_ms": [round(m, 3) for m in self.plan_ms],
                 "plan_latency_ms": self.latency_ms(), "failures": [asdict(f) for f in self.failures],
                 "failure": asdict(failure) if failure else None, "tolerance": self.tolerance.to_json()}
@@ -80,7 +82,7 @@ class RunSummary:
     def from_json(cls, data: dict[str, Any]) -> RunSummary:
         return cls(seed=data["seed"], km=data["km"], sim_time_s=data["sim_time_s"], wall_s=data["wall_s"],
                    overtakes=data["overtakes"], plans=data["plans"], replans=data["replans"],
-                   kept_plans=data["kept_plans"],
+                   kept_plans=[Failure(**f) for f in data["kept_plans"]], frame_fallbacks=data["frame_fallbacks"],
                    actions=data["actions"], plan_ms=list(data["plan_ms"]),
                    failures=[Failure(**f) for f in data["failures"]],
                    tolerance=ToleranceReport.from_json(data["tolerance"]))

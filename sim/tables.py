@@ -34,12 +34,16 @@ def totals_table(results: list[RunSummary]) -> Table:
     """The whole campaign in one column: distance, time, overtakes, plans, latency, failures by cause."""
     ms = np.array([m for r in results for m in r.plan_ms]) if any(r.plan_ms for r in results) else np.zeros(1)
     causes = Counter(f"{f.kind}: {f.cause}" for r in results for f in r.failures)
+    kept = Counter(f"  kept after {f.kind}: {f.cause}" for r in results for f in r.kept_plans)
     table = Table(title="campaign totals", show_header=False)
     rows = [("runs", str(len(results))), ("km", f"{sum(r.km for r in results):.1f}"),
             ("simulated time", hours_minutes(sum(r.sim_time_s for r in results))),
             ("overtakes", str(sum(r.overtakes for r in results))), ("plans", str(sum(r.plans for r in results))),
             ("re-plans", str(sum(r.replans for r in results))),
-            ("re-plans without a plan (the plan under way was kept)", str(sum(r.kept_plans for r in results))),
+            ("re-plans without a plan (the plan under way was kept)", str(sum(len(r.kept_plans) for r in results))),
+            *sorted((cause, str(n)) for cause, n in kept.items()),
+            ("plans in the common-speed frame (none consistent with its own)",
+             str(sum(r.frame_fallbacks for r in results))),
             ("planning ms: median / p99 / max", f"{np.median(ms):.2f} / {np.percentile(ms, 99):.2f} / {ms.max():.2f}"),
             ("collisions", str(sum(len(r.collisions) for r in results))),
             ("planner failures", str(sum(len(r.planner_failures) for r in results))),

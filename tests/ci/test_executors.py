@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import operator
+import time
+from pathlib import Path
 
 import pytest
 
@@ -55,3 +57,19 @@ def test_progress_reported_by_a_job_reaches_this_process_while_it_runs(choice: E
     heard: list[tuple[int, int]] = []
     assert dict(run_jobs(report_twice, JOBS, choice, heard.append)) == EXPECTED
     assert sorted(heard) == sorted((i, k) for i in range(len(JOBS)) for k in (1, 2))
+
+
+def mark_and_wait(folder: str, index: int) -> int:
+    (Path(folder) / str(index)).touch()  # this job started
+    time.sleep(0.5)
+    return index
+
+
+def test_a_campaign_stopped_early_starts_none_of_its_queued_jobs(tmp_path: Path) -> None:
+    """Ctrl-C (or any error) while runs are queued must not go on to run, and throw away, every queued run."""
+    results = run_jobs(mark_and_wait, [(str(tmp_path), i) for i in range(12)], ExecutorChoice("processes", 2))
+    next(results)
+    results.close()  # the consumer stops, as the CLI does on an interrupt
+    started = len(list(tmp_path.iterdir()))
+    time.sleep(1.0)
+    assert started == len(list(tmp_path.iterdir())) < 12

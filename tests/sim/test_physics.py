@@ -7,7 +7,7 @@ import itertools
 import numpy as np
 import pytest
 
-from sim.executor import RAMP_SHARE, Executor, SpeedProfile, action_speed_mps, plan_profiles, ramp_gain_m, ramp_s
+from sim.executor import RAMP_SHARE, Executor, action_speed_mps, plan_profiles, ramp_gain_m, ramp_s
 from sim.scene import Scene
 from sim.vehicle import KinematicCar, WheeledCar
 from spec.actions import ACTION_RULES, Action
@@ -107,16 +107,33 @@ def test_a_staged_crash_is_detected_as_a_contact(world) -> None:
     assert not executor.hold(12.0, DEFAULT_SPEED_MPS, contact)
 
 
+def feasible(speeds: list[float], dt: float) -> bool:
+    """Every speed change within the car's acceleration (up) or braking (down) limit."""
+    return all(-CAR.max_brake_mps2 * dt * 1.001 <= b - a <= CAR.max_accel_mps2 * dt * 1.001
+               for a, b in itertools.pairwise(speeds))
+
+
+@pytest.mark.parametrize(("start_mps", "plan"), [(3.5, (Action.ACCELERATE, Action.DRIVE)),
+                                                 (14.0, (Action.BRAKE, Action.ACCELERATE)),
+                                                 (10.5, (Action.DRIVE, Action.ACCELERATE))])
+def test_a_plans_first_ramp_starts_at_the_cars_speed_and_stays_feasible(start_mps: float,
+                                                                       plan: tuple[Action, ...]) -> None:
+    dt = 0.01
+    profiles = plan_profiles(plan, start_mps)
+    speeds = [p.at(i * dt) for a, p in zip(plan, profiles) for i in range(round(ACTION_RULES[a].duration_s / dt))]
+    assert speeds[0] == pytest.approx(start_mps) and feasible(speeds, dt)
+
+
 def test_ramp_gain_is_what_a_ramp_gains_or_loses_on_a_car_at_the_target_speed() -> None:
     assert ramp_gain_m(DEFAULT_SPEED_MPS, DEFAULT_SPEED_MPS) == 0.0
     assert ramp_gain_m(14.0, 7.0) == pytest.approx(7.0**2 / (2 * RAMP_SHARE * CAR.max_brake_mps2))
     assert ramp_gain_m(7.0, 14.0) == pytest.approx(-(7.0**2) / (2 * RAMP_SHARE * CAR.max_accel_mps2))
     profile = plan_profiles((Action.ACCELERATE,), 7.0)[0]  # a plan's first ramp starts at the car's speed
-    dt = 0.001
-    covered_m = sum(profile.at(i * dt) for i in range(round(profile.duration_s / dt))) * dt
-    assert covered_m == pytest.approx(14.0 * profile.duration_s + ramp_gain_m(7.0, 14.0)
+    dt, duration_s = 0.001, ACTION_RULES[Action.ACCELERATE].duration_s
+    covered_m = sum(profile.at(i * dt) for i in range(round(duration_s / dt))) * dt
+    assert covered_m == pytest.approx(14.0 * duration_s + ramp_gain_m(7.0, 14.0)
                                       - ramp_gain_m(14.0, 7.0) / 4, abs=0.05)  # - half the centred ramp out
-    speeds = [profile.at(i * dt) for i in range(round(profile.duration_s / dt))]
+    speeds = [profile.at(i * dt) for i in range(round(duration_s / dt))]
     assert max(abs(b - a) for a, b in itertools.pairwise(speeds)) < 0.01  # continuous where the ramps overlap
 
 
@@ -130,16 +147,12 @@ def test_centred_ramps_put_the_reference_where_the_model_is_at_every_boundary(pl
     speeds_mps = [action_speed_mps(a) for a in plan]
     bound_m = max(abs(b - a) * ramp_s(a, b) / 8 for a, b in zip(speeds_mps, [*speeds_mps[1:], DEFAULT_SPEED_MPS]))
     model_m = reference_m = 0.0
-    for k, action in enumerate(plan):
-        before = plan[k - 1] if k else None
-        after = plan[k + 1] if k + 1 < len(plan) else None
-        profile = SpeedProfile(action_speed_mps(before), action_speed_mps(action), action_speed_mps(after),
-                               ACTION_RULES[action].duration_s)
-        speeds = [profile.at(i * dt) for i in range(round(profile.duration_s / dt))]
-        assert all(abs(b - a) <= max(CAR.max_accel_mps2, CAR.max_brake_mps2) * dt * 1.001
-                   for a, b in itertools.pairwise(speeds))  # feasible: within the car's limits
+    for action, profile in zip(plan, plan_profiles(plan, DEFAULT_SPEED_MPS)):
+        duration_s = ACTION_RULES[action].duration_s
+        speeds = [profile.at(i * dt) for i in range(round(duration_s / dt))]
+        assert feasible(speeds, dt)
         reference_m += sum(speeds) * dt
-        model_m += action_speed_mps(action) * profile.duration_s
+        model_m += action_speed_mps(action) * duration_s
         assert abs(reference_m - model_m) <= bound_m + 0.05
 
 
