@@ -4,7 +4,14 @@ from __future__ import annotations
 
 import pytest
 
+import sim.simulator as sim_module
+from sim.executor import ramp_gain_m
+from sim.sensors import Reading
 from sim.simulator import Simulator
+from spec.actions import Action
+from spec.constants import DEFAULT_SPEED_MPS
+from spec.errors import ScenarioError
+from spec.lanes import Lane
 
 
 @pytest.mark.parametrize("seed", [1, 3, 4])
@@ -50,3 +57,35 @@ def test_simulate_cli_json_trace_and_plot(tmp_path) -> None:
     assert len(recorded) == runs[0]["tolerance"]["violations"]  # every violation is in the trace, with its values
     assert {"step", "action", "predicted_cells", "measured_cells"} <= set(recorded[0])
     assert (tmp_path / "trace-seed3.jsonl").stat().st_size > 0 and (tmp_path / "spacetime-seed3.png").exists()
+
+
+def test_the_plans_frame_is_the_snapshot_moved_by_what_the_first_ramp_gains() -> None:
+    sim = Simulator(3)
+    try:
+        readings = (Reading(Lane.LEFT, 0, 30.0), Reading(Lane.RIGHT, 1, 200.0))
+        moved = sim._frame(readings, 14.0, DEFAULT_SPEED_MPS)  # braking to 7 m/s gains on traffic
+        assert [r.dx_m for r in moved] == pytest.approx([30.0 - ramp_gain_m(14.0, 7.0), 200.0 - ramp_gain_m(14.0, 7.0)])
+        assert sim._frame(readings, 7.0, 7.0) == readings
+    finally:
+        sim.close()
+
+
+def test_a_replan_that_cannot_plan_keeps_the_plan_under_way_and_says_why(monkeypatch: pytest.MonkeyPatch) -> None:
+    def unusable(*_args: object, **_kwargs: object) -> None:
+        raise ScenarioError("left_lane", [11, 11], "two vehicles in one cell")
+
+    sim = Simulator(3)
+    try:
+        sim.drive(0.3)
+        monkeypatch.setattr(sim_module, "discretise", unusable)
+        sim.pending = (Action.DRIVE,) * 12
+        actions = sim.summary.actions
+        assert sim._one_plan()
+        assert sim.summary.actions == actions + 10 and sim.pending == (Action.DRIVE,) * 2  # at most 10, then re-plan
+        assert [(f.kind, f.cause) for f in sim.summary.kept_plans] == [("sensing", "two vehicles in one cell")]
+        assert not sim.summary.failures
+        sim.pending = ()
+        sim._one_plan()  # no plan under way: now it is a failure
+        assert [(f.kind, f.cause) for f in sim.summary.failures] == [("sensing", "two vehicles in one cell")]
+    finally:
+        sim.close()
