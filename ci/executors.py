@@ -78,8 +78,8 @@ def run_jobs(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: Exec
                 stack.enter_context(_drained(queue, progress))
                 call = functools.partial(fn, report=queue.put)
             pool = stack.enter_context(ProcessPoolExecutor(max_workers=min(choice.workers, len(jobs))))
-            futures = {pool.submit(call, *job): index for index, job in enumerate(jobs)}
             try:
+                futures = {pool.submit(call, *job): index for index, job in enumerate(jobs)}
                 for future in as_completed(futures):
                     yield futures[future], future.result()
             except BaseException:  # an interrupt, a failed job, or a consumer that stopped: nothing queued starts
@@ -128,6 +128,8 @@ def _dask(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: Executo
                                    dashboard_address=None, silence_logs=logging.ERROR)
             client = Client(cluster)
     except ValueError as err:
+        if not choice.scheduler:
+            raise
         raise ScenarioError("--scheduler", choice.scheduler, f"not a scheduler address ({err})") from None
     except (OSError, TimeoutError) as err:
         raise ToolMissing(f"no dask scheduler answered at {choice.scheduler} within {CONNECT_TIMEOUT_S} s "

@@ -77,30 +77,30 @@ class SpeedProfile:
         return self.start_mps + sum(r.at(t) for r in self.ramps)
 
 
-def plan_profiles(actions: tuple[Action, ...], start_mps: float, frame_mps: float | None = None) -> list[SpeedProfile]:
-    """One profile per action of a plan, ending with a ramp towards the common speed centred on the plan's
-    end (the next plan's frame starts there).
-
-    Between two actions the ramp is centred on their boundary, so the distance lost on one side is
-    made up on the other and the car is where the model puts it at every boundary (to within half the
-    ramp's area). Into the first action: a ramp from the car's speed starting now, when the plan was made
-    in the frame of that action's speed (the default: the frame already counts what that ramp gains,
-    ``ramp_gain_m``); when it was made in another speed's frame (no plan was consistent with its own), a
-    ramp from that speed centred on the start, the reference starting where that frame puts the AV.
+def plan_profiles(actions: tuple[Action, ...], start_mps: float) -> list[SpeedProfile]:
+    """One profile per action of a plan: a ramp from the car's speed into the first action, starting now;
+    between two actions a ramp centred on their boundary, so the distance lost on one side is made up on
+    the other and the car is where the model puts it at every boundary (to within half the ramp's area);
+    and a ramp towards the common speed centred on the plan's end (the next plan's frame starts there).
     """
     speeds = [action_speed_mps(a) for a in actions]
-    own_frame = frame_mps is None or frame_mps == speeds[0]
-    first_from = start_mps if frame_mps is None or own_frame else frame_mps
     starts, t = [], 0.0
     for action in actions:
         starts.append(t)
         t += ACTION_RULES[action].duration_s
-    edges = [(0.0, first_from, speeds[0], not own_frame)]
+    edges = [(0.0, start_mps, speeds[0], False)]
     edges += [(starts[k], speeds[k - 1], speeds[k], True) for k in range(1, len(speeds))]
     edges += [(t, speeds[-1], DEFAULT_SPEED_MPS, True)]
     ramps = tuple(Ramp(at - (ramp_s(v0, v1) / 2 if centred else 0.0), ramp_s(v0, v1), v1 - v0)
                   for at, v0, v1, centred in edges if v1 != v0)
-    return [SpeedProfile(first_from, ramps, start) for start in starts]
+    return [SpeedProfile(start_mps, ramps, start) for start in starts]
+
+
+def reference_offset_m(speed_mps: float, frame_mps: float, first_mps: float) -> float:
+    """Where a plan's position reference starts, ahead of the car: at the AV of the frame the plan was
+    made in (``ramp_gain_m`` to the frame's speed), less what the first ramp itself gains on the way to
+    the first action's speed (zero in the plan's own frame, where the two are the same)."""
+    return ramp_gain_m(speed_mps, frame_mps) - ramp_gain_m(speed_mps, first_mps)
 
 
 class Executor:

@@ -22,7 +22,7 @@ import numpy as np
 from oracle.answer import Answer, Status
 from oracle.planner import plan
 from sim.discretiser import discretise, reading_cell
-from sim.executor import Executor, action_speed_mps, plan_profiles, ramp_gain_m
+from sim.executor import Executor, action_speed_mps, plan_profiles, ramp_gain_m, reference_offset_m
 from sim.scene import Scene
 from sim.sensors import Reading, sweep
 from sim.summary import Failure, RunSummary
@@ -141,6 +141,7 @@ class Simulator:
         try:
             scenario_again = discretise(seen_again, lane)
         except ScenarioError:
+            self.summary.frame_fallbacks += 1
             return answer, seen, scenario, DEFAULT_SPEED_MPS
         again = plan(scenario_again, self.strategy, engine=self.engine)
         both_ms = again.elapsed_ms + answer.elapsed_ms
@@ -200,15 +201,14 @@ class Simulator:
     def _execute(self, actions: tuple[Action, ...], states: tuple[State, ...], seen: tuple[Reading, ...],
                  speed_mps: float, frame_mps: float) -> bool:
         plan_id = self.summary.plans
-        self.executor.reset_reference(ramp_gain_m(speed_mps, frame_mps) if frame_mps != action_speed_mps(
-            actions[0]) else 0.0)
+        self.executor.reset_reference(reference_offset_m(speed_mps, frame_mps, action_speed_mps(actions[0])))
         tracked = self._tracked(seen, states[0])
         deviation = dict.fromkeys(tracked, 0.0)
         known = {r.body for r in seen}
         cars = {car.body: car for car in self.traffic.cars()}
         generation = {body: cars[body].respawns for body in cars}
         executed = actions[: LOOP.replan_after_actions]
-        for k, (action, profile) in enumerate(zip(executed, plan_profiles(executed, speed_mps, frame_mps))):
+        for k, (action, profile) in enumerate(zip(executed, plan_profiles(executed, speed_mps))):
             self.doing = f"{action.value} (plan {plan_id}, step {k + 1} of {len(actions)})"
             if not self.executor.run(action, self._tick, profile):
                 return False

@@ -7,7 +7,15 @@ import itertools
 import numpy as np
 import pytest
 
-from sim.executor import RAMP_SHARE, Executor, action_speed_mps, plan_profiles, ramp_gain_m, ramp_s
+from sim.executor import (
+    RAMP_SHARE,
+    Executor,
+    action_speed_mps,
+    plan_profiles,
+    ramp_gain_m,
+    ramp_s,
+    reference_offset_m,
+)
 from sim.scene import Scene
 from sim.vehicle import KinematicCar, WheeledCar
 from spec.actions import ACTION_RULES, Action
@@ -170,3 +178,30 @@ def test_the_lateral_move_of_a_lane_change_is_done_early(world) -> None:
     past_centre = next(i for i, y in enumerate(ys) if y < 0) * executor.dt_s
     assert past_centre <= LOOP.lane_change_lateral_s * 0.75  # out of its old lane by 3/4 of the lateral time
     assert abs(ys[-1] - scene.lane_y(Lane.RIGHT)) < 0.3
+
+
+@pytest.mark.parametrize(("speed_mps", "frame_mps", "plan"), [
+    (7.0, 14.0, (Action.ACCELERATE, Action.ACCELERATE, Action.DRIVE)),  # the plan's own frame
+    (7.0, 7.0, (Action.ACCELERATE, Action.DRIVE, Action.DRIVE)),  # made in the common-speed frame instead
+    (14.0, 7.0, (Action.BRAKE, Action.DRIVE)),
+    (3.5, 7.0, (Action.ACCELERATE, Action.ACCELERATE, Action.DRIVE)),
+])
+def test_the_reference_follows_the_frames_av_once_the_first_ramp_is_done(speed_mps: float, frame_mps: float,
+                                                                       plan: tuple[Action, ...]) -> None:
+    """The model's AV starts at the frame's offset and moves at each action's speed; the reference starts at the
+    car's speed, from reference_offset_m, and meets it at every boundary after the first ramp (to within half
+    a centred ramp's area)."""
+    dt = 0.001
+    speeds_mps = [action_speed_mps(a) for a in plan]
+    bound_m = max(abs(b - a) * ramp_s(a, b) / 8 for a, b in zip(speeds_mps, [*speeds_mps[1:], DEFAULT_SPEED_MPS]))
+    reference_m = reference_offset_m(speed_mps, frame_mps, speeds_mps[0])
+    model_m = ramp_gain_m(speed_mps, frame_mps)
+    elapsed_s, first_ramp_s = 0.0, ramp_s(speed_mps, speeds_mps[0])
+    for action, profile in zip(plan, plan_profiles(plan, speed_mps)):
+        duration_s = ACTION_RULES[action].duration_s
+        reference_m += sum(profile.at(i * dt) for i in range(round(duration_s / dt))) * dt
+        model_m += action_speed_mps(action) * duration_s
+        elapsed_s += duration_s
+        if elapsed_s >= first_ramp_s:
+            assert abs(reference_m - model_m) <= bound_m + 0.05
+    assert plan_profiles(plan, speed_mps)[0].at(0.0) == pytest.approx(speed_mps)
