@@ -20,6 +20,7 @@ from sim.scene import Scene
 from sim.vehicle import WheeledCar
 from spec.actions import ACTION_RULES, Action
 from spec.constants import DEFAULT_SPEED_MPS
+from spec.errors import EngineError
 from spec.lanes import Lane
 from spec.physical import CAR, LOOP, CarSpec
 
@@ -119,6 +120,9 @@ class Executor:
         """Execute ``action`` for its duration along ``profile`` (default: its speed throughout); False as soon
         as ``tick`` reports a collision."""
         rule = ACTION_RULES[action]
+        if rule.from_lane is not None and rule.from_lane is not self.lane:
+            raise EngineError(f"simulator: {action.value} asked of an AV in the {self.lane.value} lane "
+                              f"(its guard needs the {rule.from_lane.value} lane)")
         speed = action_speed_mps(action)
         profile = profile or SpeedProfile(speed, ())
         y_from = self.scene.lane_y(self.lane)

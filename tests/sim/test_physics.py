@@ -20,6 +20,7 @@ from sim.scene import Scene
 from sim.vehicle import KinematicCar, WheeledCar
 from spec.actions import ACTION_RULES, Action
 from spec.constants import DEFAULT_SPEED_MPS
+from spec.errors import EngineError
 from spec.lanes import Lane
 from spec.physical import CAR, LOOP
 
@@ -205,3 +206,9 @@ def test_the_reference_follows_the_frames_av_once_the_first_ramp_is_done(speed_m
         if elapsed_s >= first_ramp_s:
             assert abs(reference_m - model_m) <= bound_m + 0.05
     assert plan_profiles(plan, speed_mps)[0].at(0.0) == pytest.approx(speed_mps)
+
+
+def test_an_action_whose_lane_guard_fails_is_an_error_not_a_straight_drive(world) -> None:
+    _scene, _car, executor = world
+    with pytest.raises(EngineError, match="left_lane_change asked of an AV in the left lane"):
+        executor.run(Action.LEFT_LANE_CHANGE, no_traffic)
