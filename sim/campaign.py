@@ -51,11 +51,9 @@ def simulate(campaign: Campaign, seeds: list[int], out_dir: str, executor: Execu
         if on_done:
             on_done(summary, True)
     todo = [s for s in seeds if s not in done]
-    jobs = [(s, campaign.km, campaign.until_failure, campaign.engine, campaign.strategy, str(out),
-             campaign.replan_on_violation, campaign.step_tolerance_cells, campaign.plan_tolerance_cells)
-            for s in todo]
+    jobs = [(s, campaign, str(out)) for s in todo]
     with open_for_append(log) as lines:
-        for _index, summary in run_jobs(run_drive, jobs, executor, on_km):
+        for _index, summary in run_jobs(drive_one, jobs, executor, on_km):
             append(lines, {"campaign": asdict(campaign), "run": summary.to_json()})
             done[summary.seed] = summary
             trace = out / f"trace-seed{summary.seed}.jsonl"
@@ -64,6 +62,12 @@ def simulate(campaign: Campaign, seeds: list[int], out_dir: str, executor: Execu
             if on_done:
                 on_done(summary, False)
     return [done[s] for s in seeds]
+
+
+def drive_one(seed: int, campaign: Campaign, out_dir: str,
+              report: Callable[[tuple[int, float]], None] | None = None) -> RunSummary:
+    """One run of the campaign (what a worker runs): the campaign's parameters go to ``run_drive`` by name."""
+    return run_drive(seed, out_dir=out_dir, report=report, **asdict(campaign))
 
 
 def recorded(log: Path, campaign: Campaign) -> dict[int, RunSummary]:

@@ -85,15 +85,19 @@ class Simulator:
             self.car.shift_x(-x)
             self.traffic.shift_x(-x)
             self.executor.x_ref_m -= x
-        self.summary.km = self.origin_km + self.car.pose().x_m / 1000
+            x = 0.0  # the car is now at the origin
+        self.summary.km = self.origin_km + x / 1000
         if self.report and self.summary.km >= self._next_report_km:
             self.report((self.summary.seed, self.summary.km))
             self._next_report_km = int(self.summary.km) + 1
         return True
 
+    def _event(self, kind: str, cause: str, detail: str) -> Failure:
+        """A failure record stamped with where and when the drive is now."""
+        return Failure(kind, cause, detail, round(self.summary.km, 3), round(self.summary.sim_time_s, 1))
+
     def _fail(self, kind: str, cause: str, detail: str) -> None:
-        self.summary.failures.append(Failure(kind, cause, detail, round(self.summary.km, 3),
-                                             round(self.summary.sim_time_s, 1)))
+        self.summary.failures.append(self._event(kind, cause, detail))
 
     # -- the decision clock ------------------------------------------------------------------
     def drive(self, km: float, until_failure: bool = False) -> RunSummary:
@@ -128,8 +132,8 @@ class Simulator:
 
         Plan in the frame of a first action at the common speed; if the plan starts at another
         speed, plan again in that speed's frame and keep the second plan when it starts at that
-        speed too. Otherwise the first plan stands, made in the common-speed frame (the executor
-        then follows that frame: see ``plan_profiles``).
+        speed too. Otherwise the first plan stands, made in the common-speed frame (the executor's
+        reference then starts where that frame puts the AV: see ``reference_offset_m``).
         """
         seen = self._frame(readings, speed_mps, DEFAULT_SPEED_MPS)
         scenario = discretise(seen, lane)
@@ -186,8 +190,7 @@ class Simulator:
         warns that re-planning mid-manoeuvre abandons manoeuvres that would have succeeded).
         Recorded in ``kept_plans`` with its cause; it is a failure only when no plan is under way.
         """
-        self.summary.kept_plans.append(Failure(kind, cause, detail, round(self.summary.km, 3),
-                                               round(self.summary.sim_time_s, 1)))
+        self.summary.kept_plans.append(self._event(kind, cause, detail))
         self.executor.reset_reference()
         kept = pending[: LOOP.replan_after_actions]
         for k, (action, profile) in enumerate(zip(kept, plan_profiles(kept, self.car.pose().speed_mps))):

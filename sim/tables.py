@@ -26,7 +26,7 @@ def runs_table(results: list[RunSummary]) -> Table:
         failure = f"{r.failure.cause} at {r.failure.km:.2f} km" if r.failure else "-"
         table.add_row(str(r.seed), hours_minutes(r.sim_time_s), f"{r.km:.2f}", str(r.overtakes), str(r.plans),
                       str(r.replans), f"{latency['median']:.2f} / {latency['p99']:.2f}",
-                      str(sum(r.tolerance.violations_by_action.values())), failure)
+                      str(r.tolerance.violation_count), failure)
     return table
 
 
@@ -47,7 +47,7 @@ def totals_table(results: list[RunSummary]) -> Table:
             ("planning ms: median / p99 / max", f"{np.median(ms):.2f} / {np.percentile(ms, 99):.2f} / {ms.max():.2f}"),
             ("collisions", str(sum(len(r.collisions) for r in results))),
             ("planner failures", str(sum(len(r.planner_failures) for r in results))),
-            ("tolerance violations", str(sum(sum(r.tolerance.violations_by_action.values()) for r in results)))]
+            ("tolerance violations", str(sum(r.tolerance.violation_count for r in results)))]
     rows += [(f"  {cause}", str(n)) for cause, n in sorted(causes.items())]
     for key, value in rows:
         table.add_row(key, value)

@@ -62,9 +62,14 @@ class ToleranceReport:
             self.violations_by_action[action] += 1
         return deviation
 
+    @property
+    def violation_count(self) -> int:
+        """How many violations, of every action (also when read back from JSON, without the records)."""
+        return sum(self.violations_by_action.values())
+
     def to_json(self) -> dict[str, object]:
         return {"step_tolerance_cells": self.step_tolerance, "plan_tolerance_cells": self.plan_tolerance,
-                "checks": dict(self.checks), "violations": sum(self.violations_by_action.values()),
+                "checks": dict(self.checks), "violations": self.violation_count,
                 "violations_by_action": dict(self.violations_by_action),
                 "largest_step_deviation_cells": {k: round(v, 3) for k, v in self.largest.items()}}
 

@@ -29,7 +29,7 @@ def test_a_campaign_resumes_from_its_record_without_running_finished_seeds(tmp_p
     first = simulate(SHORT, [3], str(tmp_path))
     assert (tmp_path / "trace-seed3.jsonl").stat().st_size and (tmp_path / "spacetime-seed3.png").exists()
 
-    def must_not_run(*_args: object) -> RunSummary:
+    def must_not_run(*_args: object, **_kwargs: object) -> RunSummary:
         raise AssertionError("a recorded run was run again")
 
     monkeypatch.setattr(sim.campaign, "run_drive", must_not_run)
