@@ -22,15 +22,16 @@ from rich.table import Table
 
 from ci.gen import balanced, random_scenarios
 from oracle import search
-from oracle.answer import Status
-from oracle.engines import Engine, register
 from oracle.planner import plan
+from spec.answers import Status, Strategy
 from spec.constants import DEFAULT_HORIZON
+from spec.engines import Engine, register
 from spec.library import BUILTINS
 from spec.scenario import Scenario
 
-REFERENCE = Engine("reference", ("sensible", "shortest"),
-                   lambda p, s, _limits: search.sensible(p) if s == "sensible" else search.shortest_reference(p),
+SENSIBLE, SHORTEST = Strategy.SENSIBLE, Strategy.SHORTEST
+REFERENCE = Engine("reference", (SENSIBLE, SHORTEST),
+                   lambda p, s, _limits: search.sensible(p) if s is SENSIBLE else search.shortest_reference(p),
                    "plain DFS and BFS over interpreter states (benchmark only)")
 
 
@@ -84,7 +85,7 @@ def main() -> None:
                   f"python {platform.python_version()}, {time.strftime('%Y-%m-%d')}")
 
     def has_plan(s: Scenario) -> bool:
-        return plan(s, "shortest").status is Status.PLAN
+        return plan(s, SHORTEST).status is Status.PLAN
 
     generated = balanced(args.seed, args.count, has_plan)
     builtins = [b.load() for b in BUILTINS]
@@ -95,18 +96,18 @@ def main() -> None:
     table = Table(title="planning latency per scenario (ms), whole pipeline")
     for col in ("planner / scenarios", "n", "median", "p99", "max", "median vs bitset"):
         table.add_column(col, justify="right" if col != "planner / scenarios" else "left")
-    fast = timed(generated, lambda s: plan(s, "shortest"))
+    fast = timed(generated, lambda s: plan(s, SHORTEST))
     row(table, "shortest (bitset BFS): all generated", fast, None)
     row(table, "  ... with a plan", fast[: len(with_plan)], None)
     row(table, "  ... without a plan", fast[len(with_plan):], None)
-    row(table, "shortest (bitset BFS): built-in library", timed(builtins, lambda s: plan(s, "shortest")), None)
-    fast_ref = timed(ref_sample, lambda s: plan(s, "shortest"))
+    row(table, "shortest (bitset BFS): built-in library", timed(builtins, lambda s: plan(s, SHORTEST)), None)
+    fast_ref = timed(ref_sample, lambda s: plan(s, SHORTEST))
     row(table, f"shortest (bitset BFS): {len(ref_sample)}-scenario sample", fast_ref, fast_ref)
     row(table, "shortest (plain BFS over states): same sample",
-        timed(ref_sample, lambda s: plan(s, "shortest", engine="reference")), fast_ref)
-    row(table, "sensible (DFS over offsets): same sample", timed(ref_sample, lambda s: plan(s, "sensible")), fast_ref)
+        timed(ref_sample, lambda s: plan(s, SHORTEST, engine="reference")), fast_ref)
+    row(table, "sensible (DFS over offsets): same sample", timed(ref_sample, lambda s: plan(s, SENSIBLE)), fast_ref)
     row(table, "sensible (DFS over states): same sample",
-        timed(ref_sample, lambda s: plan(s, "sensible", engine="reference")), fast_ref)
+        timed(ref_sample, lambda s: plan(s, SENSIBLE, engine="reference")), fast_ref)
     console.print(table)
     ok = np.median(fast) <= 1.0 and np.percentile(fast, 99) <= 10.0
     console.print(f"target (shortest, generated): median <= 1 ms and p99 <= 10 ms: {'met' if ok else 'NOT met'} "

@@ -15,17 +15,14 @@ from rich.console import Console
 from rich.table import Table
 
 from ci.bench import machine
-from sim.simulator import Simulator
+from sim.parts import DriveConfig
+from sim.simulator import run_drive
 from sim.summary import RunSummary
 from spec.physical import LOOP
 
 
 def drive(seed: int, km: float, engine: str) -> RunSummary:
-    sim = Simulator(seed, engine)
-    try:
-        return sim.drive(km)
-    finally:
-        sim.close()
+    return run_drive(seed, DriveConfig(km, engine=engine))
 
 
 def main() -> None:

@@ -15,11 +15,12 @@ import numpy as np
 from rich.console import Console
 
 from ci.bench import latency_table, library_and_generated, machine, timed
-from oracle.engines import Engine, get_engine, register
 from oracle.planner import plan
 from promela import runner
+from spec.answers import Strategy
+from spec.engines import Engine, get_engine, register
 
-COMPILING = Engine("spin-compiling", ("sensible", "shortest"),
+COMPILING = Engine("spin-compiling", (Strategy.SENSIBLE, Strategy.SHORTEST),
                    lambda p, s, limits: runner.search_compiling(p, s, limits.timeout_s),
                    "Spin, model rendered with the scenario and compiled for every plan (benchmark only)")
 
@@ -30,6 +31,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=2026)
     parser.add_argument("--strategy", default="sensible", choices=["sensible", "shortest"])
     args = parser.parse_args()
+    strategy = Strategy(args.strategy)
     console = Console(width=120)
     scenarios = library_and_generated(args.seed, args.count)
     console.print(f"seed {args.seed}; {len(scenarios)} scenarios (library + generated); "
@@ -37,13 +39,13 @@ def main() -> None:
     register(COMPILING)
     spin = get_engine("spin")
     for scenario in scenarios:  # warm the cache: every verifier shape the pipeline will need
-        plan(scenario, args.strategy, engine=spin)
+        plan(scenario, strategy, engine=spin)
     results = {
         "spin, compile every time (spin -a, gcc -O2, pan, spin -t)":
-            timed(scenarios, lambda s: plan(s, args.strategy, engine=COMPILING)),
+            timed(scenarios, lambda s: plan(s, strategy, engine=COMPILING)),
         "spin, compiled once (cached pan, scenario injected, pan -r)":
-            timed(scenarios, lambda s: plan(s, args.strategy, engine=spin)),
-        "interpreter": timed(scenarios, lambda s: plan(s, args.strategy)),
+            timed(scenarios, lambda s: plan(s, strategy, engine=spin)),
+        "interpreter": timed(scenarios, lambda s: plan(s, strategy)),
     }
     once = results["spin, compiled once (cached pan, scenario injected, pan -r)"]
     table = latency_table("per-plan latency (ms), whole pipeline, same scenarios", "pipeline", results, once,

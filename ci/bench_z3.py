@@ -15,6 +15,7 @@ from rich.console import Console
 
 from ci.bench import latency_table, library_and_generated, machine, timed
 from oracle.planner import plan
+from spec.answers import Strategy
 from spec.constants import DEFAULT_HORIZON
 
 
@@ -27,10 +28,11 @@ def main() -> None:
     scenarios = library_and_generated(args.seed, args.count)
     console.print(f"seed {args.seed}; {len(scenarios)} scenarios (library + generated); "
                   f"horizon {DEFAULT_HORIZON}; z3 {z3.get_version_string()}; {machine()}")
+    shortest, optimal = Strategy.SHORTEST, Strategy.OPTIMAL
     results = {
-        "interpreter, shortest (bitset BFS)": timed(scenarios, lambda s: plan(s, "shortest")),
-        "z3, shortest (incremental bounds)": timed(scenarios, lambda s: plan(s, "shortest", engine="z3")),
-        "z3, optimal (z3.Optimize, lexicographic cost)": timed(scenarios, lambda s: plan(s, "optimal", engine="z3")),
+        "interpreter, shortest (bitset BFS)": timed(scenarios, lambda s: plan(s, shortest)),
+        "z3, shortest (incremental bounds)": timed(scenarios, lambda s: plan(s, shortest, engine="z3")),
+        "z3, optimal (z3.Optimize, lexicographic cost)": timed(scenarios, lambda s: plan(s, optimal, engine="z3")),
     }
     base = results["interpreter, shortest (bitset BFS)"]
     table = latency_table("per-plan latency (ms), whole pipeline, same scenarios", "engine, strategy", results, base,

@@ -1,6 +1,7 @@
 """Conformance campaign: registered engines must agree on generated scenarios, plan for plan.
 
 Usage: python -m ci.conform --engines interpreter,spin --strategy sensible --count 500 --seed 7 --out out/conform
+       [--cell-m 10.5]
 
 Every scenario's verdict is appended to ``OUT/results.jsonl`` as it is decided, so an
 interrupted campaign resumes where it stopped (same seed, same scenarios). Each
@@ -20,16 +21,15 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from ci.gen import random_scenarios
 from ci.records import append, open_for_append, read_records
-from oracle.answer import Limits
 from oracle.conform import disagreements
-from oracle.engines import check_strategy, get_engine
 from oracle.planner import plan
 from oracle.shrink import engines_disagree, shrink, to_toml
+from spec.answers import Limits
 from spec.constants import DEFAULT_HORIZON
-from spec.errors import SuiteError
+from spec.engines import check_strategy, get_engine, parse_strategy
+from spec.errors import ExitCode, SuiteError
 from spec.files import scenario_to_dict
-
-DISAGREE_EXIT = 6
+from spec.grid import grid_for
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -41,12 +41,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--horizon", type=int, default=DEFAULT_HORIZON)
     parser.add_argument("--timeout", type=float, default=None, help="seconds per scenario and engine")
     parser.add_argument("--out", default="out/conform")
+    parser.add_argument("--cell-m", type=float, default=None, help="cell length in metres (default: the paper's 21)")
     args = parser.parse_args(argv)
     console = Console(stderr=True)
     try:
+        strategy = parse_strategy(args.strategy)
+        grid = grid_for(args.cell_m)
         engines = [get_engine(name.strip()) for name in args.engines.split(",")]
         for engine in engines:
-            check_strategy(engine, args.strategy)
+            check_strategy(engine, strategy)
     except SuiteError as err:
         console.print(f"conform: error: {err}")
         return err.exit_code
@@ -54,11 +57,11 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     results = out / "results.jsonl"
     done = _done(results, args)
-    console.print(f"seed {args.seed}; {args.count} scenarios; engines {args.engines}; strategy {args.strategy}; "
-                  f"resuming after {len(done)}" if done else
-                  f"seed {args.seed}; {args.count} scenarios; engines {args.engines}; strategy {args.strategy}")
+    heading = (f"seed {args.seed}; {args.count} scenarios on {grid.describe()}; engines {args.engines}; "
+               f"strategy {strategy.value}")
+    console.print(f"{heading}; resuming after {len(done)}" if done else heading)
     limits = Limits(timeout_s=args.timeout)
-    scenarios = itertools.islice(random_scenarios(args.seed, horizon=args.horizon), args.count)
+    scenarios = itertools.islice(random_scenarios(args.seed, horizon=args.horizon, grid=grid), args.count)
     bad = sum(1 for r in done.values() if r["disagreements"])
     columns = (TextColumn("conform"), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[bad]} disagree"),
                TimeRemainingColumn())
@@ -67,29 +70,34 @@ def main(argv: list[str] | None = None) -> int:
         for index, scenario in enumerate(scenarios):
             if index in done:
                 continue
-            answers = [plan(scenario, args.strategy, engine=e, limits=limits) for e in engines]
+            answers = [plan(scenario, strategy, engine=e, limits=limits) for e in engines]
             problems = disagreements(answers)
             record = {"index": index, "seed": args.seed, "strategy": args.strategy, "engines": args.engines,
+                      "cell_m": args.cell_m,
                       "scenario": scenario_to_dict(scenario), "statuses": [a.status.value for a in answers],
                       "disagreements": problems}
             if problems:
                 bad += 1
-                small, _ = shrink(scenario, engines_disagree(engines, args.strategy, limits))
+                small, _ = shrink(scenario, engines_disagree(engines, strategy, limits))
                 repro = out / f"repro-{index}.toml"
                 repro.write_text(to_toml(small, f"seed {args.seed}, scenario {index}: " + "; ".join(problems)))
                 record["reproducer"] = str(repro)
             append(log, record)
             progress.update(task, advance=1, bad=bad)
-    console.print(f"conform: {args.count} scenarios, {bad} disagreement(s); results in {results}")
+    records = _done(results, args)
+    statuses = [r.get("statuses") for r in records.values()]
+    incomplete = sum(isinstance(st, list) and "incomplete" in st for st in statuses)
+    console.print(f"conform: {args.count} scenarios, {bad} disagreement(s), {incomplete} with an incomplete answer "
+                  f"(a limit was hit; compared with nothing); results in {results}")
     print(f"{args.count - bad} passed, {bad} failed")
-    return DISAGREE_EXIT if bad else 0
+    return ExitCode.DISAGREE if bad else ExitCode.OK
 
 
 def _done(results: Path, args: argparse.Namespace) -> dict[int, dict[str, object]]:
     """Verdicts already recorded by an earlier run of the same campaign (same seed, engines, strategy)."""
+    key = (args.seed, args.engines, args.strategy, args.cell_m)
     return {record["index"]: record for record in read_records(results)
-            if (record.get("seed"), record.get("engines"), record.get("strategy")) == (args.seed, args.engines,
-                                                                                       args.strategy)
+            if (record.get("seed"), record.get("engines"), record.get("strategy"), record.get("cell_m")) == key
             and isinstance(record.get("index"), int)}
 
 

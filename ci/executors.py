@@ -9,6 +9,7 @@ worker needs this package installed) or None for a local cluster of ``workers`` 
 from __future__ import annotations
 
 import contextlib
+import enum
 import functools
 import logging
 import multiprocessing
@@ -18,25 +19,31 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
-from spec.errors import ScenarioError, ToolMissing
+from spec.errors import OptionError, ToolMissing
 
 R = TypeVar("R")
-KINDS = ("processes", "dask")
 CONNECT_TIMEOUT_S = 10
+
+
+class ExecutorKind(enum.Enum):
+    """Where a campaign's jobs run."""
+
+    PROCESSES = "processes"  # this process (one worker) or a pool of local processes
+    DASK = "dask"  # a dask.distributed cluster: a local one, or a running scheduler
 
 
 @dataclass(frozen=True, slots=True)
 class ExecutorChoice:
     """How to run a campaign's jobs."""
 
-    kind: str = "processes"  # one of KINDS
+    kind: ExecutorKind = ExecutorKind.PROCESSES
     workers: int = 1  # local processes (for dask without a scheduler: the local cluster's workers)
     scheduler: str | None = None  # dask only: a running scheduler's address
 
     def describe(self) -> str:
-        if self.kind == "dask" and self.scheduler:
+        if self.kind is ExecutorKind.DASK and self.scheduler:
             return f"dask scheduler {self.scheduler}"
-        if self.kind == "dask":
+        if self.kind is ExecutorKind.DASK:
             return f"local dask cluster, {self.workers} worker(s)"
         return "this process" if self.workers <= 1 else f"{self.workers} processes"
 
@@ -46,12 +53,13 @@ IN_PROCESS = ExecutorChoice()
 
 def check_executor(choice: ExecutorChoice) -> None:
     """Reject a choice that cannot run, before any job starts."""
-    if choice.kind not in KINDS:
-        raise ScenarioError("--executor", choice.kind, f"unknown executor (known: {', '.join(KINDS)})")
-    if choice.scheduler and choice.kind != "dask":
-        raise ScenarioError("--scheduler", choice.scheduler, "a scheduler address goes with --executor dask")
+    if not isinstance(choice.kind, ExecutorKind):
+        known = ", ".join(k.value for k in ExecutorKind)
+        raise OptionError("--executor", choice.kind, f"unknown executor (known: {known})")
+    if choice.scheduler and choice.kind is not ExecutorKind.DASK:
+        raise OptionError("--scheduler", choice.scheduler, "a scheduler address goes with --executor dask")
     if choice.workers < 1:
-        raise ScenarioError("--workers", choice.workers, "at least one worker is needed")
+        raise OptionError("--workers", choice.workers, "at least one worker is needed")
 
 
 def run_jobs(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: ExecutorChoice,
@@ -63,7 +71,7 @@ def run_jobs(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: Exec
     ``report`` is None and progress is per finished job). Jobs must not report None.
     """
     check_executor(choice)
-    if choice.kind == "dask":
+    if choice.kind is ExecutorKind.DASK:
         extra: dict[str, Any] = {"report": None} if progress else {}
         yield from _dask(functools.partial(fn, **extra), jobs, choice)
     elif choice.workers <= 1 or len(jobs) <= 1:
@@ -130,7 +138,7 @@ def _dask(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: Executo
     except ValueError as err:
         if not choice.scheduler:
             raise
-        raise ScenarioError("--scheduler", choice.scheduler, f"not a scheduler address ({err})") from None
+        raise OptionError("--scheduler", choice.scheduler, f"not a scheduler address ({err})") from None
     except (OSError, TimeoutError) as err:
         raise ToolMissing(f"no dask scheduler answered at {choice.scheduler} within {CONNECT_TIMEOUT_S} s "
                           f"({type(err).__name__}); start one with `dask scheduler` and workers with "

@@ -20,14 +20,15 @@ from dataclasses import dataclass
 
 import z3
 
-from oracle.answer import Limits, SearchResult, Status
-from oracle.engines import Engine, register
-from oracle.interpreter import step
+from oracle.abstraction import offsets_of
+from oracle.interpreter import problem_step, replay
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
-from spec.constants import AV_CELL
-from spec.errors import EngineError
+from spec.answers import Limits, SearchResult, Status, Strategy
+from spec.engines import Engine, register
 from spec.lanes import Lane
-from spec.scenario import Collision, Problem, State
+from spec.rules import behind_line, collision_span, nearest_span, passed_line
+from spec.scenario import Problem
+from spec.state import State
 
 #: The cost ``optimal`` minimises, most important first (see COST_DOC).
 COST_TERMS = ("lane_changes", "right_lane_steps", "brakes", "length")
@@ -55,9 +56,11 @@ class Encoding:
         self.steps: list[Step] = []
         self.actions: list[z3.ArithRef] = []
         self.targets = list(scenario.target_indices)
-        self.left_hits = sorted({AV_CELL - c for c in scenario.left_lane})
-        ticks = {rule.oncoming_ticks for rule in ACTION_RULES.values()} | {0}
-        self.right_hits = {t: self._right_hits(t) for t in ticks}
+        self.grid = problem.grid
+        self.form = offsets_of(problem)
+        self.left_hits = sorted(self.form.left_hits)
+        self.ticks = {a: self.grid.ticks(a) for a in ACTION_ORDER}
+        self.right_hits = {t: [(lo - t, hi) for lo, hi in self.form.right_hits] for t in {*self.ticks.values(), 0}}
         start = self.new_step()
         self.initial = z3.And(start.right == (scenario.lane is Lane.RIGHT), start.lc == 0, start.l == 0, start.o == 0,
                               self.safe(start.right, start.l, start.o, 0))
@@ -73,9 +76,9 @@ class Encoding:
 
     def bounds(self, k: int) -> z3.BoolRef:
         """Invariants after k actions, implied by the rules but cheap for the solver to use."""
-        s, rules = self.steps[k], ACTION_RULES.values()
-        ticks = [r.oncoming_ticks for r in rules]
-        shifts = [r.left_shift_cells for r in rules]
+        s = self.steps[k]
+        ticks = list(self.ticks.values())
+        shifts = [self.grid.left_shift(a) for a in ACTION_ORDER]
         return z3.And(s.lc >= 0, s.lc <= self.problem.rules.max_lane_changes,
                       s.o >= min(ticks) * k, s.o <= max(ticks) * k,
                       s.l >= min(shifts) * k, s.l <= max(shifts) * k)
@@ -88,40 +91,21 @@ class Encoding:
         right_ok = [z3.Or(o_start < lo, o_start > hi) for lo, hi in self.right_hits[ticks]]
         return z3.If(right, z3.And(*right_ok, True), z3.And(*left_ok, True))
 
-    def _right_hits(self, ticks: int) -> list[tuple[int, int]]:
-        """Intervals of starting tick counts from which an action with ``ticks`` ticks meets a danger zone.
-
-        The vehicle at cell c is in the zone when o is in [c - AV_CELL - r, c - AV_CELL + r];
-        checked after the effect and after each tick, the start o collides when o + j does
-        for some j in 0..ticks.
-        """
-        radius = self.problem.rules.danger_radius
-        spans = sorted((c - AV_CELL - radius - ticks, c - AV_CELL + radius) for c in self.problem.scenario.right_lane)
-        merged: list[tuple[int, int]] = []
-        for lo, hi in spans:
-            if hi < 0:
-                continue  # o is never negative
-            if merged and lo <= merged[-1][1] + 1:
-                merged[-1] = (merged[-1][0], max(hi, merged[-1][1]))
-            else:
-                merged.append((lo, hi))
-        return merged
-
     def _safe_per_vehicle(self, right: z3.BoolRef, l_off: z3.ArithRef, o_start: z3.ArithRef,
                           ticks: int) -> z3.BoolRef:
         """The same condition written per vehicle, each guarded by its presence literal (explanations)."""
-        scenario, radius = self.problem.scenario, self.problem.rules.danger_radius
-        left_ok = [z3.Implies(self._here(Lane.LEFT, i), c + l_off != AV_CELL)
+        scenario, rules = self.problem.scenario, self.problem.rules
+        (l_lo, l_hi), (r_lo, r_hi) = (collision_span(lane, rules, self.grid) for lane in (Lane.LEFT, Lane.RIGHT))
+        left_ok = [z3.Implies(self._here(Lane.LEFT, i), z3.Or(c + l_off < l_lo, c + l_off > l_hi))
                    for i, c in enumerate(scenario.left_lane)]
-        right_ok = [z3.Implies(self._here(Lane.RIGHT, i), z3.Or(c - (o_start + j) > AV_CELL + radius,
-                                                                c - (o_start + j) < AV_CELL - radius))
+        right_ok = [z3.Implies(self._here(Lane.RIGHT, i), z3.Or(c - (o_start + j) > r_hi, c - (o_start + j) < r_lo))
                     for i, c in enumerate(scenario.right_lane) for j in range(ticks + 1)]
         return z3.If(right, z3.And(*right_ok, True), z3.And(*left_ok, True))
 
     def transition(self, a: Step, action_var: z3.ArithRef, b: Step) -> z3.BoolRef:
         """One decision step from ``a`` to ``b`` by the action numbered ``action_var`` (ACTION_ORDER)."""
         rules, options = self.problem.rules, []
-        safe = {t: self.safe(b.right, b.l, a.o, t) for t in {r.oncoming_ticks for r in ACTION_RULES.values()}}
+        safe = {t: self.safe(b.right, b.l, a.o, t) for t in set(self.ticks.values())}
         for index, action in enumerate(ACTION_ORDER):
             rule = ACTION_RULES[action]
             guard = [a.lc < rules.max_lane_changes] if rule.changes_lane else []
@@ -129,8 +113,8 @@ class Encoding:
                 guard.append(a.right == (rule.from_lane is Lane.RIGHT))
             lane_after = (rule.to_lane is Lane.RIGHT) if rule.to_lane is not None else a.right
             options.append(z3.And(action_var == index, *guard, b.right == lane_after,
-                                  b.lc == a.lc + int(rule.changes_lane), b.l == a.l + rule.left_shift_cells,
-                                  b.o == a.o + rule.oncoming_ticks, safe[rule.oncoming_ticks]))
+                                  b.lc == a.lc + int(rule.changes_lane), b.l == a.l + self.grid.left_shift(action),
+                                  b.o == a.o + self.ticks[action], safe[self.ticks[action]]))
         return z3.Or(*options)
 
     def goal(self, s: Step) -> z3.BoolRef:
@@ -138,22 +122,23 @@ class Encoding:
         goal, scenario, parts = self.problem.goal, self.problem.scenario, []
         if goal.av_lane is not None:
             parts.append(s.right == (goal.av_lane is Lane.RIGHT))
-        cells = scenario.left_lane
+        cells, grid = scenario.left_lane, self.grid
         if goal.targets_behind:
-            parts += [z3.Implies(self._here(Lane.LEFT, i), cells[i] + s.l < AV_CELL) for i in self.targets]
-        if goal.nearest_target_offset is not None:
-            parts.append(self._nearest_at(s, AV_CELL + goal.nearest_target_offset))
+            parts += [z3.Implies(self._here(Lane.LEFT, i), cells[i] + s.l <= behind_line(grid)) for i in self.targets]
+        span = nearest_span(goal, grid)
+        if span is not None:
+            parts.append(self._nearest_within(s, span))
         if goal.oncoming_passed:
-            parts += [z3.Implies(self._here(Lane.RIGHT, i), c - s.o <= AV_CELL)
+            parts += [z3.Implies(self._here(Lane.RIGHT, i), c - s.o <= passed_line(grid))
                       for i, c in enumerate(scenario.right_lane)]
         return z3.And(*parts, True)
 
-    def _nearest_at(self, s: Step, cell: int) -> z3.BoolRef | bool:
-        """The nearest present target is at ``cell``; false without one."""
+    def _nearest_within(self, s: Step, span: tuple[int, int]) -> z3.BoolRef | bool:
+        """The nearest present target is within ``span``; false without one."""
         result: z3.BoolRef | bool = False
         for i in reversed(self.targets):
-            here = self._here(Lane.LEFT, i)
-            result = z3.If(here, self.problem.scenario.left_lane[i] + s.l == cell, result)
+            here, cell = self._here(Lane.LEFT, i), self.problem.scenario.left_lane[i] + s.l
+            result = z3.If(here, z3.And(cell >= span[0], cell <= span[1]), result)
         return result
 
     def extend(self) -> z3.BoolRef:
@@ -166,13 +151,7 @@ class Encoding:
     def decode(self, model: z3.ModelRef, length: int) -> tuple[tuple[Action, ...], tuple[State, ...]]:
         """The plan of ``length`` actions in ``model``, with the interpreter's states (a cross-check)."""
         actions = tuple(ACTION_ORDER[model.eval(a, model_completion=True).as_long()] for a in self.actions[:length])
-        states = [self.problem.scenario.initial_state()]
-        for n, action in enumerate(actions, start=1):
-            nxt = step(states[-1], action, self.problem.rules)
-            if isinstance(nxt, Collision):
-                raise EngineError(f"z3: the interpreter finds a collision at step {n}: {nxt.describe()}")
-            states.append(nxt)
-        return actions, tuple(states)
+        return actions, replay(self.problem, actions, "z3")
 
 
 def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
@@ -229,7 +208,7 @@ def plan_cost(problem: Problem, actions: tuple[Action, ...]) -> dict[str, int]:
     """The same cost, computed from a plan by the interpreter: to compare any engine's plan."""
     states = [problem.scenario.initial_state()]
     for action in actions:
-        nxt = step(states[-1], action, problem.rules)
+        nxt = problem_step(problem, states[-1], action)
         states.append(nxt if isinstance(nxt, State) else states[-1])
     return {"lane_changes": states[-1].lane_changes,
             "right_lane_steps": sum(1 for s in states[1:] if s.lane is Lane.RIGHT),
@@ -266,10 +245,13 @@ def _set_timeout(solver: z3.Solver | z3.Optimize, limits: Limits | None) -> None
         solver.set("timeout", max(1, int(limits.timeout_s * 1000)))
 
 
-def _solve(problem: Problem, strategy: str, limits: Limits) -> SearchResult:
+SOLVERS = {Strategy.SHORTEST: shortest, Strategy.OPTIMAL: optimal}
+
+
+def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult:
     """shortest: incremental bounds; optimal: z3.Optimize. sensible is left to the search engines."""
-    return optimal(problem, limits) if strategy == "optimal" else shortest(problem, limits)
+    return SOLVERS[strategy](problem, limits)
 
 
-Z3 = register(Engine("z3", ("shortest", "optimal"), _solve,
+Z3 = register(Engine("z3", tuple(SOLVERS), _solve,
                      "Z3 bounded model checking: shortest lengths, optimal plans, proofs within the horizon"))

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from oracle.answer import Answer, Status
+from spec.answers import Answer, Status, Strategy
 
 #: The plan-free answers; they agree with each other on "no plan within the horizon".
 NO_PLAN = (Status.NO_PLAN, Status.NO_PLAN_WITHIN_HORIZON)
@@ -24,10 +24,10 @@ def disagreement(a: Answer, b: Answer) -> str | None:
         return None
     if a.model is not b.model:
         return f"{a.engine} plans with the {_name(a)} model, {b.engine} with the {_name(b)} model"
-    strategy = a.strategy if a.strategy == b.strategy else None
-    if strategy == "sensible" and a.actions != b.actions:
+    strategy = a.strategy if a.strategy is b.strategy else None
+    if strategy is Strategy.SENSIBLE and a.actions != b.actions:
         return f"sensible plans differ: {a.engine} {_plan(a)} vs {b.engine} {_plan(b)}"
-    if strategy == "shortest" and len(a.actions) != len(b.actions):
+    if strategy is Strategy.SHORTEST and len(a.actions) != len(b.actions):
         return f"shortest lengths differ: {a.engine} {len(a.actions)} vs {b.engine} {len(b.actions)}"
     return None
 

@@ -17,12 +17,12 @@ from dataclasses import dataclass
 
 import z3
 
-from oracle.answer import Answer, Status
 from oracle.bmc import Encoding, bounded
 from oracle.planner import plan
+from spec.answers import Answer, Status, Strategy
 from spec.errors import EngineError
 from spec.lanes import Lane
-from spec.models import models_for
+from spec.models import ModelKind, models_for
 from spec.scenario import Scenario, make_scenario, problem_for
 
 Vehicle = tuple[Lane, int]  # lane and index in that lane's (ascending) cells
@@ -46,7 +46,7 @@ class Explanation:
         return f"{lane.value}_lane[{i}] ({kind} at cell {cells[i]})"
 
 
-def explain(scenario: Scenario, strategy: str = "shortest") -> Explanation:
+def explain(scenario: Scenario, strategy: Strategy = Strategy.SHORTEST) -> Explanation:
     """Explain a scenario without a plan; a scenario with a plan is reported as such."""
     if plan(scenario, strategy).status is Status.PLAN:
         return Explanation(scenario, True, (), None, ())
@@ -68,8 +68,8 @@ def explain(scenario: Scenario, strategy: str = "shortest") -> Explanation:
     return _checked(scenario, tuple(blocking), strategy)
 
 
-def _solver(scenario: Scenario, kind: object, literals: dict[Vehicle, z3.BoolRef]) -> z3.Solver:
-    enc = Encoding(problem_for(scenario, kind), present=literals)  # type: ignore[arg-type]
+def _solver(scenario: Scenario, kind: ModelKind, literals: dict[Vehicle, z3.BoolRef]) -> z3.Solver:
+    enc = Encoding(problem_for(scenario, kind), present=literals)
     _, constraints = bounded(enc)
     solver = z3.SolverFor("QF_LIA")
     solver.set("unsat_core", True)
@@ -83,10 +83,11 @@ def keep_only(scenario: Scenario, keep: set[Vehicle]) -> Scenario:
     left = [c for i, c in enumerate(scenario.left_lane) if (Lane.LEFT, i) in keep]
     right = [c for i, c in enumerate(scenario.right_lane) if (Lane.RIGHT, i) in keep]
     kept_targets = sum(1 for i in targets if (Lane.LEFT, i) in keep)
-    return make_scenario(scenario.lane, left, right, kept_targets, scenario.model, scenario.horizon)
+    return make_scenario(scenario.lane, left, right, kept_targets, scenario.model, scenario.horizon,
+                         grid=scenario.grid)
 
 
-def _checked(scenario: Scenario, blocking: tuple[Vehicle, ...], strategy: str) -> Explanation:
+def _checked(scenario: Scenario, blocking: tuple[Vehicle, ...], strategy: Strategy) -> Explanation:
     """Check with the interpreter: the blocking set alone has no plan, and each removal yields one."""
     reduced = keep_only(scenario, set(blocking))
     if plan(reduced, strategy).status is Status.PLAN:

@@ -1,7 +1,8 @@
-"""The reference interpreter: the readable meaning of one decision step, goals, and plan validation.
+"""The reference interpreter: the readable meaning of one decision step, plan validation and replay.
 
 Pure functions over frozen values: ``step`` returns a new state (or the collision),
-never mutating its input.
+never mutating its input. The rules it applies (guards, collisions, the goal) are the
+functions of ``spec.rules``; the effects come from the problem's grid.
 """
 
 from __future__ import annotations
@@ -10,20 +11,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 from spec.actions import ACTION_RULES, Action
-from spec.constants import AV_CELL
-from spec.lanes import Lane
-from spec.models import GoalRule, ModelRules
-from spec.scenario import Collision, Problem, State
-
-
-def disabled_reason(state: State, action: Action, rules: ModelRules) -> str | None:
-    """Why ``action`` is not enabled in ``state``, or None when it is."""
-    rule = ACTION_RULES[action]
-    if rule.from_lane is not None and state.lane is not rule.from_lane:
-        return f"{action.value} needs the AV in the {rule.from_lane.value} lane"
-    if rule.changes_lane and state.lane_changes >= rules.max_lane_changes:
-        return f"{action.value}: the {rules.kind.value} model allows at most {rules.max_lane_changes} lane changes"
-    return None
+from spec.errors import EngineError
+from spec.grid import Grid
+from spec.models import ModelRules
+from spec.rules import collision_in, disabled_reason, goal_holds
+from spec.scenario import Problem
+from spec.state import Collision, State
 
 
 def enabled_actions(state: State, rules: ModelRules) -> list[Action]:
@@ -31,26 +24,13 @@ def enabled_actions(state: State, rules: ModelRules) -> list[Action]:
     return [a for a in Action if disabled_reason(state, a, rules) is None]
 
 
-def collision_in(state: State, rules: ModelRules, tick: int) -> Collision | None:
-    """The collision in ``state``, if any: a left-lane vehicle at the AV, or an oncoming one too near."""
-    if state.lane is Lane.LEFT:
-        for i, cell in enumerate(state.left_lane):
-            if cell == AV_CELL:
-                return Collision(state, Lane.LEFT, i, cell, tick)
-    else:
-        for i, cell in enumerate(state.right_lane):
-            if abs(cell - AV_CELL) <= rules.danger_radius:
-                return Collision(state, Lane.RIGHT, i, cell, tick)
-    return None
-
-
-def step(state: State, action: Action, rules: ModelRules) -> State | Collision:
+def step(state: State, action: Action, rules: ModelRules, grid: Grid) -> State | Collision:
     """One decision step: effect, collision check, oncoming ticks each followed by a check."""
     reason = disabled_reason(state, action, rules)
     if reason is not None:
         raise ValueError(reason)
     rule = ACTION_RULES[action]
-    shift = rule.left_shift_cells
+    shift = grid.left_shift(action)
     after = replace(
         state,
         lane=rule.to_lane or state.lane,
@@ -58,32 +38,28 @@ def step(state: State, action: Action, rules: ModelRules) -> State | Collision:
         lane_changes=state.lane_changes + int(rule.changes_lane),
         steps=state.steps + 1,
     )
-    hit = collision_in(after, rules, 0)
-    for tick in range(1, rule.oncoming_ticks + 1):
+    hit = collision_in(after, rules, grid, 0)
+    for tick in range(1, grid.ticks(action) + 1):
         if hit is not None:
             return hit
         after = replace(after, right_lane=tuple(cell - 1 for cell in after.right_lane))
-        hit = collision_in(after, rules, tick)
+        hit = collision_in(after, rules, grid, tick)
     return hit if hit is not None else after
 
 
-def goal(state: State, rule: GoalRule, targets: Sequence[int]) -> bool:
-    """Whether ``state`` meets the goal; ``targets`` are indices into ``state.left_lane``."""
-    if rule.av_lane is not None and state.lane is not rule.av_lane:
-        return False
-    if rule.targets_behind and any(state.left_lane[i] >= AV_CELL for i in targets):
-        return False
-    if rule.nearest_target_offset is not None:
-        if not targets or state.left_lane[targets[0]] != AV_CELL + rule.nearest_target_offset:
-            return False
-    if rule.oncoming_passed and any(cell > AV_CELL for cell in state.right_lane):
-        return False
-    return True
+def problem_step(problem: Problem, state: State, action: Action) -> State | Collision:
+    """One decision step under ``problem``'s model and grid."""
+    return step(state, action, problem.rules, problem.grid)
 
 
 def problem_goal(problem: Problem, state: State) -> bool:
     """Whether ``state`` meets the goal of ``problem``."""
-    return goal(state, problem.goal, problem.scenario.target_indices)
+    return goal_holds(state, problem.goal, problem.scenario.target_indices, problem.grid)
+
+
+def problem_collision(problem: Problem, state: State) -> Collision | None:
+    """The collision in ``state`` (as after an effect) under ``problem``'s model and grid."""
+    return collision_in(state, problem.rules, problem.grid, 0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -99,7 +75,7 @@ def validate(problem: Problem, actions: Sequence[Action]) -> Validation:
     """Check that ``actions`` is a plan: enabled, collision-free, within the horizon, goal first at the end."""
     state = problem.scenario.initial_state()
     states = [state]
-    start_hit = collision_in(state, problem.rules, 0)
+    start_hit = problem_collision(problem, state)
     if start_hit is not None:
         return Validation(False, f"initial state: {start_hit.describe()}", tuple(states))
     if len(actions) > problem.horizon:
@@ -110,7 +86,7 @@ def validate(problem: Problem, actions: Sequence[Action]) -> Validation:
         reason = disabled_reason(state, action, problem.rules)
         if reason is not None:
             return Validation(False, f"step {n}: {reason}", tuple(states))
-        result = step(state, action, problem.rules)
+        result = problem_step(problem, state, action)
         if isinstance(result, Collision):
             return Validation(False, f"step {n} ({action.value}): {result.describe()}", tuple(states))
         state = result
@@ -118,3 +94,20 @@ def validate(problem: Problem, actions: Sequence[Action]) -> Validation:
     if not problem_goal(problem, state):
         return Validation(False, f"goal not reached after {len(actions)} action(s)", tuple(states))
     return Validation(True, "plan reaches the goal", tuple(states))
+
+
+def replay(problem: Problem, actions: Sequence[Action], engine: str) -> tuple[State, ...]:
+    """The interpreter's states along an engine's plan (initial included); a collision, a disabled action
+    or a plan that misses the goal means the engine and the interpreter disagree: an engine error."""
+    states = [problem.scenario.initial_state()]
+    for n, action in enumerate(actions, start=1):
+        reason = disabled_reason(states[-1], action, problem.rules)
+        if reason is not None:
+            raise EngineError(f"{engine}: the interpreter disagrees at step {n}: {reason}")
+        nxt = problem_step(problem, states[-1], action)
+        if isinstance(nxt, Collision):
+            raise EngineError(f"{engine}: the interpreter disagrees at step {n}: {nxt.describe()}")
+        states.append(nxt)
+    if not problem_goal(problem, states[-1]):
+        raise EngineError(f"{engine}: the interpreter disagrees: the plan does not reach the goal")
+    return tuple(states)

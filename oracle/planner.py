@@ -3,18 +3,22 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
+from dataclasses import dataclass
 
-from oracle.answer import Answer, Limits, SearchResult, Status
-from oracle.engines import Engine, check_strategy, get_engine
-from oracle.interpreter import validate
+from oracle.interpreter import Validation, validate
+from spec.actions import Action
+from spec.answers import Answer, Limits, SearchResult, Status, Strategy
+from spec.engines import Engine, check_strategy, get_engine
 from spec.errors import EngineError
 from spec.models import ModelChoice, ModelKind, models_for
-from spec.scenario import Problem, Scenario, State, problem_for
+from spec.scenario import Problem, Scenario, problem_for
+from spec.state import State
 
 
 def plan(
     scenario: Scenario,
-    strategy: str = "sensible",
+    strategy: Strategy = Strategy.SENSIBLE,
     model: ModelChoice | None = None,
     horizon: int | None = None,
     engine: str | Engine = "interpreter",
@@ -90,3 +94,24 @@ def _combined(stages: list[tuple[ModelKind, Status, str]]) -> Status:
 def _summary(stages: list[tuple[ModelKind, Status, str]]) -> str:
     parts = (f"{kind.value}: {status.value}" + (f" ({detail})" if detail else "") for kind, status, detail in stages)
     return "; ".join(parts)
+
+
+@dataclass(frozen=True, slots=True)
+class PipelineValidation:
+    """An action list checked against the pipeline's models: valid under which model, or why under none."""
+
+    model: ModelKind  # the model it is a plan for, or the first model tried
+    verdict: Validation
+    reason: str  # the valid model's reason, or every model's, joined
+
+
+def validate_pipeline(scenario: Scenario, actions: Sequence[Action], model: ModelChoice | None = None,
+                      horizon: int | None = None) -> PipelineValidation:
+    """Whether ``actions`` is a plan under the first model of the choice (default: the scenario's) that accepts it."""
+    verdicts = []
+    for kind in models_for(model or scenario.model):
+        verdict = validate(problem_for(scenario, kind, horizon), actions)
+        if verdict.valid:
+            return PipelineValidation(kind, verdict, verdict.reason)
+        verdicts.append((kind, verdict))
+    return PipelineValidation(verdicts[0][0], verdicts[0][1], "; ".join(f"{k.value}: {v.reason}" for k, v in verdicts))

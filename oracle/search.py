@@ -11,10 +11,11 @@ from collections import deque
 from collections.abc import Callable, Hashable, Iterable, Iterator
 from typing import TypeVar
 
-from oracle.answer import Limits, SearchResult, Status
-from oracle.interpreter import collision_in, enabled_actions, problem_goal, step
+from oracle.interpreter import enabled_actions, problem_collision, problem_goal, problem_step
 from spec.actions import Action
-from spec.scenario import Collision, Problem, State
+from spec.answers import Limits, SearchResult, Status
+from spec.scenario import Problem
+from spec.state import Collision, State
 
 K = TypeVar("K", bound=Hashable)
 
@@ -27,7 +28,7 @@ def _successors(problem: Problem, state: State) -> Iterator[tuple[Action, State]
     if state.steps >= problem.horizon:
         return
     for action in enabled_actions(state, problem.rules):
-        nxt = step(state, action, problem.rules)
+        nxt = problem_step(problem, state, action)
         if not isinstance(nxt, Collision):
             yield action, nxt
 
@@ -35,7 +36,7 @@ def _successors(problem: Problem, state: State) -> Iterator[tuple[Action, State]
 def trivial_answer(problem: Problem) -> SearchResult | None:
     """The answer when the initial state already decides: a collision or the goal."""
     start = problem.scenario.initial_state()
-    hit = collision_in(start, problem.rules, 0)
+    hit = problem_collision(problem, start)
     if hit is not None:
         return SearchResult(Status.NO_PLAN, (), 1, f"initial state: {hit.describe()}")
     if problem_goal(problem, start):

@@ -11,11 +11,10 @@ from __future__ import annotations
 import json
 from collections.abc import Callable, Iterator
 
-from oracle.answer import Limits
 from oracle.conform import disagreements
-from oracle.engines import Engine
 from oracle.planner import plan
-from spec.constants import AV_CELL
+from spec.answers import Limits, Strategy
+from spec.engines import Engine
 from spec.errors import ScenarioError
 from spec.files import scenario_to_dict
 from spec.scenario import Scenario, make_scenario
@@ -52,14 +51,15 @@ def _smaller(s: Scenario) -> Iterator[Scenario]:
     for h in sorted({s.horizon // 2, s.horizon - 1}):
         if 0 <= h < s.horizon:
             yield from _valid(s, horizon=h)
+    av_cell = s.grid.av_cell
     for i, cell in enumerate(s.left_lane):
-        yield from _valid(s, left=(*s.left_lane[:i], _toward_av(cell), *s.left_lane[i + 1:]))
+        yield from _valid(s, left=(*s.left_lane[:i], _toward(cell, av_cell), *s.left_lane[i + 1:]))
     for i, cell in enumerate(s.right_lane):
-        yield from _valid(s, right=(*s.right_lane[:i], _toward_av(cell), *s.right_lane[i + 1:]))
+        yield from _valid(s, right=(*s.right_lane[:i], _toward(cell, av_cell), *s.right_lane[i + 1:]))
 
 
-def _toward_av(cell: int) -> int:
-    return cell - 1 if cell > AV_CELL else cell + 1
+def _toward(cell: int, av_cell: int) -> int:
+    return cell - 1 if cell > av_cell else cell + 1
 
 
 def _valid(s: Scenario, left: tuple[int, ...] | None = None, right: tuple[int, ...] | None = None,
@@ -69,14 +69,14 @@ def _valid(s: Scenario, left: tuple[int, ...] | None = None, right: tuple[int, .
         changed = make_scenario(s.lane, list(s.left_lane if left is None else left),
                                 list(s.right_lane if right is None else right),
                                 s.targets if targets is None else targets, s.model,
-                                s.horizon if horizon is None else horizon)
+                                s.horizon if horizon is None else horizon, grid=s.grid)
     except ScenarioError:
         return
     if changed != s:
         yield changed
 
 
-def engines_disagree(engines: list[Engine], strategy: str, limits: Limits | None = None) -> Predicate:
+def engines_disagree(engines: list[Engine], strategy: Strategy, limits: Limits | None = None) -> Predicate:
     """The predicate "these engines disagree on this scenario"."""
     def fails(scenario: Scenario) -> bool:
         answers = [plan(scenario, strategy, engine=e, limits=limits) for e in engines]

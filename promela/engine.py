@@ -2,16 +2,16 @@
 
 from __future__ import annotations
 
-from oracle.answer import Limits, SearchResult
-from oracle.engines import Engine, register
 from promela import runner
+from spec.answers import Limits, SearchResult, Strategy
+from spec.engines import Engine, register
 from spec.scenario import Problem
 
 
-def _solve(problem: Problem, strategy: str, limits: Limits) -> SearchResult:
+def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult:
     """Spin's default depth-first search for sensible, its breadth-first search for shortest."""
     return runner.search(problem, strategy, limits.timeout_s)
 
 
-SPIN = register(Engine("spin", ("sensible", "shortest"), _solve,
+SPIN = register(Engine("spin", (Strategy.SENSIBLE, Strategy.SHORTEST), _solve,
                        "Spin model checker, verifier compiled once per model and cached"))

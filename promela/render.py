@@ -19,30 +19,72 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
-from spec.constants import AV_CELL, MAX_HORIZON, ROAD_CELLS
+from spec.constants import MAX_HORIZON
+from spec.grid import PAPER_GRID, Grid
 from spec.lanes import Lane
-from spec.models import GOAL_RULES, MODEL_RULES, GoalKind, ModelKind, goal_kind
+from spec.models import GOAL_RULES, MODEL_RULES, GoalKind, GoalRule, ModelKind, ModelRules
+from spec.rules import behind_line, collision_span, nearest_span, passed_line
 from spec.scenario import Problem, Scenario
 
-#: Array sizes of the injected verifier: every scenario the spec accepts fits.
-MAX_VEHICLES = ROAD_CELLS + 1
 ENV_VAR = "OVERTAKE_SCENARIO"
 LANE_CODE = {Lane.LEFT: 0, Lane.RIGHT: 1}
 
 
 @dataclass(frozen=True, slots=True)
 class Shape:
-    """What a compiled verifier is specialised for: the model, its goal, and the array sizes."""
+    """What a compiled verifier is specialised for: the model's rules, its goal, the grid (array sizes too)."""
 
-    model: ModelKind
-    goal: GoalKind
-    max_left: int = MAX_VEHICLES
-    max_right: int = MAX_VEHICLES
+    rules: ModelRules
+    goal: GoalRule
+    grid: Grid = PAPER_GRID
+
+    @property
+    def model(self) -> ModelKind:
+        return self.rules.kind
+
+    @property
+    def name(self) -> str:
+        """``model-goal``, and the cell length when it is not the paper's: file and cache names."""
+        cell = "" if self.grid.is_paper else f"-{float(self.grid.cell_m):g}m"
+        return f"{self.rules.kind.value}-{self.goal.kind.value}{cell}"
+
+    @property
+    def max_vehicles(self) -> int:
+        """Array sizes of the injected verifier: every scenario the grid accepts fits."""
+        return self.grid.road_cells + 1
+
+
+def standard_shape(model: ModelKind, goal: GoalKind, grid: Grid = PAPER_GRID) -> Shape:
+    """The shape of one of the spec's models and goals."""
+    return Shape(MODEL_RULES[model], GOAL_RULES[goal], grid)
 
 
 def shape_of(problem: Problem) -> Shape:
     """The verifier shape that serves ``problem``."""
-    return Shape(problem.model, problem.goal.kind)
+    return Shape(problem.rules, problem.goal, problem.grid)
+
+
+def _cell(grid: Grid, cell: int) -> str:
+    """A cell written relative to the AV's, as the template writes them: AV_CELL, AV_CELL + 1, AV_CELL - 1."""
+    offset = cell - grid.av_cell
+    return "AV_CELL" if offset == 0 else f"AV_CELL {'+' if offset > 0 else '-'} {abs(offset)}"
+
+
+def _danger(shape: Shape) -> int:
+    """The oncoming collision span as the template's symmetric DANGER around AV_CELL."""
+    lo, hi = collision_span(Lane.RIGHT, shape.rules, shape.grid)
+    av = shape.grid.av_cell
+    if av - lo != hi - av:
+        raise ValueError(f"promela: the oncoming collision span {lo}..{hi} is not symmetric around the AV's cell")
+    return hi - av
+
+
+def _left_hit(shape: Shape) -> str:
+    """The left-lane collision span as a condition on ``left[i]``."""
+    lo, hi = collision_span(Lane.LEFT, shape.rules, shape.grid)
+    if lo == hi:
+        return f"left[i] == {_cell(shape.grid, lo)}"
+    return f"(left[i] >= {_cell(shape.grid, lo)} && left[i] <= {_cell(shape.grid, hi)})"
 
 
 def scenario_values(problem: Problem) -> str:
@@ -56,13 +98,14 @@ def scenario_values(problem: Problem) -> str:
 
 def render(shape: Shape, scenario: Scenario | None = None, horizon: int | None = None) -> str:
     """The Promela model: literal when ``scenario`` is given, else injected at run time."""
-    rules, goal = MODEL_RULES[shape.model], GOAL_RULES[shape.goal]
-    max_left = max(1, len(scenario.left_lane)) if scenario else shape.max_left
-    max_right = max(1, len(scenario.right_lane)) if scenario else shape.max_right
+    rules, goal, grid = shape.rules, shape.goal, shape.grid
+    max_left = max(1, len(scenario.left_lane)) if scenario else shape.max_vehicles
+    max_right = max(1, len(scenario.right_lane)) if scenario else shape.max_vehicles
+    what = f"{rules.kind.value} model, goal {goal.kind.value}" + ("" if grid.is_paper else f", {grid.describe()}")
     parts = [
-        f"/* overtake-mc: {shape.model.value} model, goal {shape.goal.value}; rendered from spec/, do not edit */",
-        f"#define AV_CELL {AV_CELL}",
-        f"#define DANGER {rules.danger_radius}",
+        f"/* overtake-mc: {what}; rendered from spec/, do not edit */",
+        f"#define AV_CELL {grid.av_cell}",
+        f"#define DANGER {_danger(shape)}",
         f"#define MAX_LC {rules.max_lane_changes}",
         f"#define MAXL {max_left}",
         f"#define MAXR {max_right}",
@@ -75,14 +118,14 @@ def render(shape: Shape, scenario: Scenario | None = None, horizon: int | None =
         "bit lane; byte lc; byte steps; bool crashed; bool reached;",
         "byte i;  /* scratch index, reset to 0 at the end of every atomic step, so it is constant */",
         "",
-        _INLINES,
-        _goal_inline(goal.av_lane, goal.targets_behind, goal.nearest_target_offset, goal.oncoming_passed),
+        _INLINES.replace("LEFT_HIT", _left_hit(shape)),
+        _goal_inline(goal, grid),
         "active proctype av() {",
         _load_literal(scenario, horizon) if scenario else _load_injected(),
         "  d_step { collide(); if :: !crashed -> printf(\"INIT \"); print_state(); goal_check() :: else -> skip fi;",
         "           assert(!reached); i = 0 }",
         "  do",
-        *(_option(action) for action in ACTION_ORDER),
+        *(_option(action, grid) for action in ACTION_ORDER),
         "  od",
         "}",
     ]
@@ -92,7 +135,7 @@ def render(shape: Shape, scenario: Scenario | None = None, horizon: int | None =
 _INLINES = """inline collide() {
   if
   :: lane == LEFT ->
-     i = 0; do :: i < nl -> crashed = crashed || left[i] == AV_CELL; i++ :: else -> break od
+     i = 0; do :: i < nl -> crashed = crashed || LEFT_HIT; i++ :: else -> break od
   :: else ->
      i = 0; do :: i < nr -> crashed = crashed || (right[i] >= AV_CELL - DANGER && right[i] <= AV_CELL + DANGER); i++
                :: else -> break od
@@ -107,22 +150,28 @@ inline print_state() {
 }"""
 
 
-def _goal_inline(av_lane: Lane | None, targets_behind: bool, nearest: int | None, passed: bool) -> str:
-    """The goal as a conjunction, field by field from the GoalRule."""
+def _goal_inline(goal: GoalRule, grid: Grid) -> str:
+    """The goal as a conjunction, field by field from the GoalRule, each line from its rule in ``spec.rules``."""
     lines = ["inline goal_check() {", "  reached = 1;"]
-    if av_lane is not None:
-        lines.append(f"  reached = reached && lane == {av_lane.name};")
-    if targets_behind:
-        lines.append("  i = ft; do :: i < ft + nt -> reached = reached && left[i] < AV_CELL; i++ :: else -> break od;")
-    if nearest is not None:
-        lines.append(f"  reached = reached && nt > 0 && left[ft] == AV_CELL + {nearest};")
-    if passed:
-        lines.append("  i = 0; do :: i < nr -> reached = reached && right[i] <= AV_CELL; i++ :: else -> break od;")
+    if goal.av_lane is not None:
+        lines.append(f"  reached = reached && lane == {goal.av_lane.name};")
+    if goal.targets_behind:
+        below = _cell(grid, behind_line(grid) + 1)
+        lines.append(f"  i = ft; do :: i < ft + nt -> reached = reached && left[i] < {below}; i++ :: else -> break od;")
+    span = nearest_span(goal, grid)
+    if span is not None:
+        lo, hi = span
+        within = (f"left[ft] == {_cell(grid, lo)}" if lo == hi
+                  else f"left[ft] >= {_cell(grid, lo)} && left[ft] <= {_cell(grid, hi)}")
+        lines.append(f"  reached = reached && nt > 0 && {within};")
+    if goal.oncoming_passed:
+        passed = _cell(grid, passed_line(grid))
+        lines.append(f"  i = 0; do :: i < nr -> reached = reached && right[i] <= {passed}; i++ :: else -> break od;")
     lines.append("}")
     return "\n".join(lines)
 
 
-def _option(action: Action) -> str:
+def _option(action: Action, grid: Grid) -> str:
     """One decision step as one atomic transition: guard, effect, check, ticks, goal."""
     rule = ACTION_RULES[action]
     guard = ["!crashed", "steps < horizon"]
@@ -132,10 +181,10 @@ def _option(action: Action) -> str:
     if rule.changes_lane:
         guard.append("lc < MAX_LC")
         body += [f"lane = {rule.to_lane.name if rule.to_lane else 'lane'}", "lc++"]
-    if rule.left_shift_cells:
-        body.append(f"shift_left({rule.left_shift_cells})")
+    if grid.left_shift(action):
+        body.append(f"shift_left({grid.left_shift(action)})")
     body += ["steps++", "collide()"]
-    body += ["tick()"] * rule.oncoming_ticks
+    body += ["tick()"] * grid.ticks(action)
     finish = (f'if :: !crashed -> printf("STEP {action.value} "); print_state(); goal_check(); assert(!reached)'
               " :: else -> skip fi; i = 0")
     return f"  :: d_step {{ {' && '.join(guard)} ->\n       {'; '.join(body)};\n       {finish} }}"
@@ -168,5 +217,4 @@ def _load_injected() -> str:
 
 def render_for(problem: Problem) -> str:
     """The literal model of one problem: what ``overtake promela`` writes."""
-    return render(Shape(problem.model, goal_kind(problem.model, problem.scenario.lane)), problem.scenario,
-                  problem.horizon)
+    return render(shape_of(problem), problem.scenario, problem.horizon)

@@ -19,12 +19,13 @@ from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
-from oracle.answer import SearchResult, Status
 from promela.render import ENV_VAR, Shape, render, render_for, scenario_values, shape_of
 from spec.actions import Action
+from spec.answers import SearchResult, Status, Strategy
 from spec.errors import EngineError, ToolMissing
 from spec.lanes import Lane
-from spec.scenario import Problem, State
+from spec.scenario import Problem
+from spec.state import State
 
 MODEL_FILE = "model.pml"
 #: gcc flags: SAFETY (no cycle detection needed), a memory bound pan reports, no optimisation
@@ -70,12 +71,16 @@ def cache_dir() -> Path:
     return Path(base) / "overtake"
 
 
-def verifier(shape: Shape, strategy: str) -> Verifier:
-    """The compiled verifier for ``shape``: from the cache, or compiled once and cached."""
+def verifier(shape: Shape, strategy: Strategy) -> Verifier:
+    """The compiled verifier for ``shape``: from the cache, or compiled once and cached.
+
+    The key hashes the rendered template (which holds every rule and number of the shape's
+    model, goal and grid), the grid itself, the compiler flags and the tool versions."""
     source = render(shape)
     flags = _flags(strategy)
-    key = hashlib.sha256("\n".join([source, " ".join(flags), tool_versions()]).encode()).hexdigest()[:24]
-    target = cache_dir() / f"pan-{shape.model.value}-{shape.goal.value}-{strategy}-{key}"
+    key_text = [source, f"cell_m={shape.grid.cell_m}", " ".join(flags), tool_versions()]
+    key = hashlib.sha256("\n".join(key_text).encode()).hexdigest()[:24]
+    target = cache_dir() / f"pan-{shape.name}-{strategy.value}-{key}"
     if (target / "pan").exists():
         return Verifier(target / "pan", True)
     target.parent.mkdir(parents=True, exist_ok=True)
@@ -90,8 +95,8 @@ def verifier(shape: Shape, strategy: str) -> Verifier:
     return Verifier(target / "pan", False)
 
 
-def _flags(strategy: str) -> list[str]:
-    return [*CFLAGS, "-DBFS"] if strategy == "shortest" else list(CFLAGS)
+def _flags(strategy: Strategy) -> list[str]:
+    return [*CFLAGS, "-DBFS"] if strategy is Strategy.SHORTEST else list(CFLAGS)
 
 
 def _compile(folder: Path, source: str, flags: list[str]) -> None:
@@ -104,7 +109,7 @@ def _compile(folder: Path, source: str, flags: list[str]) -> None:
         raise EngineError(f"gcc failed on pan.c: {_last_line(gcc)}")
 
 
-def search(problem: Problem, strategy: str, timeout_s: float | None = None) -> SearchResult:
+def search(problem: Problem, strategy: Strategy, timeout_s: float | None = None) -> SearchResult:
     """Compile-once planning: the cached verifier, the scenario injected through the environment."""
     check_tools()
     started = time.perf_counter()
@@ -121,7 +126,7 @@ def search(problem: Problem, strategy: str, timeout_s: float | None = None) -> S
         return _with_extra(_plan_from(replay.stdout, problem), built.cached, "compile-once")
 
 
-def search_compiling(problem: Problem, strategy: str, timeout_s: float | None = None) -> SearchResult:
+def search_compiling(problem: Problem, strategy: Strategy, timeout_s: float | None = None) -> SearchResult:
     """The paper's pipeline: write the scenario into the model, spin -a, gcc, pan, replay with spin -t."""
     check_tools()
     started = time.perf_counter()

@@ -1,6 +1,6 @@
 """Readings in metres to the Scenario the planner sees, by the discretisation rules of ``spec.cells``.
 
-Cells outside the sensed window ``0 .. ROAD_CELLS`` are dropped; what remains must be a
+Cells outside the grid's sensed window ``0 .. road_cells`` are dropped; what remains must be a
 valid scenario (two vehicles in one cell, or a snapshot that is already a collision, is a
 sensing failure: ``ScenarioError``).
 """
@@ -9,19 +9,27 @@ from __future__ import annotations
 
 from sim.sensors import Reading
 from spec.cells import first_platoon, left_cell, oncoming_cell
-from spec.constants import DEFAULT_HORIZON, ROAD_CELLS
+from spec.constants import DEFAULT_HORIZON
+from spec.grid import Grid
 from spec.lanes import Lane
 from spec.scenario import Scenario, make_scenario
 
 
-def reading_cell(reading: Reading, av_lane: Lane) -> int:
-    """The cell of one reading, by its lane's rule."""
-    return left_cell(reading.dx_m, av_lane) if reading.lane is Lane.LEFT else oncoming_cell(reading.dx_m)
+def reading_cell(reading: Reading, av_lane: Lane, grid: Grid) -> int:
+    """The cell of one reading on ``grid``, by its lane's rule."""
+    return left_cell(reading.dx_m, av_lane, grid) if reading.lane is Lane.LEFT else oncoming_cell(reading.dx_m, grid)
 
 
-def discretise(readings: tuple[Reading, ...], av_lane: Lane, horizon: int = DEFAULT_HORIZON) -> Scenario:
-    """The scenario the planner sees; raises ScenarioError when the readings are inconsistent."""
-    cells = {lane: sorted(c for r in readings if r.lane is lane and 0 <= (c := reading_cell(r, av_lane)) <= ROAD_CELLS)
+def in_window(cell: int, grid: Grid) -> bool:
+    """Whether a cell is in the grid's sensed window."""
+    return 0 <= cell <= grid.road_cells
+
+
+def discretise(readings: tuple[Reading, ...], av_lane: Lane, grid: Grid, horizon: int = DEFAULT_HORIZON) -> Scenario:
+    """The scenario the planner sees on ``grid``; raises ScenarioError when the readings are inconsistent."""
+    cells = {lane: sorted(c for r in readings
+                          if r.lane is lane and in_window(c := reading_cell(r, av_lane, grid), grid))
              for lane in Lane}
     left = cells[Lane.LEFT]
-    return make_scenario(av_lane, left, cells[Lane.RIGHT], first_platoon(left, av_lane), horizon=horizon)
+    return make_scenario(av_lane, left, cells[Lane.RIGHT], first_platoon(left, av_lane, grid), horizon=horizon,
+                         grid=grid)

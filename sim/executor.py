@@ -19,8 +19,8 @@ from dataclasses import dataclass
 from sim.scene import Scene
 from sim.vehicle import WheeledCar
 from spec.actions import ACTION_RULES, Action
-from spec.constants import DEFAULT_SPEED_MPS
 from spec.errors import EngineError
+from spec.grid import Grid
 from spec.lanes import Lane
 from spec.physical import CAR, LOOP, CarSpec
 
@@ -30,9 +30,9 @@ MAX_SPEED_FACTOR = 2.4
 RAMP_SHARE = 0.9  # reference ramps use this share of the car's limits, leaving some for the feedback
 
 
-def action_speed_mps(action: Action | None) -> float:
+def action_speed_mps(action: Action | None, grid: Grid) -> float:
     """The AV's speed during an action by the physical mapping; None (no action): the common speed."""
-    return DEFAULT_SPEED_MPS if action is None else float(ACTION_RULES[action].speed_factor) * DEFAULT_SPEED_MPS
+    return grid.speed if action is None else float(ACTION_RULES[action].speed_factor) * grid.speed
 
 
 def ramp_s(v_from_mps: float, v_to_mps: float, spec: CarSpec = CAR) -> float:
@@ -78,20 +78,20 @@ class SpeedProfile:
         return self.start_mps + sum(r.at(t) for r in self.ramps)
 
 
-def plan_profiles(actions: tuple[Action, ...], start_mps: float) -> list[SpeedProfile]:
+def plan_profiles(actions: tuple[Action, ...], start_mps: float, grid: Grid) -> list[SpeedProfile]:
     """One profile per action of a plan: a ramp from the car's speed into the first action, starting now;
     between two actions a ramp centred on their boundary, so the distance lost on one side is made up on
     the other and the car is where the model puts it at every boundary (to within half the ramp's area);
     and a ramp towards the common speed centred on the plan's end (the next plan's frame starts there).
     """
-    speeds = [action_speed_mps(a) for a in actions]
+    speeds = [action_speed_mps(a, grid) for a in actions]
     starts, t = [], 0.0
     for action in actions:
         starts.append(t)
-        t += ACTION_RULES[action].duration_s
+        t += float(ACTION_RULES[action].duration_s)
     edges = [(0.0, start_mps, speeds[0], False)]
     edges += [(starts[k], speeds[k - 1], speeds[k], True) for k in range(1, len(speeds))]
-    edges += [(t, speeds[-1], DEFAULT_SPEED_MPS, True)]
+    edges += [(t, speeds[-1], grid.speed, True)]
     ramps = tuple(Ramp(at - (ramp_s(v0, v1) / 2 if centred else 0.0), ramp_s(v0, v1), v1 - v0)
                   for at, v0, v1, centred in edges if v1 != v0)
     return [SpeedProfile(start_mps, ramps, start) for start in starts]
@@ -107,8 +107,8 @@ def reference_offset_m(speed_mps: float, frame_mps: float, first_mps: float) -> 
 class Executor:
     """Drives the AV through actions; ``tick`` runs after every control step (traffic, contacts)."""
 
-    def __init__(self, scene: Scene, car: WheeledCar, lane: Lane) -> None:
-        self.scene, self.car, self.lane = scene, car, lane
+    def __init__(self, scene: Scene, car: WheeledCar, lane: Lane, grid: Grid) -> None:
+        self.scene, self.car, self.lane, self.grid = scene, car, lane, grid
         self.x_ref_m = car.pose().x_m
         self.dt_s = scene.dt_s * LOOP.control_every_steps
 
@@ -123,13 +123,14 @@ class Executor:
         if rule.from_lane is not None and rule.from_lane is not self.lane:
             raise EngineError(f"simulator: {action.value} asked of an AV in the {self.lane.value} lane "
                               f"(its guard needs the {rule.from_lane.value} lane)")
-        speed = action_speed_mps(action)
+        speed = action_speed_mps(action, self.grid)
         profile = profile or SpeedProfile(speed, ())
         y_from = self.scene.lane_y(self.lane)
         to_lane = rule.to_lane or self.lane
         y_to = self.scene.lane_y(to_lane)
-        steps = max(1, round(rule.duration_s / self.dt_s))
-        lateral_s = min(rule.duration_s, LOOP.lane_change_lateral_s)
+        duration_s = float(rule.duration_s)
+        steps = max(1, round(duration_s / self.dt_s))
+        lateral_s = min(duration_s, LOOP.lane_change_lateral_s)
         for k in range(steps):
             phase = min(1.0, (k + 1) * self.dt_s / lateral_s)
             y_ref = y_from + (y_to - y_from) * (1 - math.cos(math.pi * phase)) / 2
@@ -148,7 +149,7 @@ class Executor:
         pose = self.car.pose()
         self.x_ref_m += speed_mps * self.dt_s
         command = speed_mps + K_X * (self.x_ref_m - pose.x_m)
-        command = max(0.0, min(MAX_SPEED_FACTOR * DEFAULT_SPEED_MPS, command))
+        command = max(0.0, min(MAX_SPEED_FACTOR * self.grid.speed, command))
         v = max(pose.speed_mps, 1.0)
         vy = v * math.sin(pose.yaw_rad)
         lateral_accel = K_Y * (y_ref - pose.y_m) + K_VY * (vy_ref - vy)

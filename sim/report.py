@@ -10,13 +10,13 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
-from spec.constants import AV_CELL, SEGMENT_M
+from spec.grid import Grid
 
 LANES = (("left_lane", "tab:green", "left lane"), ("right_lane", "tab:red", "oncoming"))
 SHOWN_M = (-120.0, 400.0)
 
 
-def plot_trace(trace: Path, png: Path, window_s: float = 300.0) -> Path:
+def plot_trace(trace: Path, png: Path, grid: Grid, window_s: float = 300.0) -> Path:
     """Distance of every vehicle from the AV over the last ``window_s`` of the drive (for a failed drive: the
     lead-up to the failure): measured at the end of each action (dots) and as the model predicted (x)."""
     records = [json.loads(line) for line in trace.read_text().splitlines() if line.strip()]
@@ -25,8 +25,8 @@ def plot_trace(trace: Path, png: Path, window_s: float = 300.0) -> Path:
     fig, ax = plt.subplots(figsize=(11, 5))
     for lane, colour, label in LANES:
         measured = [(r["t_s"], d) for r in shown for d in r["measured_dx_m"][lane] if SHOWN_M[0] <= d <= SHOWN_M[1]]
-        predicted = [(r["t_s"], (c - AV_CELL) * SEGMENT_M) for r in shown for c in r["predicted"][lane]
-                     if SHOWN_M[0] <= (c - AV_CELL) * SEGMENT_M <= SHOWN_M[1]]
+        predicted = [(r["t_s"], (c - grid.av_cell) * grid.cell) for r in shown for c in r["predicted"][lane]
+                     if SHOWN_M[0] <= (c - grid.av_cell) * grid.cell <= SHOWN_M[1]]
         if measured:
             ts, ds = zip(*measured)
             ax.scatter(ts, ds, s=8, c=colour, alpha=0.45, label=f"{label}: measured")

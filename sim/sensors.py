@@ -1,16 +1,20 @@
 """Ray-cast sensors: the true reading is kept apart from what the planner sees.
 
 A 360-degree sensor of 100 m for the left lane, a front-right long-range sensor of 357 m
-and a right-side sensor for the oncoming lane. As in the paper, candidates within range
-are found first and a ray (``rayTestBatch``) is cast to each: a vehicle is seen when the
-ray reaches it first. ``seen`` is what the planner gets; a fault injector may change it,
-never ``truth``.
+and a right-side sensor for the oncoming lane. The simulator finds the ground truth (every
+vehicle within range, ``in_range``) and hands it to its sensor model, one part of a
+simulator (``sim.parts``), whose ``read(truth)`` is what the planner sees; the truth is
+never changed. The paper's sensor (``RaySensor``) casts a ray (``rayTestBatch``) to each
+vehicle and reports those the ray reaches first.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
 
 from sim.scene import Scene
 from sim.vehicle import KinematicCar
@@ -25,14 +29,6 @@ class Reading:
     lane: Lane
     body: int
     dx_m: float
-
-
-@dataclass(frozen=True, slots=True)
-class Readings:
-    """A sensor sweep: the ground truth within range, and what the sensors report."""
-
-    truth: tuple[Reading, ...]
-    seen: tuple[Reading, ...]
 
 
 def _outside_av(x: float, y: float, end: tuple[float, float, float], z: float) -> tuple[float, float, float]:
@@ -54,18 +50,45 @@ def _right_sensor(x: float, y: float, end: tuple[float, float, float], z: float)
     return (x, side_y, z)
 
 
-def sweep(scene: Scene, av_x_m: float, av_y_m: float, left: list[KinematicCar], oncoming: list[KinematicCar],
-          spec: SensorSpec = SENSORS) -> Readings:
-    """Cast one ray to each vehicle in range of its lane's sensor; keep those the ray reaches."""
+@dataclass(frozen=True, slots=True)
+class Truth:
+    """Every vehicle within range of its lane's sensor, where it really is, and where the AV is."""
+
+    readings: tuple[Reading, ...]
+    targets: tuple[tuple[float, float], ...]  # (x_m, y_m) of each reading's vehicle
+    av_x_m: float
+    av_y_m: float
+
+
+def in_range(av_x_m: float, av_y_m: float, left: list[KinematicCar], oncoming: list[KinematicCar],
+             spec: SensorSpec = SENSORS) -> Truth:
+    """The ground truth: every vehicle in range of its lane's sensor."""
     candidates = [(Lane.LEFT, car) for car in left if abs(car.x_m - av_x_m) <= spec.left_range_m]
     candidates += [(Lane.RIGHT, car) for car in oncoming
                    if -spec.side_range_m <= car.x_m - av_x_m <= spec.right_range_m]
-    truth = tuple(Reading(lane, car.body, car.x_m - av_x_m) for lane, car in candidates)
-    if not candidates:
-        return Readings((), ())
-    ends = [(car.x_m, car.y_m, spec.height_m) for _, car in candidates]
-    starts = [_outside_av(av_x_m, av_y_m, end, spec.height_m) if lane is Lane.LEFT
-              else _right_sensor(av_x_m, av_y_m, end, spec.height_m) for (lane, _), end in zip(candidates, ends)]
-    hits = scene.client.rayTestBatch(starts, ends)
-    seen = tuple(r for r, hit in zip(truth, hits, strict=True) if hit[0] == r.body)
-    return Readings(truth, seen)
+    return Truth(tuple(Reading(lane, car.body, car.x_m - av_x_m) for lane, car in candidates),
+                 tuple((car.x_m, car.y_m) for _, car in candidates), av_x_m, av_y_m)
+
+
+class SensorModel(Protocol):
+    """What a simulator asks of its sensors: what the planner sees of the truth."""
+
+    def read(self, truth: Truth) -> tuple[Reading, ...]: ...
+
+
+class RaySensor:
+    """The paper's sensors, exact: a ray to each vehicle in range; a vehicle is seen when the ray reaches it first."""
+
+    def __init__(self, scene: Scene, rng: np.random.Generator, spec: SensorSpec = SENSORS) -> None:
+        self.scene, self.rng, self.spec = scene, rng, spec
+
+    def read(self, truth: Truth) -> tuple[Reading, ...]:
+        if not truth.readings:
+            return ()
+        z = self.spec.height_m
+        ends = [(x, y, z) for x, y in truth.targets]
+        starts = [_outside_av(truth.av_x_m, truth.av_y_m, end, z) if r.lane is Lane.LEFT
+                  else _right_sensor(truth.av_x_m, truth.av_y_m, end, z) for r, end in zip(truth.readings, ends)]
+        hits = self.scene.client.rayTestBatch(starts, ends)
+        return tuple(r for r, hit in zip(truth.readings, hits, strict=True) if hit[0] == r.body)
+

@@ -6,56 +6,59 @@ plan runs out, and after ``replan_after_actions`` actions; and (``replan_on_viol
 on by default, not in the paper) as soon as a vehicle deviates from the prediction
 beyond the tolerance, since the plan's safety margins no longer hold. The world is re-centred on the
 AV every kilometre so coordinates stay small however far it drives.
+
+Every part (scene, car, traffic, sensors, planner, observers) is passed in (``sim.parts``);
+the simulator owns its scene's ``BulletClient`` and one ``numpy`` generator seeded with the
+drive's seed, which every random part draws from.
 """
 
 from __future__ import annotations
 
-import json
+import contextlib
 import time
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
-from typing import IO
 
 import numpy as np
 
-from oracle.answer import Answer, Status
-from oracle.planner import plan
-from sim.discretiser import discretise, reading_cell
+from sim.discretiser import in_window, reading_cell
 from sim.executor import Executor, action_speed_mps, plan_profiles, ramp_gain_m, reference_offset_m
-from sim.scene import Scene
-from sim.sensors import Reading, sweep
+from sim.observers import StepEvent, TraceWriter
+from sim.parts import DriveConfig, Parts
+from sim.sensors import Reading, in_range
 from sim.summary import Failure, RunSummary
 from sim.tolerance import ToleranceReport, Violation
-from sim.traffic import Traffic
-from sim.vehicle import WheeledCar
 from spec.actions import Action
-from spec.constants import DEFAULT_SPEED_MPS, ROAD_CELLS, TIME_UNIT_S
+from spec.answers import Answer, Status
 from spec.errors import ScenarioError
+from spec.kinds import FailureKind
 from spec.lanes import Lane
 from spec.physical import LOOP
-from spec.scenario import Scenario, State
+from spec.scenario import Scenario
+from spec.state import State
 
 RECENTRE_M = 1000.0
+Report = Callable[[tuple[int, float]], None]
 
 
 class Simulator:
-    """A physics world, the AV, traffic, sensors and a planner, driven by one seeded generator."""
+    """A physics world, the AV, traffic, sensors and a planner, assembled from ``parts``, driven by one seeded
+    generator."""
 
-    def __init__(self, seed: int, engine: str = "interpreter", strategy: str = "sensible",
-                 trace: IO[str] | None = None, replan_on_violation: bool = True,
-                 step_tolerance_cells: float = LOOP.step_tolerance_cells,
-                 plan_tolerance_cells: float = LOOP.plan_tolerance_cells,
-                 report: Callable[[tuple[int, float]], None] | None = None) -> None:
+    def __init__(self, seed: int, parts: Parts, replan_on_violation: bool = True,
+                 tolerance: ToleranceReport | None = None, report: Report | None = None) -> None:
         self.report, self._next_report_km = report, 1.0  # (seed, km) after every kilometre
         self.replan_on_violation = replan_on_violation
         self.rng = np.random.default_rng(seed)
-        self.engine, self.strategy, self.trace = engine, strategy, trace
-        self.scene = Scene()
-        self.car = WheeledCar(self.scene, 0.0, self.scene.lane_y(Lane.LEFT))
-        self.traffic = Traffic(self.scene, self.rng, 0.0)
-        self.executor = Executor(self.scene, self.car, Lane.LEFT)
-        self.summary = RunSummary(seed, tolerance=ToleranceReport(step_tolerance_cells, plan_tolerance_cells))
+        self.planner, self.observers = parts.planner, parts.observers
+        self.grid = parts.planner.grid
+        self.scene = parts.scene()
+        self.car = parts.car(self.scene, 0.0, self.scene.lane_y(Lane.LEFT))
+        self.traffic = parts.traffic(self.scene, self.rng, 0.0)
+        self.sensor = parts.sensor(self.scene, self.rng)
+        self.executor = Executor(self.scene, self.car, Lane.LEFT, self.grid)
+        self.summary = RunSummary(seed, tolerance=tolerance or ToleranceReport())
         self.pending: tuple[Action, ...] = ()  # the rest of the plan under way when a re-plan starts
         self.doing = "start-up"  # what the AV was executing: recorded with every collision
         self.origin_km = 0.0
@@ -70,7 +73,7 @@ class Simulator:
         for car in self.traffic.cars():
             if self.scene.client.getContactPoints(self.car.body, car.body):
                 lane = "left-lane" if car in self.traffic.left else "oncoming"
-                self._fail("collision", f"collision with a{'n' if lane == 'oncoming' else ''} {lane} vehicle",
+                self._fail(FailureKind.COLLISION, f"collision with a{'n' if lane == 'oncoming' else ''} {lane} vehicle",
                            f"{car.x_m - x:+.1f} m ahead, during {self.doing}")
                 return False
         for car in self.traffic.left:
@@ -92,18 +95,18 @@ class Simulator:
             self._next_report_km = int(self.summary.km) + 1
         return True
 
-    def _event(self, kind: str, cause: str, detail: str) -> Failure:
+    def _event(self, kind: FailureKind, cause: str, detail: str) -> Failure:
         """A failure record stamped with where and when the drive is now."""
         return Failure(kind, cause, detail, round(self.summary.km, 3), round(self.summary.sim_time_s, 1))
 
-    def _fail(self, kind: str, cause: str, detail: str) -> None:
+    def _fail(self, kind: FailureKind, cause: str, detail: str) -> None:
         self.summary.failures.append(self._event(kind, cause, detail))
 
     # -- the decision clock ------------------------------------------------------------------
     def drive(self, km: float, until_failure: bool = False) -> RunSummary:
         """Drive ``km`` kilometres (or until the first failure); stop at any collision."""
         started = time.perf_counter()
-        ok = self.executor.hold(4.0, DEFAULT_SPEED_MPS, self._tick)  # start-up: reach the common speed
+        ok = self.executor.hold(4.0, self.grid.speed, self._tick)  # start-up: reach the common speed
         while ok and self.summary.km < km:
             ok = self._one_plan()
             if until_failure and self.summary.failures:
@@ -113,7 +116,7 @@ class Simulator:
 
     def _sense(self) -> tuple[Reading, ...]:
         pose = self.car.pose()
-        return sweep(self.scene, pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming).seen
+        return self.sensor.read(in_range(pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming))
 
     def _frame(self, readings: tuple[Reading, ...], speed_mps: float, first_mps: float) -> tuple[Reading, ...]:
         """The readings as the model's AV sees them: a car at the plan's first speed from the start.
@@ -135,24 +138,25 @@ class Simulator:
         speed too. Otherwise the first plan stands, made in the common-speed frame (the executor's
         reference then starts where that frame puts the AV: see ``reference_offset_m``).
         """
-        seen = self._frame(readings, speed_mps, DEFAULT_SPEED_MPS)
-        scenario = discretise(seen, lane)
-        answer = plan(scenario, self.strategy, engine=self.engine)
-        first_mps = action_speed_mps(answer.actions[0]) if answer.actions else DEFAULT_SPEED_MPS
-        if answer.status is not Status.PLAN or first_mps == DEFAULT_SPEED_MPS:
-            return answer, seen, scenario, DEFAULT_SPEED_MPS
+        common = self.grid.speed
+        seen = self._frame(readings, speed_mps, common)
+        scenario = self.planner.scenario(seen, lane)
+        answer = self.planner.plan(scenario)
+        first_mps = action_speed_mps(answer.actions[0], self.grid) if answer.actions else common
+        if answer.status is not Status.PLAN or first_mps == common:
+            return answer, seen, scenario, common
         seen_again = self._frame(readings, speed_mps, first_mps)
         try:
-            scenario_again = discretise(seen_again, lane)
+            scenario_again = self.planner.scenario(seen_again, lane)
         except ScenarioError:
             self.summary.frame_fallbacks += 1
-            return answer, seen, scenario, DEFAULT_SPEED_MPS
-        again = plan(scenario_again, self.strategy, engine=self.engine)
+            return answer, seen, scenario, common
+        again = self.planner.plan(scenario_again)
         both_ms = again.elapsed_ms + answer.elapsed_ms
-        if again.status is Status.PLAN and again.actions and action_speed_mps(again.actions[0]) == first_mps:
+        if again.status is Status.PLAN and again.actions and action_speed_mps(again.actions[0], self.grid) == first_mps:
             return replace(again, elapsed_ms=both_ms), seen_again, scenario_again, first_mps
         self.summary.frame_fallbacks += 1
-        return replace(answer, elapsed_ms=both_ms), seen, scenario, DEFAULT_SPEED_MPS
+        return replace(answer, elapsed_ms=both_ms), seen, scenario, common
 
     def _one_plan(self) -> bool:
         pending, self.pending = self.pending, ()
@@ -163,25 +167,30 @@ class Simulator:
             answer, seen, scenario, frame_mps = self._decide(self._sense(), pose.speed_mps, lane)
         except ScenarioError as err:
             if pending:
-                return self._keep(pending, "sensing", err.reason, str(err))
-            self._fail("sensing", err.reason, str(err))
+                return self._keep(pending, FailureKind.SENSING, err.reason, str(err))
+            self._fail(FailureKind.SENSING, err.reason, str(err))
             self.doing = "waiting after a sensing failure"
-            return self.executor.hold(TIME_UNIT_S, DEFAULT_SPEED_MPS, self._tick)
+            return self.executor.hold(float(self.grid.time_unit_s), self.grid.speed, self._tick)
         self.summary.plans += 1
         self.summary.plan_ms.append(answer.elapsed_ms)
         if answer.status is not Status.PLAN and pending:
-            return self._keep(pending, "planner", answer.status.value, f"{answer.status.value} for {scenario}")
+            return self._keep(pending, FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
         if answer.status is not Status.PLAN:
-            self._fail("planner", answer.status.value, f"{answer.status.value} for {scenario}")
+            self._fail(FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
             self.doing = "waiting without a plan"
-            return self.executor.hold(TIME_UNIT_S, DEFAULT_SPEED_MPS, self._tick)
+            return self.executor.hold(float(self.grid.time_unit_s), self.grid.speed, self._tick)
         if not answer.actions:  # nothing to overtake: drive on
             self.doing = "drive (nothing to overtake)"
             self.executor.reset_reference()
-            return self.executor.run(Action.DRIVE, self._tick, plan_profiles((Action.DRIVE,), pose.speed_mps)[0])
+            profile = plan_profiles((Action.DRIVE,), pose.speed_mps, self.grid)[0]
+            return self.executor.run(Action.DRIVE, self._tick, profile)
         return self._execute(answer.actions, answer.states, seen, pose.speed_mps, frame_mps)
 
-    def _keep(self, pending: tuple[Action, ...], kind: str, cause: str, detail: str) -> bool:
+    @staticmethod
+    def _no_plan(answer: Answer, scenario: Scenario) -> str:
+        return f"{answer.status.value} for {scenario}"
+
+    def _keep(self, pending: tuple[Action, ...], kind: FailureKind, cause: str, detail: str) -> bool:
         """A re-plan found no plan (or could not use its snapshot) while a model-checked plan was under way:
         go on with that plan, for at most ``replan_after_actions`` actions, then plan again.
 
@@ -193,8 +202,8 @@ class Simulator:
         self.summary.kept_plans.append(self._event(kind, cause, detail))
         self.executor.reset_reference()
         kept = pending[: LOOP.replan_after_actions]
-        for k, (action, profile) in enumerate(zip(kept, plan_profiles(kept, self.car.pose().speed_mps))):
-            self.doing = f"{action.value} (kept plan after {kind}: {cause}, step {k + 1} of {len(kept)})"
+        for k, (action, profile) in enumerate(zip(kept, plan_profiles(kept, self.car.pose().speed_mps, self.grid))):
+            self.doing = f"{action.value} (kept plan after {kind.value}: {cause}, step {k + 1} of {len(kept)})"
             if not self.executor.run(action, self._tick, profile):
                 return False
             self.summary.actions += 1
@@ -204,14 +213,14 @@ class Simulator:
     def _execute(self, actions: tuple[Action, ...], states: tuple[State, ...], seen: tuple[Reading, ...],
                  speed_mps: float, frame_mps: float) -> bool:
         plan_id = self.summary.plans
-        self.executor.reset_reference(reference_offset_m(speed_mps, frame_mps, action_speed_mps(actions[0])))
+        self.executor.reset_reference(reference_offset_m(speed_mps, frame_mps, action_speed_mps(actions[0], self.grid)))
         tracked = self._tracked(seen, states[0])
         deviation = dict.fromkeys(tracked, 0.0)
         known = {r.body for r in seen}
         cars = {car.body: car for car in self.traffic.cars()}
         generation = {body: cars[body].respawns for body in cars}
         executed = actions[: LOOP.replan_after_actions]
-        for k, (action, profile) in enumerate(zip(executed, plan_profiles(executed, speed_mps))):
+        for k, (action, profile) in enumerate(zip(executed, plan_profiles(executed, speed_mps, self.grid))):
             self.doing = f"{action.value} (plan {plan_id}, step {k + 1} of {len(actions)})"
             if not self.executor.run(action, self._tick, profile):
                 return False
@@ -224,9 +233,9 @@ class Simulator:
                 cells = states[k + 1].left_lane if lane is Lane.LEFT else states[k + 1].right_lane
                 deviation[(lane, index, body)] = self.summary.tolerance.check(
                     plan_id, k + 1, action.value, f"{lane.value}_lane[{index}]", cells[index] - start_cell,
-                    start_dx, now[body], deviation[(lane, index, body)])
+                    start_dx, now[body], deviation[(lane, index, body)], self.grid.cell)
             new_violations = self.summary.tolerance.violations[violations_before:]
-            self._trace(plan_id, k + 1, action, states[k + 1], new_violations)
+            self._observe(plan_id, k + 1, action, states[k + 1], new_violations)
             if (self.replan_on_violation and new_violations) or {r.body for r in self._sense()} - known:
                 self.summary.replans += 1
                 self.pending = actions[k + 1:]
@@ -234,52 +243,41 @@ class Simulator:
         self.pending = actions[len(executed):]
         return True
 
-    @staticmethod
-    def _tracked(seen: tuple[Reading, ...], start: State) -> dict[tuple[Lane, int, int], tuple[float, int]]:
+    def _tracked(self, seen: tuple[Reading, ...], start: State) -> dict[tuple[Lane, int, int], tuple[float, int]]:
         """Each sensed vehicle in the window, keyed by its lane and index in the scenario, with its start."""
         tracked = {}
         for lane, cells in ((Lane.LEFT, start.left_lane), (Lane.RIGHT, start.right_lane)):
             readings = sorted((r for r in seen if r.lane is lane), key=lambda r: r.dx_m)
-            inside = [r for r in readings if 0 <= reading_cell(r, start.lane) <= ROAD_CELLS]
+            inside = [r for r in readings if in_window(reading_cell(r, start.lane, self.grid), self.grid)]
             for index, reading in enumerate(inside):
                 tracked[(lane, index, reading.body)] = (reading.dx_m, cells[index])
         return tracked
 
-    def _trace(self, plan_id: int, step: int, action: Action, predicted: State,
-               violations: list[Violation]) -> None:
-        if self.trace is None:
+    def _observe(self, plan_id: int, step: int, action: Action, predicted: State,
+                 violations: list[Violation]) -> None:
+        if not self.observers:
             return
         pose = self.car.pose()
-        self.trace.write(json.dumps({"t_s": round(self.summary.sim_time_s, 2), "km": round(self.summary.km, 4),
-                                     "plan": plan_id, "step": step, "action": action.value,
-                                     "av": {"x_m": round(pose.x_m, 2), "y_m": round(pose.y_m, 2),
-                                            "speed_mps": round(pose.speed_mps, 2)},
-                                     "measured_dx_m": {lane: sorted(round(c.x_m - pose.x_m, 1) for c in cars)
-                                                       for lane, cars in (("left_lane", self.traffic.left),
-                                                                          ("right_lane", self.traffic.oncoming))},
-                                     "predicted": {"left_lane": list(predicted.left_lane),
-                                                   "right_lane": list(predicted.right_lane)},
-                                     "violations": [v.to_json() for v in violations]}) + "\n")
+        measured = {lane: [c.x_m - pose.x_m for c in cars]
+                    for lane, cars in (("left_lane", self.traffic.left), ("right_lane", self.traffic.oncoming))}
+        event = StepEvent(self.summary.sim_time_s, self.summary.km, plan_id, step, action, pose.x_m, pose.y_m,
+                          pose.speed_mps, measured, predicted, tuple(violations))
+        for observer in self.observers:
+            observer.on_step(event)
 
     def close(self) -> None:
         self.scene.close()
 
 
-def run_drive(seed: int, km: float, until_failure: bool = False, engine: str = "interpreter",
-              strategy: str = "sensible", out_dir: str | None = None, replan_on_violation: bool = True,
-              step_tolerance_cells: float = LOOP.step_tolerance_cells,
-              plan_tolerance_cells: float = LOOP.plan_tolerance_cells,
-              report: Callable[[tuple[int, float]], None] | None = None) -> RunSummary:
-    """One drive in a fresh simulator (the unit a worker process runs); ``report`` hears (seed, km) every km."""
-    trace = None
-    if out_dir:
-        Path(out_dir).mkdir(parents=True, exist_ok=True)
-        trace = (Path(out_dir) / f"trace-seed{seed}.jsonl").open("w")
-    sim = Simulator(seed, engine, strategy, trace, replan_on_violation, step_tolerance_cells, plan_tolerance_cells,
-                    report)
-    try:
-        return sim.drive(km, until_failure)
-    finally:
-        sim.close()
-        if trace:
-            trace.close()
+def run_drive(seed: int, config: DriveConfig, out_dir: str | None = None, report: Report | None = None) -> RunSummary:
+    """One drive in a fresh simulator assembled as ``config`` says (the unit a worker process runs); with
+    ``out_dir``, its trace goes to ``trace-seedS.jsonl`` there; ``report`` hears (seed, km) every km."""
+    with contextlib.ExitStack() as stack:
+        observers: tuple[TraceWriter, ...] = ()
+        if out_dir:
+            Path(out_dir).mkdir(parents=True, exist_ok=True)
+            observers = (TraceWriter(stack.enter_context((Path(out_dir) / f"trace-seed{seed}.jsonl").open("w"))),)
+        tolerance = ToleranceReport(config.step_tolerance_cells, config.plan_tolerance_cells)
+        sim = Simulator(seed, config.parts(observers), config.replan_on_violation, tolerance, report)
+        stack.callback(sim.close)
+        return sim.drive(config.km, config.until_failure)

@@ -12,16 +12,14 @@ from typing import Any
 import numpy as np
 
 from sim.tolerance import ToleranceReport
-
-#: Failure kinds, in the order a drive's first failure is reported.
-KINDS = ("collision", "planner", "sensing")
+from spec.kinds import FailureKind
 
 
 @dataclass(frozen=True, slots=True)
 class Failure:
     """One failure: its kind, a short cause for tables, the full story, and where it happened."""
 
-    kind: str  # one of KINDS
+    kind: FailureKind
     cause: str  # e.g. "collision with an oncoming vehicle", "no_plan"
     detail: str
     km: float
@@ -46,21 +44,21 @@ class RunSummary:
     failures: list[Failure] = field(default_factory=list)
     tolerance: ToleranceReport = field(default_factory=ToleranceReport)
 
-    def of_kind(self, kind: str) -> list[Failure]:
-        return [f for f in self.failures if f.kind == kind]
+    def of_kind(self, kind: FailureKind) -> list[Failure]:
+        return [f for f in self.failures if f.kind is kind]
 
     @property
     def collisions(self) -> list[Failure]:
-        return self.of_kind("collision")
+        return self.of_kind(FailureKind.COLLISION)
 
     @property
     def planner_failures(self) -> list[Failure]:
-        return self.of_kind("planner")
+        return self.of_kind(FailureKind.PLANNER)
 
     @property
     def failure(self) -> Failure | None:
         """The first failure of the most serious kind, if the drive had one."""
-        return next((f for kind in KINDS for f in self.of_kind(kind)), None)
+        return next((f for kind in FailureKind for f in self.of_kind(kind)), None)
 
     def latency_ms(self) -> dict[str, float]:
         """Median, p99 and max planning time, from the samples as recorded (to the microsecond)."""
@@ -72,17 +70,27 @@ class RunSummary:
         failure = self.failure
         return {"seed": self.seed, "km": round(self.km, 3), "sim_time_s": round(self.sim_time_s, 1),
                 "wall_s": round(self.wall_s, 2), "overtakes": self.overtakes, "plans": self.plans,
-                "replans": self.replans, "kept_plans": [asdict(f) for f in self.kept_plans],
+                "replans": self.replans, "kept_plans": [failure_json(f) for f in self.kept_plans],
                 "frame_fallbacks": self.frame_fallbacks, "actions": self.actions,
                 "plan_ms": [round(m, 3) for m in self.plan_ms],
-                "plan_latency_ms": self.latency_ms(), "failures": [asdict(f) for f in self.failures],
-                "failure": asdict(failure) if failure else None, "tolerance": self.tolerance.to_json()}
+                "plan_latency_ms": self.latency_ms(), "failures": [failure_json(f) for f in self.failures],
+                "failure": failure_json(failure) if failure else None, "tolerance": self.tolerance.to_json()}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> RunSummary:
         return cls(seed=data["seed"], km=data["km"], sim_time_s=data["sim_time_s"], wall_s=data["wall_s"],
                    overtakes=data["overtakes"], plans=data["plans"], replans=data["replans"],
-                   kept_plans=[Failure(**f) for f in data["kept_plans"]], frame_fallbacks=data["frame_fallbacks"],
-                   actions=data["actions"], plan_ms=list(data["plan_ms"]),
-                   failures=[Failure(**f) for f in data["failures"]],
+                   kept_plans=[failure_from(f) for f in data["kept_plans"]],
+                   frame_fallbacks=data["frame_fallbacks"], actions=data["actions"], plan_ms=list(data["plan_ms"]),
+                   failures=[failure_from(f) for f in data["failures"]],
                    tolerance=ToleranceReport.from_json(data["tolerance"]))
+
+
+def failure_json(failure: Failure) -> dict[str, Any]:
+    """A failure as JSON (its kind by name)."""
+    return {**asdict(failure), "kind": failure.kind.value}
+
+
+def failure_from(data: dict[str, Any]) -> Failure:
+    """A failure read back from ``failure_json``."""
+    return Failure(**{**data, "kind": FailureKind(data["kind"])})

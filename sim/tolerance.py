@@ -2,7 +2,7 @@
 
 Displacements are measured since the plan started, so the rounding of the initial
 snapshot does not count: predicted = (predicted cell after step k) - (its cell at the
-start); measured = (true distance now - true distance at the start) / SEGMENT_M. The
+start); measured = (true distance now - true distance at the start) / the cell length. The
 deviation is their difference; each action may add at most ``step`` cells of it, and a
 plan may accumulate at most ``plan`` cells.
 """
@@ -13,7 +13,7 @@ from collections import defaultdict
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from spec.constants import SEGMENT_M
+from spec.kinds import ViolationKind
 from spec.physical import LOOP
 
 
@@ -27,14 +27,14 @@ class Violation:
     vehicle: str
     predicted_cells: float
     measured_cells: float
-    kind: str  # "step" or "plan"
+    kind: ViolationKind
 
     @property
     def deviation(self) -> float:
         return self.measured_cells - self.predicted_cells
 
     def to_json(self) -> dict[str, object]:
-        return {**asdict(self), "deviation_cells": round(self.deviation, 3)}
+        return {**asdict(self), "kind": self.kind.value, "deviation_cells": round(self.deviation, 3)}
 
 
 @dataclass(slots=True)
@@ -49,15 +49,16 @@ class ToleranceReport:
     violations_by_action: dict[str, int] = field(default_factory=lambda: defaultdict(int))
 
     def check(self, plan: int, step: int, action: str, vehicle: str, predicted_cells: float,
-              start_dx_m: float, now_dx_m: float, previous_deviation: float) -> float:
-        """Record one vehicle after one action; return its deviation so far (cells)."""
-        measured = (now_dx_m - start_dx_m) / SEGMENT_M
+              start_dx_m: float, now_dx_m: float, previous_deviation: float, cell_m: float) -> float:
+        """Record one vehicle after one action; return its deviation so far (cells of ``cell_m``)."""
+        measured = (now_dx_m - start_dx_m) / cell_m
         deviation = measured - predicted_cells
         added = abs(deviation - previous_deviation)
         self.largest[action] = max(self.largest[action], added)
         self.checks[action] += 1
-        kind = "step" if added > self.step_tolerance else "plan" if abs(deviation) > self.plan_tolerance else ""
-        if kind:
+        kind = (ViolationKind.STEP if added > self.step_tolerance
+                else ViolationKind.PLAN if abs(deviation) > self.plan_tolerance else None)
+        if kind is not None:
             self.violations.append(Violation(plan, step, action, vehicle, predicted_cells, measured, kind))
             self.violations_by_action[action] += 1
         return deviation

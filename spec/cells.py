@@ -1,7 +1,7 @@
 """Metres to cells: the discretisation rules every sensor snapshot goes through (SPEC.md, "Discretisation").
 
 A same-direction (left-lane) vehicle ``dx`` metres ahead of the AV is in the nearest cell,
-``AV_CELL + round(dx / SEGMENT_M)``, except that one in the AV's own lane is never put in
+``av_cell + round(dx / cell_m)`` of the grid, except that one in the AV's own lane is never put in
 the AV's cell (it is on one side of the AV or touching it; the model would read the shared
 cell as a collision). An oncoming vehicle is put in the nearest cell *towards the AV*
 (rounded towards zero): every rule about oncoming traffic (danger zone, "passed the AV")
@@ -13,29 +13,31 @@ from __future__ import annotations
 
 import math
 
-from spec.constants import AV_CELL, SEGMENT_M
+from spec.grid import Grid
 from spec.lanes import Lane
 
 #: The most left-lane vehicles one plan overtakes (the paper's FV1..FV3).
 MAX_TARGETS = 3
 
 
-def left_cell(dx_m: float, av_lane: Lane) -> int:
+def left_cell(dx_m: float, av_lane: Lane, grid: Grid) -> int:
     """The cell of a same-direction vehicle ``dx_m`` metres ahead of the AV (negative: behind)."""
-    cell = AV_CELL + round(dx_m / SEGMENT_M)
-    if cell == AV_CELL and av_lane is Lane.LEFT:
-        return AV_CELL + 1 if dx_m > 0 else AV_CELL - 1
+    av_cell = grid.av_cell
+    cell = av_cell + round(dx_m / grid.cell)
+    if cell == av_cell and av_lane is Lane.LEFT:
+        return av_cell + 1 if dx_m > 0 else av_cell - 1
     return cell
 
 
-def oncoming_cell(dx_m: float) -> int:
+def oncoming_cell(dx_m: float, grid: Grid) -> int:
     """The cell of an oncoming vehicle ``dx_m`` metres ahead of the AV: the nearest cell towards the AV."""
-    return AV_CELL + math.trunc(dx_m / SEGMENT_M)
+    return grid.av_cell + math.trunc(dx_m / grid.cell)
 
 
-def first_platoon(left: list[int], av_lane: Lane) -> int:
+def first_platoon(left: list[int], av_lane: Lane, grid: Grid) -> int:
     """How many targets: the first platoon at or ahead of the AV (one alongside counts from the right lane)."""
-    ahead = sorted(c for c in left if c > AV_CELL or (c == AV_CELL and av_lane is Lane.RIGHT))
+    av_cell = grid.av_cell
+    ahead = sorted(c for c in left if c > av_cell or (c == av_cell and av_lane is Lane.RIGHT))
     if not ahead:
         return 0
     count = 1

@@ -1,42 +1,71 @@
-"""One small hierarchy of typed errors, each with the exit code the CLI returns for it."""
+"""One hierarchy of typed errors; every exit code the suite uses is declared once, here (``ExitCode``)."""
 
 from __future__ import annotations
+
+import enum
+
+
+class ExitCode(enum.IntEnum):
+    """The documented exit codes of every command (README, "exit codes")."""
+
+    OK = 0  # a plan, a valid action list, every property held
+    NO = 1  # no plan, an invalid action list, a drive that failed
+    BAD_INPUT = 2  # one line naming the file or option, the value and the reason
+    INCOMPLETE = 3  # a search limit was hit: nothing is claimed
+    TOOL_MISSING = 4  # spin, gcc, dask.distributed, an unreachable scheduler
+    ENGINE_FAILED = 5  # an engine crashed or answered nonsense: never "no plan"
+    DISAGREE = 6  # engines disagree
+    INTERRUPTED = 130  # Ctrl-C: what a campaign finished is kept
 
 
 class SuiteError(Exception):
     """Base of every error the suite reports to a user as one line."""
 
-    exit_code = 5
+    exit_code = ExitCode.ENGINE_FAILED
 
 
-class ScenarioError(SuiteError):
-    """Bad input: a scenario file or value that cannot be planned for."""
+class BadInput(SuiteError):
+    """Bad input of any kind: a file, a value, an option."""
 
-    exit_code = 2
+    exit_code = ExitCode.BAD_INPUT
 
     def __init__(self, key: str, value: object, reason: str, source: str = "") -> None:
         self.source, self.key, self.value, self.reason = source, key, value, reason
         where = f"{source}: " if source else ""
         super().__init__(f"{where}{key}={value!r}: {reason}")
 
+
+class ScenarioError(BadInput):
+    """Bad input: a scenario file or value that cannot be planned for."""
+
     def with_source(self, source: str) -> ScenarioError:
         """The same error, naming the file it came from."""
         return ScenarioError(self.key, self.value, self.reason, source)
 
 
+class OptionError(BadInput):
+    """Bad input: a command-line option (or the same setting given to the library) with an unusable value."""
+
+
 class ActionError(SuiteError):
     """Bad input: an action list that names an unknown action."""
 
-    exit_code = 2
+    exit_code = ExitCode.BAD_INPUT
 
 
 class ToolMissing(SuiteError):
-    """An external tool (spin, gcc) is not installed; the message says how to install it."""
+    """An external tool (spin, gcc, dask.distributed) is not installed; the message says how to install it."""
 
-    exit_code = 4
+    exit_code = ExitCode.TOOL_MISSING
 
 
 class EngineError(SuiteError):
     """An engine failed (crash, unreadable output): never reported as "no plan"."""
 
-    exit_code = 5
+    exit_code = ExitCode.ENGINE_FAILED
+
+
+class EnginesDisagree(SuiteError):
+    """Engines asked the same question gave different answers; the message says how."""
+
+    exit_code = ExitCode.DISAGREE

@@ -11,7 +11,7 @@ from spec.errors import ScenarioError
 from spec.scenario import Scenario, make_scenario
 
 REQUIRED_KEYS = ("lane", "left_lane", "right_lane")
-OPTIONAL_KEYS = ("targets", "model", "horizon")
+OPTIONAL_KEYS = ("targets", "model", "horizon", "cell_m")
 SUFFIXES = (".json", ".toml")
 
 
@@ -66,4 +66,5 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
         "targets": scenario.targets,
         "model": scenario.model.value,
         "horizon": scenario.horizon,
+        "cell_m": scenario.grid.to_json(),
     }

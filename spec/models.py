@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass
+from fractions import Fraction
 
 from spec.lanes import Lane
 
@@ -36,7 +37,7 @@ class ModelRules:
     """Collision and guard parameters of one model."""
 
     kind: ModelKind
-    danger_radius: int  # an oncoming vehicle within this many cells of the AV collides
+    danger_m: Fraction  # an oncoming vehicle within this distance of the AV's cell collides (a whole number of cells)
     max_lane_changes: int
 
 
@@ -46,20 +47,20 @@ class GoalRule:
 
     kind: GoalKind
     av_lane: Lane | None  # the AV must be in this lane, or None: either lane
-    targets_behind: bool  # every target is at a cell below AV_CELL
-    nearest_target_offset: int | None  # the nearest target is at AV_CELL + offset (false without targets)
-    oncoming_passed: bool  # every oncoming vehicle is at or behind AV_CELL
+    targets_behind: bool  # every target is at a cell below the AV's
+    nearest_target_m: Fraction | None  # the nearest target is ahead of the AV, at most this far (false without targets)
+    oncoming_passed: bool  # every oncoming vehicle is at or behind the AV's cell
 
 
 MODEL_RULES: dict[ModelKind, ModelRules] = {
-    ModelKind.FINAL: ModelRules(ModelKind.FINAL, danger_radius=1, max_lane_changes=2),
-    ModelKind.PREPARATIONS: ModelRules(ModelKind.PREPARATIONS, danger_radius=0, max_lane_changes=1),
+    ModelKind.FINAL: ModelRules(ModelKind.FINAL, danger_m=Fraction(21), max_lane_changes=2),  # one paper cell
+    ModelKind.PREPARATIONS: ModelRules(ModelKind.PREPARATIONS, danger_m=Fraction(0), max_lane_changes=1),
 }
 
 GOAL_RULES: dict[GoalKind, GoalRule] = {
     GoalKind.OVERTAKE: GoalRule(GoalKind.OVERTAKE, Lane.LEFT, True, None, False),
     GoalKind.RETURN_LEFT: GoalRule(GoalKind.RETURN_LEFT, Lane.LEFT, False, None, True),
-    GoalKind.CLOSE_GAP: GoalRule(GoalKind.CLOSE_GAP, None, False, 1, True),
+    GoalKind.CLOSE_GAP: GoalRule(GoalKind.CLOSE_GAP, None, False, Fraction(21), True),  # the next paper cell
 }
 
 #: The planner pipeline of the paper: the final model first, then the preparations model.

@@ -1,8 +1,9 @@
 """The simulator's physical parameters: road, vehicles, sensors, traffic rules, re-planning and tolerances.
 
 The discrete model's own mapping (cell length, common speed, each action's speed and
-duration) is in ``spec.constants`` and ``spec.actions``; this module holds what only the
-physical world needs, from the paper's simulator section and SPEC.md.
+duration) is in ``spec.grid`` and ``spec.actions``; this module holds what only the
+physical world needs, from the paper's simulator section and SPEC.md. The paper states its
+traffic in cells of its 21 m grid (``PAPER_GRID``), whatever grid the planner uses.
 """
 
 from __future__ import annotations
@@ -10,7 +11,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 
-from spec.constants import SEGMENT_M
+from spec.grid import PAPER_GRID
+
+_PAPER_CELL_M = PAPER_GRID.cell
 
 
 @dataclass(frozen=True, slots=True)
@@ -44,8 +47,8 @@ class SensorSpec:
     """The paper's three sensors (ranges in metres)."""
 
     left_range_m: float = 100.0  # 360-degree sensor for the left lane
-    right_range_m: float = 17 * SEGMENT_M  # front-right long-range sensor: 357 m, 17 cells
-    side_range_m: float = 2 * SEGMENT_M  # right-side sensor: what the front-right one cannot see
+    right_range_m: float = 17 * _PAPER_CELL_M  # front-right long-range sensor: 357 m, 17 cells
+    side_range_m: float = 2 * _PAPER_CELL_M  # right-side sensor: what the front-right one cannot see
     height_m: float = 0.8  # rays are cast at this height, through the other cars' bodies
 
 
@@ -53,6 +56,8 @@ class SensorSpec:
 class TrafficSpec:
     """The paper's traffic: constant vehicle counts, respawn rules, removal behind the AV."""
 
+    speed_mps: float = PAPER_GRID.speed  # every vehicle drives at the model's common speed, as in the paper
+    cell_m: float = _PAPER_CELL_M  # the unit of the respawn gaps below
     left_vehicles: int = 6
     oncoming_vehicles: int = 3
     left_respawn_cells: tuple[int, ...] = (1, 2, 3, 4)  # ahead of the front-most, equal odds

@@ -1,4 +1,4 @@
-"""Scenarios (a discretised sensor snapshot), states, collisions, and planning problems."""
+"""Scenarios (a discretised sensor snapshot) and planning problems (a scenario under one model)."""
 
 from __future__ import annotations
 
@@ -6,8 +6,9 @@ import enum
 from dataclasses import dataclass
 from typing import TypeVar
 
-from spec.constants import AV_CELL, DEFAULT_HORIZON, MAX_HORIZON, ROAD_CELLS
-from spec.errors import ScenarioError
+from spec.constants import DEFAULT_HORIZON, MAX_HORIZON
+from spec.errors import BadInput, ScenarioError
+from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
 from spec.models import (
     GOAL_RULES,
@@ -19,35 +20,10 @@ from spec.models import (
     goal_kind,
     models_for,
 )
+from spec.rules import collision_in
+from spec.state import State
 
 E = TypeVar("E", bound=enum.Enum)
-
-
-@dataclass(frozen=True, slots=True)
-class State:
-    """One state of the transition system: cells are relative to the AV (at AV_CELL)."""
-
-    lane: Lane
-    left_lane: tuple[int, ...]  # same-direction vehicles, ascending; never clipped
-    right_lane: tuple[int, ...]  # oncoming vehicles, ascending; never clipped
-    lane_changes: int = 0
-    steps: int = 0
-
-
-@dataclass(frozen=True, slots=True)
-class Collision:
-    """A collision: the state it happened in and the vehicle hit."""
-
-    state: State
-    lane: Lane  # the lane of the vehicle hit
-    vehicle: int  # its index in that lane's tuple (ascending cells)
-    cell: int  # its cell when hit
-    tick: int  # 0: right after the action's effect; k: after oncoming tick k
-
-    def describe(self) -> str:
-        """One line naming the vehicle, its cell, and when it was hit."""
-        when = "after the effect" if self.tick == 0 else f"after oncoming tick {self.tick}"
-        return f"collision with {self.lane.value}_lane[{self.vehicle}] at cell {self.cell} {when}"
 
 
 @dataclass(frozen=True, slots=True)
@@ -60,11 +36,12 @@ class Scenario:
     targets: int = 0
     model: ModelChoice = ModelChoice.AUTO
     horizon: int = DEFAULT_HORIZON
+    grid: Grid = PAPER_GRID
 
     @property
     def target_indices(self) -> tuple[int, ...]:
         """Indices into ``left_lane`` of the targets: the nearest vehicles at or ahead of the AV."""
-        ahead = [i for i, cell in enumerate(self.left_lane) if cell >= AV_CELL]
+        ahead = [i for i, cell in enumerate(self.left_lane) if cell >= self.grid.av_cell]
         return tuple(ahead[: self.targets])
 
     def initial_state(self) -> State:
@@ -86,6 +63,11 @@ class Problem:
         """The model this problem uses."""
         return self.rules.kind
 
+    @property
+    def grid(self) -> Grid:
+        """The grid the scenario's cells are on."""
+        return self.scenario.grid
+
 
 def problem_for(scenario: Scenario, model: ModelKind, horizon: int | None = None) -> Problem:
     """The planning problem of ``scenario`` under ``model``."""
@@ -100,17 +82,25 @@ def make_scenario(
     targets: object = 0,
     model: ModelChoice | str = ModelChoice.AUTO,
     horizon: object = DEFAULT_HORIZON,
+    cell_m: object = None,
+    grid: Grid | None = None,
 ) -> Scenario:
-    """A validated scenario; raises ScenarioError naming the key, value and reason."""
+    """A validated scenario on ``grid`` (or the grid of ``cell_m``; default the paper's); raises ScenarioError
+    naming the key, value and reason."""
+    if grid is None:
+        try:
+            grid = grid_for(cell_m)
+        except BadInput as err:
+            raise ScenarioError("cell_m", cell_m, err.reason) from None
     lane_v = _check_enum(Lane, "lane", lane)
     model_v = _check_enum(ModelChoice, "model", model)
-    left = _check_cells("left_lane", left_lane)
-    right = _check_cells("right_lane", right_lane)
-    targets_v = _check_int("targets", targets, 0, ROAD_CELLS + 1)
+    left = _check_cells("left_lane", left_lane, grid)
+    right = _check_cells("right_lane", right_lane, grid)
+    targets_v = _check_int("targets", targets, 0, grid.road_cells + 1)
     horizon_v = _check_int("horizon", horizon, 0, MAX_HORIZON)
-    scenario = Scenario(lane_v, tuple(sorted(left)), tuple(sorted(right)), targets_v, model_v, horizon_v)
+    scenario = Scenario(lane_v, tuple(sorted(left)), tuple(sorted(right)), targets_v, model_v, horizon_v, grid)
     _check_targets(scenario)
-    _check_no_initial_collision(scenario, left, right)
+    _check_no_initial_collision(scenario)
     return scenario
 
 
@@ -131,7 +121,7 @@ def _check_int(key: str, value: object, low: int, high: int) -> int:
     return value
 
 
-def _check_cells(key: str, value: object) -> list[int]:
+def _check_cells(key: str, value: object, grid: Grid) -> list[int]:
     if not isinstance(value, (list, tuple)):
         raise ScenarioError(key, value, "must be a list of cells")
     seen: dict[int, int] = {}
@@ -139,8 +129,8 @@ def _check_cells(key: str, value: object) -> list[int]:
         where = f"{key}[{i}]"
         if isinstance(cell, bool) or not isinstance(cell, int):
             raise ScenarioError(where, cell, "a cell must be an integer")
-        if not 0 <= cell <= ROAD_CELLS:
-            raise ScenarioError(where, cell, f"cell outside the sensed window 0..{ROAD_CELLS}")
+        if not 0 <= cell <= grid.road_cells:
+            raise ScenarioError(where, cell, f"cell outside the sensed window 0..{grid.road_cells}")
         if cell in seen:
             raise ScenarioError(where, cell, f"two vehicles in one cell (also {key}[{seen[cell]}])")
         seen[cell] = i
@@ -148,22 +138,19 @@ def _check_cells(key: str, value: object) -> list[int]:
 
 
 def _check_targets(scenario: Scenario) -> None:
-    ahead = sum(1 for cell in scenario.left_lane if cell >= AV_CELL)
+    av_cell = scenario.grid.av_cell
+    ahead = sum(1 for cell in scenario.left_lane if cell >= av_cell)
     if scenario.targets > ahead:
         raise ScenarioError(
-            "targets", scenario.targets, f"only {ahead} left-lane vehicle(s) at or ahead of the AV (cell {AV_CELL})"
+            "targets", scenario.targets, f"only {ahead} left-lane vehicle(s) at or ahead of the AV (cell {av_cell})"
         )
 
 
-def _check_no_initial_collision(scenario: Scenario, left: list[int], right: list[int]) -> None:
+def _check_no_initial_collision(scenario: Scenario) -> None:
     """Reject a start that collides under every model the scenario may use."""
-    radius = min(MODEL_RULES[m].danger_radius for m in models_for(scenario.model))
-    if scenario.lane is Lane.LEFT and AV_CELL in left:
-        i = left.index(AV_CELL)
-        raise ScenarioError(f"left_lane[{i}]", AV_CELL, "initial collision: vehicle in the AV's cell")
-    if scenario.lane is Lane.RIGHT:
-        for i, cell in enumerate(right):
-            if abs(cell - AV_CELL) <= radius:
-                raise ScenarioError(
-                    f"right_lane[{i}]", cell, f"initial collision: oncoming vehicle within {radius} cell(s) of the AV"
-                )
+    start = scenario.initial_state()
+    hits = [collision_in(start, MODEL_RULES[m], scenario.grid, 0) for m in models_for(scenario.model)]
+    hit = hits[-1]
+    if hit is not None and all(hits):
+        what = "vehicle in the AV's cell" if hit.lane is Lane.LEFT else "oncoming vehicle in the AV's danger zone"
+        raise ScenarioError(f"{hit.lane.value}_lane[{hit.vehicle}]", hit.cell, f"initial collision: {what}")

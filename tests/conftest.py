@@ -1,12 +1,20 @@
-"""Shared test settings: hypothesis profiles picked by HYPOTHESIS_PROFILE, the requires_spin marker."""
+"""Shared test settings and helpers: hypothesis profiles picked by HYPOTHESIS_PROFILE, the requires_spin
+marker, and the hypothesis strategy for valid scenarios that tests import from here."""
 
 from __future__ import annotations
 
 import os
 import shutil
+import subprocess
+import sys
 
 import pytest
 from hypothesis import HealthCheck, settings
+from hypothesis import strategies as st
+
+from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
+from spec.lanes import Lane
+from spec.scenario import Scenario, make_scenario
 
 settings.register_profile("dev", max_examples=60, deadline=None)
 settings.register_profile("ci", max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow],
@@ -23,3 +31,41 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     for item in items:
         if "requires_spin" in item.keywords:
             item.add_marker(skip)
+
+
+@st.composite
+def scenarios(draw: st.DrawFn, max_left: int = 5, max_right: int = 2, horizon: int | None = None,
+              span: int | None = None, grid: Grid = PAPER_GRID) -> Scenario:
+    """A valid scenario on ``grid``: cells drawn in ``0 .. span`` (default the whole window) so that plans and
+    dead ends both occur."""
+    lane = draw(st.sampled_from(list(Lane)))
+    cells = st.integers(0, grid.road_cells if span is None else span)
+    left = draw(st.lists(cells, max_size=max_left, unique=True))
+    right = draw(st.lists(cells, max_size=max_right, unique=True))
+    if lane is Lane.LEFT:
+        left = [c for c in left if c != grid.av_cell]
+    else:
+        right = [c for c in right if c != grid.av_cell]
+    ahead = sum(1 for c in left if c >= grid.av_cell)
+    targets = draw(st.integers(0, min(ahead, 3)))
+    h = horizon if horizon is not None else draw(st.integers(0, 12))
+    return make_scenario(lane, left, right, targets, horizon=h, grid=grid)
+
+
+#: The paper's grid and the finer ones every engine must handle alike.
+GRIDS = tuple(Grid(c) for c in STANDARD_CELLS_M)
+
+
+def scenarios_on_grids(span: int | None = None, **kw: object) -> st.SearchStrategy[Scenario]:
+    """``scenarios(**kw)`` on any standard grid; ``span`` (cells of the paper's grid) scales with the grid."""
+    def on(grid: Grid) -> st.SearchStrategy[Scenario]:
+        scaled = None if span is None else round(span * PAPER_GRID.cell / grid.cell)
+        return scenarios(span=scaled, grid=grid, **kw)  # type: ignore[arg-type]
+
+    return st.sampled_from(GRIDS).flatmap(on)
+
+
+def run_cli(*args: str, timeout_s: float = 120) -> subprocess.CompletedProcess[str]:
+    """The ``overtake`` command in a fresh process, as a user runs it."""
+    return subprocess.run([sys.executable, "-m", "ci.cli.main", *args], capture_output=True, text=True,
+                          timeout=timeout_s)

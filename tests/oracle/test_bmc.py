@@ -3,16 +3,16 @@
 from __future__ import annotations
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from oracle import bitplan, bmc, offsets
-from oracle.answer import Limits, Status
 from oracle.interpreter import validate
+from spec.answers import Limits, Status
 from spec.library import BUILTINS
 from spec.models import ModelKind
 from spec.scenario import Scenario, make_scenario, problem_for
-from tests.strategies import scenarios
+from tests.conftest import scenarios, scenarios_on_grids
 
 MODELS = st.sampled_from(list(ModelKind))
 
@@ -53,13 +53,11 @@ def test_library_shortest_and_optimal_agree_with_the_interpreter(builtin) -> Non
         check_optimal(builtin.load(), model)
 
 
-@settings(max_examples=60)
-@given(scenarios(), MODELS)
+@given(scenarios_on_grids(span=30), MODELS)
 def test_generated_shortest_lengths_equal_the_interpreters(scenario: Scenario, model: ModelKind) -> None:
     check_shortest(scenario, model)
 
 
-@settings(max_examples=25)
 @given(scenarios(horizon=8), MODELS)
 def test_optimal_is_never_costlier_than_shortest_or_sensible(scenario: Scenario, model: ModelKind) -> None:
     check_optimal(scenario, model)

@@ -2,19 +2,17 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import replace
 
-from oracle.answer import Answer, Status
 from oracle.conform import disagreement, disagreements
 from oracle.planner import plan
 from spec.actions import Action
-from spec.library import builtin
+from spec.answers import Answer, Status, Strategy
+from spec.library import BUILTINS
 from spec.models import ModelKind
-from tests.oracle.test_cli import run
 
 A, D = Action.ACCELERATE, Action.DRIVE
-BASE = Answer(Status.PLAN, ModelKind.FINAL, "one", "sensible", (A, D), (), 0, 0.0)
+BASE = Answer(Status.PLAN, ModelKind.FINAL, "one", Strategy.SENSIBLE, (A, D), (), 0, 0.0)
 
 
 def test_identical_answers_agree() -> None:
@@ -34,7 +32,7 @@ def test_no_plan_and_no_plan_within_horizon_agree() -> None:
 def test_sensible_plans_must_be_identical_and_shortest_only_equally_long() -> None:
     other = replace(BASE, engine="two", actions=(D, A))
     assert "sensible plans differ" in (disagreement(BASE, other) or "")
-    short = replace(BASE, strategy="shortest")
+    short = replace(BASE, strategy=Strategy.SHORTEST)
     assert disagreement(short, replace(short, actions=(D, A))) is None
     assert "lengths differ" in (disagreement(short, replace(short, actions=(D,))) or "")
 
@@ -47,14 +45,12 @@ def test_incomplete_is_compared_with_nothing() -> None:
     assert disagreements([BASE, replace(BASE, status=Status.INCOMPLETE, actions=())]) == []
 
 
-def test_interpreter_strategies_agree_on_the_library() -> None:
-    for name in ("paper_example", "prep_case_a", "no_plan_boxed_in"):
-        scenario = builtin(name).load()  # type: ignore[union-attr]
-        assert disagreements([plan(scenario, "shortest"), plan(scenario, "shortest")]) == []
-
-
-def test_plan_engine_all_json() -> None:
-    done = run("plan", "one_target", "--engine", "all", "--json")
-    result = json.loads(done.stdout)
-    assert done.returncode == 0 and result["agree"] is True and result["disagreements"] == []
-    assert {a["engine"] for a in result["answers"]} >= {"interpreter"}
+def test_sensible_and_shortest_agree_on_existence_and_model_and_a_shorter_copy_is_caught() -> None:
+    for builtin in BUILTINS:
+        scenario = builtin.load()
+        sensible, shortest = plan(scenario, Strategy.SENSIBLE), plan(scenario, Strategy.SHORTEST)
+        assert disagreements([sensible, shortest]) == [], builtin.name
+        if shortest.actions:
+            clipped = replace(shortest, engine="clipped", actions=shortest.actions[:-1])
+            assert disagreements([shortest, clipped]) == [
+                f"shortest lengths differ: interpreter {len(shortest.actions)} vs clipped {len(clipped.actions)}"]

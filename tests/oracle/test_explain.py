@@ -6,15 +6,15 @@ import json
 
 import pytest
 
-from oracle.answer import Status
 from oracle.explain import explain, keep_only
 from oracle.planner import plan
+from spec.answers import Status
 from spec.lanes import Lane
 from spec.library import BUILTINS, builtin
 from spec.scenario import make_scenario
-from tests.oracle.test_cli import run
+from tests.conftest import run_cli as run
 
-NO_PLAN = [b for b in BUILTINS if b.expected.status != "plan"]
+NO_PLAN = [b for b in BUILTINS if b.expected.status is not Status.PLAN]
 
 
 @pytest.mark.parametrize("case", NO_PLAN, ids=lambda b: b.name)

@@ -4,12 +4,26 @@ from __future__ import annotations
 
 import pytest
 
-from oracle.interpreter import disabled_reason, goal, step, validate
+from oracle.interpreter import step as grid_step
+from oracle.interpreter import validate
 from spec.actions import Action
-from spec.constants import AV_CELL
+from spec.grid import PAPER_GRID
 from spec.lanes import Lane
-from spec.models import GOAL_RULES, MODEL_RULES, GoalKind, ModelKind
-from spec.scenario import Collision, State, make_scenario, problem_for
+from spec.models import GOAL_RULES, MODEL_RULES, GoalKind, GoalRule, ModelKind, ModelRules
+from spec.rules import disabled_reason, goal_holds
+from spec.scenario import make_scenario, problem_for
+from spec.state import Collision, State
+
+AV_CELL = PAPER_GRID.av_cell
+
+
+def step(state: State, action: Action, rules: ModelRules) -> State | Collision:
+    """One step on the paper's grid."""
+    return grid_step(state, action, rules, PAPER_GRID)
+
+
+def goal(state: State, rule: GoalRule, targets: tuple[int, ...]) -> bool:
+    return goal_holds(state, rule, targets, PAPER_GRID)
 
 FINAL = MODEL_RULES[ModelKind.FINAL]
 PREP = MODEL_RULES[ModelKind.PREPARATIONS]

@@ -6,13 +6,14 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from oracle import bitplan, offsets, search
-from oracle.answer import Status
-from oracle.interpreter import collision_in, enabled_actions, problem_goal, step, validate
+from oracle.interpreter import enabled_actions, problem_collision, problem_goal, problem_step, validate
 from oracle.planner import plan
 from spec.actions import Action
+from spec.answers import Status, Strategy
 from spec.models import ModelKind
-from spec.scenario import Collision, Problem, Scenario, State, problem_for
-from tests.strategies import scenarios
+from spec.scenario import Problem, Scenario, make_scenario, problem_for
+from spec.state import Collision, State
+from tests.conftest import scenarios, scenarios_on_grids
 
 MODELS = st.sampled_from(list(ModelKind))
 
@@ -24,7 +25,7 @@ def all_plans(problem: Problem, max_len: int) -> list[tuple[Action, ...]]:
     of action sequences is cut there; nothing else is pruned (no visited set).
     """
     start = problem.scenario.initial_state()
-    if collision_in(start, problem.rules, 0):
+    if problem_collision(problem, start):
         return []
     found: list[tuple[Action, ...]] = []
 
@@ -35,7 +36,7 @@ def all_plans(problem: Problem, max_len: int) -> list[tuple[Action, ...]]:
         if len(prefix) == min(max_len, problem.horizon):
             return
         for action in enabled_actions(state, problem.rules):
-            nxt = step(state, action, problem.rules)
+            nxt = problem_step(problem, state, action)
             if not isinstance(nxt, Collision):
                 walk(nxt, (*prefix, action))
 
@@ -43,7 +44,7 @@ def all_plans(problem: Problem, max_len: int) -> list[tuple[Action, ...]]:
     return found
 
 
-@given(scenarios(horizon=6, max_left=4, span=25), MODELS)
+@given(scenarios_on_grids(horizon=6, max_left=4, span=25), MODELS)
 def test_shortest_is_truly_shortest_and_first_in_order_by_enumeration(scenario: Scenario, model: ModelKind) -> None:
     problem = problem_for(scenario, model)
     plans = all_plans(problem, 6)
@@ -56,7 +57,7 @@ def test_shortest_is_truly_shortest_and_first_in_order_by_enumeration(scenario: 
     assert result.status is Status.PLAN and result.actions == first
 
 
-@given(scenarios(), MODELS)
+@given(scenarios_on_grids(), MODELS)
 def test_every_returned_plan_validates_and_never_passes_the_goal_early(scenario: Scenario, model: ModelKind) -> None:
     problem = problem_for(scenario, model)
     for result in (offsets.sensible(problem), bitplan.shortest(problem)):
@@ -85,7 +86,7 @@ def test_shortest_is_never_longer_than_sensible_and_they_agree_on_existence(
         assert len(bfs.actions) <= len(dfs.actions)
 
 
-@given(scenarios(span=30), MODELS)
+@given(scenarios_on_grids(span=30), MODELS)
 def test_offset_dfs_equals_the_state_dfs(scenario: Scenario, model: ModelKind) -> None:
     problem = problem_for(scenario, model)
     fast, ref = offsets.sensible(problem), search.sensible(problem)
@@ -93,7 +94,7 @@ def test_offset_dfs_equals_the_state_dfs(scenario: Scenario, model: ModelKind) -
         ref.status, ref.actions, ref.states, ref.states_explored)
 
 
-@given(scenarios(span=30), MODELS)
+@given(scenarios_on_grids(span=30), MODELS)
 def test_bitset_planner_equals_the_reference_bfs(scenario: Scenario, model: ModelKind) -> None:
     problem = problem_for(scenario, model)
     fast, ref = bitplan.shortest(problem), search.shortest_reference(problem)
@@ -101,7 +102,7 @@ def test_bitset_planner_equals_the_reference_bfs(scenario: Scenario, model: Mode
     assert fast.actions == ref.actions
 
 
-@given(scenarios(span=25), MODELS)
+@given(scenarios_on_grids(span=25), MODELS)
 def test_no_plan_of_any_length_is_sound(scenario: Scenario, model: ModelKind) -> None:
     problem = problem_for(scenario, model)
     if bitplan.beyond_horizon(problem).status is Status.NO_PLAN:
@@ -109,8 +110,8 @@ def test_no_plan_of_any_length_is_sound(scenario: Scenario, model: ModelKind) ->
         assert bitplan.shortest(longer).status is not Status.PLAN
 
 
-@given(scenarios(), st.sampled_from(["sensible", "shortest"]))
-def test_pipeline_tries_final_then_preparations(scenario: Scenario, strategy: str) -> None:
+@given(scenarios(), st.sampled_from([Strategy.SENSIBLE, Strategy.SHORTEST]))
+def test_pipeline_tries_final_then_preparations(scenario: Scenario, strategy: Strategy) -> None:
     answer = plan(scenario, strategy)
     final = problem_for(scenario, ModelKind.FINAL)
     final_has_plan = bitplan.shortest(final).status is Status.PLAN
@@ -122,8 +123,6 @@ def test_pipeline_tries_final_then_preparations(scenario: Scenario, strategy: st
 
 
 def test_incomplete_when_the_state_limit_is_hit() -> None:
-    from spec.scenario import make_scenario
-
     problem = problem_for(make_scenario("left", [12, 14, 16], [40], 3), ModelKind.FINAL)
     assert search.sensible(problem, max_states=5).status is Status.INCOMPLETE
     assert search.shortest_reference(problem, max_states=5).status is Status.INCOMPLETE

@@ -6,15 +6,16 @@ from collections.abc import Iterator
 
 import pytest
 
-from oracle import engines as registry
-from oracle.answer import Limits, SearchResult, Status
-from oracle.engines import INTERPRETER, Engine
+from oracle.engine import INTERPRETER
 from oracle.shrink import _smaller, engines_disagree, shrink, to_toml
+from spec import engines as registry
+from spec.answers import Limits, SearchResult, Status, Strategy
+from spec.engines import Engine
 from spec.files import scenario_from_dict
 from spec.scenario import Problem, make_scenario
 
 
-def _liar(problem: Problem, strategy: str, limits: Limits) -> SearchResult:
+def _liar(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult:
     """The interpreter, except that it claims no plan whenever two or more vehicles share the left lane."""
     if len(problem.scenario.left_lane) >= 2:
         return SearchResult(Status.NO_PLAN_WITHIN_HORIZON)
@@ -23,14 +24,14 @@ def _liar(problem: Problem, strategy: str, limits: Limits) -> SearchResult:
 
 @pytest.fixture
 def liar() -> Iterator[Engine]:
-    engine = registry.register(Engine("liar", ("sensible", "shortest"), _liar, "test only"))
+    engine = registry.register(Engine("liar", (Strategy.SENSIBLE, Strategy.SHORTEST), _liar, "test only"))
     yield engine
     del registry.ENGINES["liar"]
 
 
 def test_shrinks_to_a_one_minimal_reproducer(liar: Engine) -> None:
     big = make_scenario("left", [3, 12, 14, 20, 33], [25, 47], 2)
-    fails = engines_disagree([INTERPRETER, liar], "sensible")
+    fails = engines_disagree([INTERPRETER, liar], Strategy.SENSIBLE)
     assert fails(big)
     small, checks = shrink(big, fails)
     assert fails(small) and checks > 0
@@ -48,5 +49,5 @@ def test_reproducer_is_a_loadable_scenario_file(liar: Engine) -> None:
 
 
 def test_agreeing_engines_have_nothing_to_shrink() -> None:
-    fails = engines_disagree([INTERPRETER, INTERPRETER], "shortest")
+    fails = engines_disagree([INTERPRETER, INTERPRETER], Strategy.SHORTEST)
     assert not fails(make_scenario("left", [12], [30], 1))

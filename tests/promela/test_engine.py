@@ -8,48 +8,48 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from oracle import bitplan, offsets
-from oracle.answer import Status
 from oracle.interpreter import validate
 from promela import runner
+from spec.answers import Status, Strategy
 from spec.errors import EngineError, ToolMissing
 from spec.library import BUILTINS
 from spec.models import ModelKind
 from spec.scenario import Scenario, make_scenario, problem_for
-from tests.strategies import scenarios
+from tests.conftest import scenarios_on_grids
 
 pytestmark = pytest.mark.requires_spin
 MODELS = st.sampled_from(list(ModelKind))
 
 
-def agree(scenario: Scenario, model: ModelKind, strategy: str) -> None:
+def agree(scenario: Scenario, model: ModelKind, strategy: Strategy) -> None:
     """Spin's answer against the interpreter's: identical sensible plans, equal shortest lengths."""
     problem = problem_for(scenario, model)
     spin = runner.search(problem, strategy)
-    ours = offsets.sensible(problem) if strategy == "sensible" else bitplan.shortest(problem)
+    ours = offsets.sensible(problem) if strategy is Strategy.SENSIBLE else bitplan.shortest(problem)
     assert (spin.status is Status.PLAN) == (ours.status is Status.PLAN), (spin, ours)
     if spin.status is Status.PLAN:
         assert validate(problem, spin.actions).valid
         assert spin.states == validate(problem, spin.actions).states
-        if strategy == "sensible":
+        if strategy is Strategy.SENSIBLE:
             assert spin.actions == ours.actions
         else:
             assert len(spin.actions) == len(ours.actions)
 
 
-@pytest.mark.parametrize("strategy", ["sensible", "shortest"])
+@pytest.mark.parametrize("strategy", [Strategy.SENSIBLE, Strategy.SHORTEST])
 @pytest.mark.parametrize("builtin", BUILTINS, ids=lambda b: b.name)
-def test_library_agrees_with_the_interpreter(builtin, strategy: str) -> None:
+def test_library_agrees_with_the_interpreter(builtin, strategy: Strategy) -> None:
     for model in ModelKind:
         agree(builtin.load(), model, strategy)
 
 
-@settings(max_examples=40)
-@given(scenarios(), MODELS, st.sampled_from(["sensible", "shortest"]))
-def test_generated_scenarios_agree_with_the_interpreter(scenario: Scenario, model: ModelKind, strategy: str) -> None:
+@given(scenarios_on_grids(), MODELS, st.sampled_from([Strategy.SENSIBLE, Strategy.SHORTEST]))
+def test_generated_scenarios_agree_with_the_interpreter(scenario: Scenario, model: ModelKind,
+                                                        strategy: Strategy) -> None:
     agree(scenario, model, strategy)
 
 
@@ -58,7 +58,7 @@ def test_compile_once_and_compile_every_time_give_the_same_plans(name: str) -> N
     scenario = next(b for b in BUILTINS if b.name == name).load()
     for model in ModelKind:
         problem = problem_for(scenario, model)
-        once, every = runner.search(problem, "sensible"), runner.search_compiling(problem, "sensible")
+        once, every = runner.search(problem, Strategy.SENSIBLE), runner.search_compiling(problem, Strategy.SENSIBLE)
         assert (once.status, once.actions, once.states) == (every.status, every.actions, every.states)
         assert every.extra["spin_mode"] == "compile-every-time" and once.extra["spin_mode"] == "compile-once"
 
@@ -67,7 +67,7 @@ def test_concurrent_runs_never_share_a_trail() -> None:
     cases = [make_scenario("left", [12 + k % 3], [40 - k], 1) for k in range(12)]
     problems = [problem_for(s, ModelKind.FINAL) for s in cases]
     with ThreadPoolExecutor(max_workers=6) as pool:
-        results = list(pool.map(lambda p: runner.search(p, "sensible"), problems))
+        results = list(pool.map(lambda p: runner.search(p, Strategy.SENSIBLE), problems))
     for problem, result in zip(problems, results, strict=True):
         assert result.actions == offsets.sensible(problem).actions
 
@@ -75,7 +75,7 @@ def test_concurrent_runs_never_share_a_trail() -> None:
 def test_verifier_is_cached_and_keyed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("OVERTAKE_CACHE", str(tmp_path))
     problem = problem_for(make_scenario("left", [12], [], 1), ModelKind.FINAL)
-    first, second = runner.search(problem, "shortest"), runner.search(problem, "shortest")
+    first, second = runner.search(problem, Strategy.SHORTEST), runner.search(problem, Strategy.SHORTEST)
     assert (first.extra["verifier_cached"], second.extra["verifier_cached"]) == (False, True)
     assert len(list(tmp_path.glob("pan-final-overtake-shortest-*/pan"))) == 1
 
@@ -95,7 +95,7 @@ def test_failing_spin_is_an_engine_error(tmp_path: Path, monkeypatch: pytest.Mon
     runner.tool_versions.cache_clear()
     try:
         with pytest.raises(EngineError, match=r"spin -a failed.*spin: crashed"):
-            runner.search(problem_for(make_scenario("left", [12], [], 1), ModelKind.FINAL), "sensible")
+            runner.search(problem_for(make_scenario("left", [12], [], 1), ModelKind.FINAL), Strategy.SENSIBLE)
     finally:
         runner.tool_versions.cache_clear()
 
@@ -104,7 +104,7 @@ def test_missing_gcc_is_tool_missing_with_the_install_hint(monkeypatch: pytest.M
     real = runner.shutil.which
     monkeypatch.setattr(runner.shutil, "which", lambda tool: None if tool == "gcc" else real(tool))
     with pytest.raises(ToolMissing, match=r"gcc not found.*apt-get install gcc"):
-        runner.search(problem_for(make_scenario("left", [12], [], 1), ModelKind.FINAL), "sensible")
+        runner.search(problem_for(make_scenario("left", [12], [], 1), ModelKind.FINAL), Strategy.SENSIBLE)
 
 
 def test_missing_spin_through_the_cli_is_one_line_exit_four(tmp_path: Path) -> None:
@@ -112,7 +112,7 @@ def test_missing_spin_through_the_cli_is_one_line_exit_four(tmp_path: Path) -> N
     env = {**os.environ, "PATH": str(tmp_path)}
     import sys
 
-    done = subprocess.run([sys.executable, "-m", "oracle.cli", "plan", "one_target", "--engine", "spin"],
+    done = subprocess.run([sys.executable, "-m", "ci.cli.main", "plan", "one_target", "--engine", "spin"],
                           capture_output=True, text=True, env=env, timeout=60)
     assert done.returncode == 4 and "spin not found" in done.stderr and "apt-get install spin" in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1
@@ -120,7 +120,7 @@ def test_missing_spin_through_the_cli_is_one_line_exit_four(tmp_path: Path) -> N
 
 def test_time_out_is_incomplete_not_no_plan(monkeypatch: pytest.MonkeyPatch) -> None:
     problem = problem_for(make_scenario("left", [12, 14, 16], [], 3, horizon=3), ModelKind.FINAL)
-    runner.search(problem, "sensible")  # make sure the verifier is compiled
+    runner.search(problem, Strategy.SENSIBLE)  # make sure the verifier is compiled
     real = runner._run
 
     def slow_pan(args, cwd=None, env=None, timeout=None):
@@ -129,17 +129,17 @@ def test_time_out_is_incomplete_not_no_plan(monkeypatch: pytest.MonkeyPatch) -> 
         return real(args, cwd=cwd, env=env, timeout=timeout)
 
     monkeypatch.setattr(runner, "_run", slow_pan)
-    result = runner.search(problem, "sensible", timeout_s=0.5)
+    result = runner.search(problem, Strategy.SENSIBLE, timeout_s=0.5)
     assert result.status is Status.INCOMPLETE and "time limit" in result.detail
 
 
 def test_depth_limit_is_incomplete(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(runner, "DEPTH_MARGIN", -6)  # pan's depth bound below the horizon
     problem = problem_for(make_scenario("left", [12, 14, 16], [40], 3), ModelKind.FINAL)
-    result = runner.search(problem, "sensible")
+    result = runner.search(problem, Strategy.SENSIBLE)
     assert result.status is Status.INCOMPLETE and "max search depth too small" in result.detail
 
 
 def test_no_plan_within_horizon_is_reported_as_such() -> None:
     problem = problem_for(make_scenario("left", [12, 14, 16], [], 3, horizon=3), ModelKind.FINAL)
-    assert runner.search(problem, "sensible").status is Status.NO_PLAN_WITHIN_HORIZON
+    assert runner.search(problem, Strategy.SENSIBLE).status is Status.NO_PLAN_WITHIN_HORIZON

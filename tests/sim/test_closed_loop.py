@@ -4,20 +4,27 @@ from __future__ import annotations
 
 import pytest
 
-import sim.simulator as sim_module
+import sim.parts as parts_module
 from sim.executor import ramp_gain_m
+from sim.parts import DriveConfig
 from sim.sensors import Reading
 from sim.simulator import Simulator
 from spec.actions import Action
-from spec.constants import DEFAULT_SPEED_MPS
 from spec.errors import ScenarioError
+from spec.grid import PAPER_GRID
+from spec.kinds import FailureKind, ViolationKind
 from spec.lanes import Lane
+
+
+def paper_simulator(seed: int, **kw: object) -> Simulator:
+    """The paper's assembly (interpreter, sensible, 21 m cells) for ``seed``."""
+    return Simulator(seed, DriveConfig(1.0).parts(), **kw)  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize("seed", [1, 3, 4])
 def test_one_kilometre_without_collision_and_every_plan_found(seed: int) -> None:
     heard: list[tuple[int, float]] = []
-    sim = Simulator(seed, report=heard.append)
+    sim = paper_simulator(seed, report=heard.append)
     try:
         summary = sim.drive(1.0)
     finally:
@@ -26,13 +33,13 @@ def test_one_kilometre_without_collision_and_every_plan_found(seed: int) -> None
     assert len(heard) == 1 and heard[0][0] == seed and 1.0 <= heard[0][1] < 1.01  # progress after the kilometre
     assert summary.overtakes >= 1 and summary.plans > 0
     assert summary.tolerance.checks["accelerate"] > 0  # deviations are measured per action type
-    assert all(v.kind in ("step", "plan") for v in summary.tolerance.violations)
+    assert all(isinstance(v.kind, ViolationKind) for v in summary.tolerance.violations)
 
 
 def test_drives_are_reproducible_from_the_seed() -> None:
     runs = []
     for _ in range(2):
-        sim = Simulator(7)
+        sim = paper_simulator(7)
         try:
             runs.append(sim.drive(0.4).to_json())
         finally:
@@ -46,7 +53,7 @@ def test_drives_are_reproducible_from_the_seed() -> None:
 def test_simulate_cli_json_trace_and_plot(tmp_path) -> None:
     import json
 
-    from tests.oracle.test_cli import run
+    from tests.conftest import run_cli as run
 
     done = run("simulate", "--km", "0.3", "--seed", "3", "--out", str(tmp_path), "--step-tolerance", "0.05", "--json")
     runs = json.loads(done.stdout)
@@ -60,10 +67,10 @@ def test_simulate_cli_json_trace_and_plot(tmp_path) -> None:
 
 
 def test_the_plans_frame_is_the_snapshot_moved_by_what_the_first_ramp_gains() -> None:
-    sim = Simulator(3)
+    sim = paper_simulator(3)
     try:
         readings = (Reading(Lane.LEFT, 0, 30.0), Reading(Lane.RIGHT, 1, 200.0))
-        moved = sim._frame(readings, 14.0, DEFAULT_SPEED_MPS)  # braking to 7 m/s gains on traffic
+        moved = sim._frame(readings, 14.0, PAPER_GRID.speed)  # braking to 7 m/s gains on traffic
         assert [r.dx_m for r in moved] == pytest.approx([30.0 - ramp_gain_m(14.0, 7.0), 200.0 - ramp_gain_m(14.0, 7.0)])
         assert sim._frame(readings, 7.0, 7.0) == readings
     finally:
@@ -74,18 +81,19 @@ def test_a_replan_that_cannot_plan_keeps_the_plan_under_way_and_says_why(monkeyp
     def unusable(*_args: object, **_kwargs: object) -> None:
         raise ScenarioError("left_lane", [11, 11], "two vehicles in one cell")
 
-    sim = Simulator(3)
+    sim = paper_simulator(3)
     try:
         sim.drive(0.3)
-        monkeypatch.setattr(sim_module, "discretise", unusable)
+        monkeypatch.setattr(parts_module, "discretise", unusable)
         sim.pending = (Action.DRIVE,) * 12
         actions = sim.summary.actions
         assert sim._one_plan()
         assert sim.summary.actions == actions + 10 and sim.pending == (Action.DRIVE,) * 2  # at most 10, then re-plan
-        assert [(f.kind, f.cause) for f in sim.summary.kept_plans] == [("sensing", "two vehicles in one cell")]
+        kept = [(f.kind, f.cause) for f in sim.summary.kept_plans]
+        assert kept == [(FailureKind.SENSING, "two vehicles in one cell")]
         assert not sim.summary.failures
         sim.pending = ()
         sim._one_plan()  # no plan under way: now it is a failure
-        assert [(f.kind, f.cause) for f in sim.summary.failures] == [("sensing", "two vehicles in one cell")]
+        assert [(f.kind, f.cause) for f in sim.summary.failures] == [(FailureKind.SENSING, "two vehicles in one cell")]
     finally:
         sim.close()

@@ -19,10 +19,12 @@ from sim.executor import (
 from sim.scene import Scene
 from sim.vehicle import KinematicCar, WheeledCar
 from spec.actions import ACTION_RULES, Action
-from spec.constants import DEFAULT_SPEED_MPS
 from spec.errors import EngineError
+from spec.grid import PAPER_GRID
 from spec.lanes import Lane
 from spec.physical import CAR, LOOP
+
+COMMON_MPS = PAPER_GRID.speed  # the common speed of the paper's grid
 
 
 def no_traffic(_dt: float) -> bool:
@@ -33,7 +35,7 @@ def no_traffic(_dt: float) -> bool:
 def world():
     scene = Scene()
     car = WheeledCar(scene, 0.0, scene.lane_y(Lane.LEFT))
-    yield scene, car, Executor(scene, car, Lane.LEFT)
+    yield scene, car, Executor(scene, car, Lane.LEFT, PAPER_GRID)
     scene.close()
 
 
@@ -56,18 +58,18 @@ def speeds_while(scene: Scene, car: WheeledCar, target_mps: float, seconds: floa
 
 def test_acceleration_and_braking_stay_within_their_limits(world) -> None:
     scene, car, _ = world
-    up = speeds_while(scene, car, 2 * DEFAULT_SPEED_MPS, 6.0)
+    up = speeds_while(scene, car, 2 * COMMON_MPS, 6.0)
     down = speeds_while(scene, car, 0.0, 4.0)
     window = round(0.5 / scene.dt_s)  # rates over half a second, so contact jitter does not count
     rate = lambda v: np.diff(v[::window]) / 0.5  # noqa: E731
     assert rate(up).max() <= CAR.max_accel_mps2 * 1.05
     assert -rate(down).min() <= CAR.max_brake_mps2 * 1.05
-    assert up[-1] == pytest.approx(2 * DEFAULT_SPEED_MPS, abs=0.3) and down[-1] < 0.2
+    assert up[-1] == pytest.approx(2 * COMMON_MPS, abs=0.3) and down[-1] < 0.2
 
 
 def test_lane_keeping_holds_the_lane_centre(world) -> None:
     scene, car, executor = world
-    assert executor.hold(12.0, DEFAULT_SPEED_MPS, no_traffic)
+    assert executor.hold(12.0, COMMON_MPS, no_traffic)
     pose = car.pose()
     assert abs(pose.y_m - scene.lane_y(Lane.LEFT)) < 0.15 and abs(pose.yaw_rad) < 0.05
 
@@ -76,7 +78,7 @@ def test_lane_keeping_holds_the_lane_centre(world) -> None:
 def test_each_speed_controller_realises_its_mapping_once_at_speed(world, action: Action) -> None:
     _scene, car, executor = world
     rule = ACTION_RULES[action]
-    target = float(rule.speed_factor) * DEFAULT_SPEED_MPS
+    target = float(rule.speed_factor) * COMMON_MPS
     settle(executor, target)  # already at the action's speed: the mapping is exact
     assert car.pose().speed_mps == pytest.approx(target, abs=0.1)
     start = car.pose().x_m
@@ -88,18 +90,18 @@ def test_each_speed_controller_realises_its_mapping_once_at_speed(world, action:
 def test_accelerating_from_the_common_speed_falls_short_of_the_model(world) -> None:
     """The grid's accelerate needs 42 m in 3 s from 7 m/s; with 3 m/s^2 at most 34.5 m are possible."""
     _scene, car, executor = world
-    settle(executor, DEFAULT_SPEED_MPS)
-    assert car.pose().speed_mps == pytest.approx(DEFAULT_SPEED_MPS, abs=0.1)
+    settle(executor, COMMON_MPS)
+    assert car.pose().speed_mps == pytest.approx(COMMON_MPS, abs=0.1)
     start = car.pose().x_m
     executor.run(Action.ACCELERATE, no_traffic)
     covered = car.pose().x_m - start
-    assert 30.0 < covered <= DEFAULT_SPEED_MPS * 3 + 0.5 * CAR.max_accel_mps2 * 9 + 1.0
+    assert 30.0 < covered <= COMMON_MPS * 3 + 0.5 * CAR.max_accel_mps2 * 9 + 1.0
 
 
 @pytest.mark.parametrize(("action", "to_lane"), [(Action.RIGHT_LANE_CHANGE, Lane.RIGHT)])
 def test_lane_change_moves_one_lane_width_in_the_actions_time(world, action: Action, to_lane: Lane) -> None:
     scene, car, executor = world
-    executor.hold(4.0, DEFAULT_SPEED_MPS, no_traffic)
+    executor.hold(4.0, COMMON_MPS, no_traffic)
     assert executor.run(action, no_traffic)
     assert abs(car.pose().y_m - scene.lane_y(to_lane)) < 0.4 and executor.lane is to_lane
     assert executor.run(Action.LEFT_LANE_CHANGE, no_traffic)
@@ -113,7 +115,7 @@ def test_a_staged_crash_is_detected_as_a_contact(world) -> None:
     def contact(_dt: float) -> bool:
         return not scene.client.getContactPoints(car.body, parked.body)
 
-    assert not executor.hold(12.0, DEFAULT_SPEED_MPS, contact)
+    assert not executor.hold(12.0, COMMON_MPS, contact)
 
 
 def feasible(speeds: list[float], dt: float) -> bool:
@@ -128,17 +130,17 @@ def feasible(speeds: list[float], dt: float) -> bool:
 def test_a_plans_first_ramp_starts_at_the_cars_speed_and_stays_feasible(start_mps: float,
                                                                        plan: tuple[Action, ...]) -> None:
     dt = 0.01
-    profiles = plan_profiles(plan, start_mps)
+    profiles = plan_profiles(plan, start_mps, PAPER_GRID)
     speeds = [p.at(i * dt) for a, p in zip(plan, profiles) for i in range(round(ACTION_RULES[a].duration_s / dt))]
     assert speeds[0] == pytest.approx(start_mps) and feasible(speeds, dt)
 
 
 def test_ramp_gain_is_what_a_ramp_gains_or_loses_on_a_car_at_the_target_speed() -> None:
-    assert ramp_gain_m(DEFAULT_SPEED_MPS, DEFAULT_SPEED_MPS) == 0.0
+    assert ramp_gain_m(COMMON_MPS, COMMON_MPS) == 0.0
     assert ramp_gain_m(14.0, 7.0) == pytest.approx(7.0**2 / (2 * RAMP_SHARE * CAR.max_brake_mps2))
     assert ramp_gain_m(7.0, 14.0) == pytest.approx(-(7.0**2) / (2 * RAMP_SHARE * CAR.max_accel_mps2))
-    profile = plan_profiles((Action.ACCELERATE,), 7.0)[0]  # a plan's first ramp starts at the car's speed
-    dt, duration_s = 0.001, ACTION_RULES[Action.ACCELERATE].duration_s
+    profile = plan_profiles((Action.ACCELERATE,), 7.0, PAPER_GRID)[0]  # a plan's first ramp starts at the car's speed
+    dt, duration_s = 0.001, float(ACTION_RULES[Action.ACCELERATE].duration_s)
     covered_m = sum(profile.at(i * dt) for i in range(round(duration_s / dt))) * dt
     assert covered_m == pytest.approx(14.0 * duration_s + ramp_gain_m(7.0, 14.0)
                                       - ramp_gain_m(14.0, 7.0) / 4, abs=0.05)  # - half the centred ramp out
@@ -153,22 +155,22 @@ def test_centred_ramps_put_the_reference_where_the_model_is_at_every_boundary(pl
     """Each speed change inside a plan is a feasible ramp centred on its boundary, so at every boundary the
     reference is off the model by at most one half ramp's area (dv * ramp / 8), and the offsets do not add up."""
     dt = 0.01
-    speeds_mps = [action_speed_mps(a) for a in plan]
-    bound_m = max(abs(b - a) * ramp_s(a, b) / 8 for a, b in zip(speeds_mps, [*speeds_mps[1:], DEFAULT_SPEED_MPS]))
+    speeds_mps = [action_speed_mps(a, PAPER_GRID) for a in plan]
+    bound_m = max(abs(b - a) * ramp_s(a, b) / 8 for a, b in zip(speeds_mps, [*speeds_mps[1:], COMMON_MPS]))
     model_m = reference_m = 0.0
-    for action, profile in zip(plan, plan_profiles(plan, DEFAULT_SPEED_MPS)):
-        duration_s = ACTION_RULES[action].duration_s
+    for action, profile in zip(plan, plan_profiles(plan, COMMON_MPS, PAPER_GRID)):
+        duration_s = float(ACTION_RULES[action].duration_s)
         speeds = [profile.at(i * dt) for i in range(round(duration_s / dt))]
         assert feasible(speeds, dt)
         reference_m += sum(speeds) * dt
-        model_m += action_speed_mps(action) * duration_s
+        model_m += action_speed_mps(action, PAPER_GRID) * duration_s
         assert abs(reference_m - model_m) <= bound_m + 0.05
 
 
 def test_the_lateral_move_of_a_lane_change_is_done_early(world) -> None:
     """The model puts the AV in its new lane before any oncoming tick: the car is there well before the end."""
     scene, car, executor = world
-    executor.hold(4.0, DEFAULT_SPEED_MPS, no_traffic)
+    executor.hold(4.0, COMMON_MPS, no_traffic)
     ys: list[float] = []
 
     def record(_dt: float) -> bool:
@@ -193,19 +195,19 @@ def test_the_reference_follows_the_frames_av_once_the_first_ramp_is_done(speed_m
     car's speed, from reference_offset_m, and meets it at every boundary after the first ramp (to within half
     a centred ramp's area)."""
     dt = 0.001
-    speeds_mps = [action_speed_mps(a) for a in plan]
-    bound_m = max(abs(b - a) * ramp_s(a, b) / 8 for a, b in zip(speeds_mps, [*speeds_mps[1:], DEFAULT_SPEED_MPS]))
+    speeds_mps = [action_speed_mps(a, PAPER_GRID) for a in plan]
+    bound_m = max(abs(b - a) * ramp_s(a, b) / 8 for a, b in zip(speeds_mps, [*speeds_mps[1:], COMMON_MPS]))
     reference_m = reference_offset_m(speed_mps, frame_mps, speeds_mps[0])
     model_m = ramp_gain_m(speed_mps, frame_mps)
     elapsed_s, first_ramp_s = 0.0, ramp_s(speed_mps, speeds_mps[0])
-    for action, profile in zip(plan, plan_profiles(plan, speed_mps)):
-        duration_s = ACTION_RULES[action].duration_s
+    for action, profile in zip(plan, plan_profiles(plan, speed_mps, PAPER_GRID)):
+        duration_s = float(ACTION_RULES[action].duration_s)
         reference_m += sum(profile.at(i * dt) for i in range(round(duration_s / dt))) * dt
-        model_m += action_speed_mps(action) * duration_s
+        model_m += action_speed_mps(action, PAPER_GRID) * duration_s
         elapsed_s += duration_s
         if elapsed_s >= first_ramp_s:
             assert abs(reference_m - model_m) <= bound_m + 0.05
-    assert plan_profiles(plan, speed_mps)[0].at(0.0) == pytest.approx(speed_mps)
+    assert plan_profiles(plan, speed_mps, PAPER_GRID)[0].at(0.0) == pytest.approx(speed_mps)
 
 
 def test_an_action_whose_lane_guard_fails_is_an_error_not_a_straight_drive(world) -> None:

@@ -10,12 +10,13 @@ import pytest
 from oracle.planner import plan
 from sim.discretiser import discretise
 from sim.scene import Scene
-from sim.sensors import Reading, sweep
+from sim.sensors import RaySensor, Reading, in_range
 from sim.traffic import left_gap_cells, oncoming_gap_cells
 from sim.vehicle import KinematicCar
 from spec.actions import Action
-from spec.constants import AV_CELL, SEGMENT_M
+from spec.answers import Strategy
 from spec.errors import ScenarioError
+from spec.grid import PAPER_GRID
 from spec.lanes import Lane
 from spec.models import ModelKind
 from spec.physical import TRAFFIC
@@ -49,40 +50,41 @@ def test_discretiser_recovers_true_cells_from_random_placements() -> None:
     rng = np.random.default_rng(SEED)
     for _ in range(500):
         lane = Lane.LEFT if rng.random() < 0.5 else Lane.RIGHT
-        left = sorted(rng.choice([c for c in range(0, 40) if c != AV_CELL], size=rng.integers(0, 5), replace=False))
+        av, cell_m = PAPER_GRID.av_cell, PAPER_GRID.cell
+        left = sorted(rng.choice([c for c in range(0, 40) if c != av], size=rng.integers(0, 5), replace=False))
         right = sorted(rng.choice(range(12, 50), size=rng.integers(0, 3), replace=False))
-        readings = [Reading(Lane.LEFT, 0, (c - AV_CELL + rng.uniform(-0.45, 0.45)) * SEGMENT_M) for c in left]
-        readings += [Reading(Lane.RIGHT, 0, (c - AV_CELL + rng.uniform(0.0, 0.95)) * SEGMENT_M) for c in right]
-        scenario = discretise(tuple(readings), lane)
+        readings = [Reading(Lane.LEFT, 0, (c - av + rng.uniform(-0.45, 0.45)) * cell_m) for c in left]
+        readings += [Reading(Lane.RIGHT, 0, (c - av + rng.uniform(0.0, 0.95)) * cell_m) for c in right]
+        scenario = discretise(tuple(readings), lane, PAPER_GRID)
         assert list(scenario.left_lane) == [int(c) for c in left]
         assert list(scenario.right_lane) == [int(c) for c in right]
 
 
 def test_discretiser_drops_what_is_outside_the_window_and_keeps_the_rest() -> None:
-    far = (Reading(Lane.LEFT, 0, -11 * SEGMENT_M), Reading(Lane.LEFT, 1, 3 * SEGMENT_M),
-           Reading(Lane.RIGHT, 2, 45 * SEGMENT_M))
-    scenario = discretise(far, Lane.LEFT)
-    assert scenario.left_lane == (AV_CELL + 3,) and scenario.right_lane == () and scenario.targets == 1
+    far = (Reading(Lane.LEFT, 0, -11 * PAPER_GRID.cell), Reading(Lane.LEFT, 1, 3 * PAPER_GRID.cell),
+           Reading(Lane.RIGHT, 2, 45 * PAPER_GRID.cell))
+    scenario = discretise(far, Lane.LEFT, PAPER_GRID)
+    assert scenario.left_lane == (PAPER_GRID.av_cell + 3,) and scenario.right_lane == () and scenario.targets == 1
 
 
 def test_own_lane_vehicle_is_never_put_in_the_avs_cell() -> None:
-    assert discretise((Reading(Lane.LEFT, 0, -9.0),), Lane.LEFT).left_lane == (AV_CELL - 1,)
-    assert discretise((Reading(Lane.LEFT, 0, 9.0),), Lane.LEFT).left_lane == (AV_CELL + 1,)
-    assert discretise((Reading(Lane.LEFT, 0, 9.0),), Lane.RIGHT).left_lane == (AV_CELL,)
+    assert discretise((Reading(Lane.LEFT, 0, -9.0),), Lane.LEFT, PAPER_GRID).left_lane == (PAPER_GRID.av_cell - 1,)
+    assert discretise((Reading(Lane.LEFT, 0, 9.0),), Lane.LEFT, PAPER_GRID).left_lane == (PAPER_GRID.av_cell + 1,)
+    assert discretise((Reading(Lane.LEFT, 0, 9.0),), Lane.RIGHT, PAPER_GRID).left_lane == (PAPER_GRID.av_cell,)
 
 
 def test_an_oncoming_vehicle_41_m_ahead_is_in_the_danger_zone_so_the_av_returns_at_once() -> None:
     """41 m ahead is cell 11 (rounded towards the AV): inside the final model's danger zone, so only the
     preparations model plans, and it sends the AV straight back to its lane."""
-    scenario = discretise((Reading(Lane.RIGHT, 0, 41.0),), Lane.RIGHT)
-    answer = plan(scenario, "sensible")
-    assert scenario.right_lane == (AV_CELL + 1,)
+    scenario = discretise((Reading(Lane.RIGHT, 0, 41.0),), Lane.RIGHT, PAPER_GRID)
+    answer = plan(scenario, Strategy.SENSIBLE)
+    assert scenario.right_lane == (PAPER_GRID.av_cell + 1,)
     assert answer.model is ModelKind.PREPARATIONS and answer.actions == (Action.LEFT_LANE_CHANGE,)
 
 
 def test_two_vehicles_in_one_cell_is_a_sensing_failure() -> None:
     with pytest.raises(ScenarioError, match="two vehicles in one cell"):
-        discretise((Reading(Lane.LEFT, 0, 40.0), Reading(Lane.LEFT, 1, 45.0)), Lane.LEFT)
+        discretise((Reading(Lane.LEFT, 0, 40.0), Reading(Lane.LEFT, 1, 45.0)), Lane.LEFT, PAPER_GRID)
 
 
 def test_sensors_keep_truth_apart_and_see_past_the_car_ahead_into_the_oncoming_lane() -> None:
@@ -92,8 +94,9 @@ def test_sensors_keep_truth_apart_and_see_past_the_car_ahead_into_the_oncoming_l
         hidden = KinematicCar(scene, 40.0, scene.lane_y(Lane.LEFT), 7.0)  # behind the car ahead
         oncoming = KinematicCar(scene, 40.0, scene.lane_y(Lane.RIGHT), -7.0)
         far = KinematicCar(scene, 400.0, scene.lane_y(Lane.RIGHT), -7.0)  # beyond 357 m
-        result = sweep(scene, 0.0, scene.lane_y(Lane.LEFT), [ahead, hidden], [oncoming, far])
-        assert {r.body for r in result.truth} == {ahead.body, hidden.body, oncoming.body}
-        assert {r.body for r in result.seen} == {ahead.body, oncoming.body}
+        truth = in_range(0.0, scene.lane_y(Lane.LEFT), [ahead, hidden], [oncoming, far])
+        seen = RaySensor(scene, np.random.default_rng(SEED)).read(truth)
+        assert {r.body for r in truth.readings} == {ahead.body, hidden.body, oncoming.body}
+        assert {r.body for r in seen} == {ahead.body, oncoming.body}
     finally:
         scene.close()

@@ -1,12 +1,12 @@
-"""The action table: search order, guards, and discrete effects that follow from the physics."""
+"""The action table: search order, guards, and the physics every grid derives its effects from."""
 
 from __future__ import annotations
 
 import pytest
 
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action, parse_action
-from spec.constants import DEFAULT_SPEED_MPS, SEGMENT_M
 from spec.errors import ActionError
+from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
 
 
@@ -24,18 +24,20 @@ def test_search_order_is_the_papers() -> None:
         (Action.BRAKE, 1, 3, 6.0),
     ],
 )
-def test_effects_match_the_semantics_table(action: Action, shift: int, ticks: int, duration_s: float) -> None:
-    rule = ACTION_RULES[action]
-    assert (rule.left_shift_cells, rule.oncoming_ticks, rule.duration_s) == (shift, ticks, duration_s)
+def test_effects_on_the_paper_grid_match_the_semantics_table(action: Action, shift: int, ticks: int,
+                                                              duration_s: float) -> None:
+    grid = PAPER_GRID
+    assert (grid.left_shift(action), grid.ticks(action), ACTION_RULES[action].duration_s) == (shift, ticks, duration_s)
 
 
+@pytest.mark.parametrize("cell_m", STANDARD_CELLS_M, ids=lambda c: f"{float(c):g}m")
 @pytest.mark.parametrize("action", list(Action))
-def test_discrete_effects_equal_the_relative_physical_displacement(action: Action) -> None:
-    rule = ACTION_RULES[action]
-    av_m = float(rule.speed_factor) * DEFAULT_SPEED_MPS * rule.duration_s
-    other_m = DEFAULT_SPEED_MPS * rule.duration_s
-    assert (other_m - av_m) / SEGMENT_M == pytest.approx(rule.left_shift_cells)
-    assert (other_m + av_m) / SEGMENT_M == pytest.approx(rule.oncoming_ticks)
+def test_discrete_effects_equal_the_relative_physical_displacement_on_every_grid(action: Action, cell_m) -> None:
+    grid, rule = Grid(cell_m), ACTION_RULES[action]
+    av_m = rule.speed_factor * grid.speed_mps * rule.duration_s
+    other_m = grid.speed_mps * rule.duration_s
+    assert (other_m - av_m) / grid.cell_m == grid.left_shift(action)
+    assert (other_m + av_m) / grid.cell_m == grid.ticks(action)
 
 
 def test_lane_changes_are_guarded_by_lane() -> None:

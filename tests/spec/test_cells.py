@@ -6,33 +6,38 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from spec.cells import first_platoon, left_cell, oncoming_cell
-from spec.constants import AV_CELL, SEGMENT_M
+from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
 
 metres = st.floats(min_value=-300.0, max_value=500.0, allow_nan=False)
+grids = st.sampled_from([Grid(c) for c in STANDARD_CELLS_M])
+AV = PAPER_GRID.av_cell
 
 
 def test_left_lane_vehicles_go_to_the_nearest_cell() -> None:
-    assert left_cell(10.4, Lane.RIGHT) == AV_CELL and left_cell(10.6, Lane.RIGHT) == AV_CELL + 1
-    assert left_cell(-10.6, Lane.RIGHT) == AV_CELL - 1 and left_cell(2 * SEGMENT_M, Lane.LEFT) == AV_CELL + 2
+    grid = PAPER_GRID
+    assert left_cell(10.4, Lane.RIGHT, grid) == AV and left_cell(10.6, Lane.RIGHT, grid) == AV + 1
+    assert left_cell(-10.6, Lane.RIGHT, grid) == AV - 1 and left_cell(42.0, Lane.LEFT, grid) == AV + 2
+    assert left_cell(10.6, Lane.RIGHT, Grid(10.5)) == 21  # the AV's cell is 20 on the 10.5 m grid
 
 
-@given(metres.filter(lambda dx: dx != 0))
-def test_own_lane_vehicle_is_never_in_the_avs_cell_and_stays_on_its_side(dx_m: float) -> None:
-    cell = left_cell(dx_m, Lane.LEFT)
-    assert cell != AV_CELL
-    assert (cell > AV_CELL) == (dx_m > 0)
+@given(metres.filter(lambda dx: dx != 0), grids)
+def test_own_lane_vehicle_is_never_in_the_avs_cell_and_stays_on_its_side(dx_m: float, grid: Grid) -> None:
+    cell = left_cell(dx_m, Lane.LEFT, grid)
+    assert cell != grid.av_cell
+    assert (cell > grid.av_cell) == (dx_m > 0)
 
 
-@given(metres)
-def test_oncoming_cell_is_never_farther_from_the_av_than_the_vehicle(dx_m: float) -> None:
-    cell_m = (oncoming_cell(dx_m) - AV_CELL) * SEGMENT_M
-    assert abs(cell_m) <= abs(dx_m) < abs(cell_m) + SEGMENT_M
+@given(metres, grids)
+def test_oncoming_cell_is_never_farther_from_the_av_than_the_vehicle(dx_m: float, grid: Grid) -> None:
+    cell_m = (oncoming_cell(dx_m, grid) - grid.av_cell) * grid.cell
+    assert abs(cell_m) <= abs(dx_m) < abs(cell_m) + grid.cell
 
 
 def test_targets_are_the_first_platoon_ahead_at_most_three() -> None:
-    assert first_platoon([5, 11, 12, 13, 14], Lane.LEFT) == 3
-    assert first_platoon([11, 13], Lane.LEFT) == 1
-    assert first_platoon([10, 11, 20], Lane.RIGHT) == 2
-    assert first_platoon([10, 11, 20], Lane.LEFT) == 1
-    assert first_platoon([5], Lane.LEFT) == 0
+    grid = PAPER_GRID
+    assert first_platoon([5, 11, 12, 13, 14], Lane.LEFT, grid) == 3
+    assert first_platoon([11, 13], Lane.LEFT, grid) == 1
+    assert first_platoon([10, 11, 20], Lane.RIGHT, grid) == 2
+    assert first_platoon([10, 11, 20], Lane.LEFT, grid) == 1
+    assert first_platoon([5], Lane.LEFT, grid) == 0

@@ -13,7 +13,7 @@ from oracle.shrink import to_toml
 from spec.errors import ScenarioError
 from spec.files import load_scenario, scenario_to_dict
 from spec.scenario import Scenario
-from tests.strategies import scenarios
+from tests.conftest import scenarios
 
 
 @given(scenarios())

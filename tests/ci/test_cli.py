@@ -3,17 +3,12 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from spec.library import builtin
-
-
-def run(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "oracle.cli", *args], capture_output=True, text=True, timeout=120)
+from tests.conftest import run_cli as run
 
 
 def write(tmp_path: Path, name: str, text: str) -> str:
@@ -135,7 +130,25 @@ def test_scenarios_lists_the_library_with_expectations() -> None:
 
 
 def test_engines_lists_every_registered_engine() -> None:
-    from oracle.engines import load_engines
-
     done = run("engines")
-    assert done.returncode == 0 and all(name in done.stdout for name in load_engines())
+    assert done.returncode == 0 and all(name in done.stdout for name in ("interpreter", "spin", "z3"))
+
+
+def test_plan_engine_all_json() -> None:
+    done = run("plan", "one_target", "--engine", "all", "--json")
+    result = json.loads(done.stdout)
+    assert done.returncode == 0 and result["agree"] is True and result["disagreements"] == []
+    assert {a["engine"] for a in result["answers"]} >= {"interpreter"}
+
+
+def test_plan_on_a_finer_grid_from_the_file_or_the_option(tmp_path: Path) -> None:
+    named = write(tmp_path, "fine.toml", 'lane = "left"\nleft_lane = [24]\nright_lane = []\ntargets = 1\ncell_m = 10.5')
+    plain = write(tmp_path, "plain.toml", 'lane = "left"\nleft_lane = [24]\nright_lane = []\ntargets = 1')
+    by_file = json.loads(run("plan", named, "--json", "--strategy", "shortest").stdout)
+    by_option = json.loads(run("plan", plain, "--cell-m", "10.5", "--json", "--strategy", "shortest").stdout)
+    assert by_file["actions"] == by_option["actions"] and by_file["status"] == "plan"
+    assert by_file["states"][0]["left_lane"] == [24]
+    clash = run("plan", named, "--cell-m", "7")
+    assert clash.returncode == 2 and "--cell-m" in clash.stderr and "10.5 m cells" in clash.stderr
+    odd = run("plan", plain, "--cell-m", "10")
+    assert odd.returncode == 2 and "not a whole number" in odd.stderr and len(odd.stderr.strip().splitlines()) == 1

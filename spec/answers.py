@@ -1,4 +1,5 @@
-"""What a planner answers: a plan, no plan (proved, or within the horizon), or an incomplete search."""
+"""What a planner is asked (a strategy, limits) and answers: a plan, no plan (proved, or within the horizon),
+or an incomplete search; the values every engine returns and every layer above reads."""
 
 from __future__ import annotations
 
@@ -6,8 +7,17 @@ import enum
 from dataclasses import dataclass, field
 
 from spec.actions import Action
+from spec.errors import ExitCode
 from spec.models import ModelKind
-from spec.scenario import State
+from spec.state import State
+
+
+class Strategy(enum.Enum):
+    """Which plan an engine is asked for."""
+
+    SENSIBLE = "sensible"  # the first plan of the depth-first search in the action order (Spin's default)
+    SHORTEST = "shortest"  # a plan of the fewest actions (the first in the action order, for the interpreter)
+    OPTIMAL = "optimal"  # the least lexicographic cost (``oracle.bmc.COST_DOC``)
 
 
 class Status(enum.Enum):
@@ -19,9 +29,9 @@ class Status(enum.Enum):
     INCOMPLETE = "incomplete"  # a search limit was hit: nothing is claimed
 
     @property
-    def exit_code(self) -> int:
+    def exit_code(self) -> ExitCode:
         """The CLI's exit code: 0 plan, 1 no plan, 3 incomplete."""
-        return {Status.PLAN: 0, Status.INCOMPLETE: 3}.get(self, 1)
+        return {Status.PLAN: ExitCode.OK, Status.INCOMPLETE: ExitCode.INCOMPLETE}.get(self, ExitCode.NO)
 
 
 @dataclass(frozen=True, slots=True)
@@ -57,7 +67,7 @@ class Answer:
     status: Status
     model: ModelKind | None  # the model whose plan this is (or the last model tried)
     engine: str
-    strategy: str
+    strategy: Strategy
     actions: tuple[Action, ...]
     states: tuple[State, ...]
     states_explored: int
@@ -72,7 +82,7 @@ class Answer:
             "status": self.status.value,
             "model": self.model.value if self.model else None,
             "engine": self.engine,
-            "strategy": self.strategy,
+            "strategy": self.strategy.value,
             "actions": [a.value for a in self.actions],
             "states": [state_to_json(s) for s in self.states],
             "detail": self.detail,

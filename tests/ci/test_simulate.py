@@ -7,18 +7,21 @@ from pathlib import Path
 
 import pytest
 
-import sim.campaign
-from ci.executors import ExecutorChoice
-from sim.campaign import RUNS_FILE, Campaign, simulate
+import ci.simulate
+from ci.executors import ExecutorChoice, ExecutorKind
+from ci.simulate import RUNS_FILE, simulate
+from sim.parts import DriveConfig
 from sim.summary import Failure, RunSummary
+from spec.kinds import FailureKind
 
-SHORT = Campaign(km=0.2)
+SHORT = DriveConfig(km=0.2)
 
 
 def test_summary_round_trips_through_json() -> None:
     summary = RunSummary(5, km=1.5, sim_time_s=200.0, overtakes=3, plans=7, plan_ms=[0.5, 1.25],
-                         failures=[Failure("collision", "collision with an oncoming vehicle", "+4.0 m", 1.4, 199.0)])
-    summary.tolerance.check(1, 1, "accelerate", "left_lane[0]", -1.0, 30.0, 16.0, 0.0)
+                         failures=[Failure(FailureKind.COLLISION, "collision with an oncoming vehicle", "+4.0 m", 1.4,
+                                           199.0)])
+    summary.tolerance.check(1, 1, "accelerate", "left_lane[0]", -1.0, 30.0, 16.0, 0.0, 21.0)
     again = RunSummary.from_json(json.loads(json.dumps(summary.to_json())))
     assert again.to_json() == summary.to_json()
     assert again.failure == summary.failures[0] and again.tolerance.violations_by_action == {"accelerate": 1}
@@ -32,12 +35,12 @@ def test_a_campaign_resumes_from_its_record_without_running_finished_seeds(tmp_p
     def must_not_run(*_args: object, **_kwargs: object) -> RunSummary:
         raise AssertionError("a recorded run was run again")
 
-    monkeypatch.setattr(sim.campaign, "run_drive", must_not_run)
+    monkeypatch.setattr(ci.simulate, "run_drive", must_not_run)
     seen: list[tuple[int, bool]] = []
     again = simulate(SHORT, [3], str(tmp_path), on_done=lambda s, resumed: seen.append((s.seed, resumed)))
     assert [r.to_json() for r in again] == [r.to_json() for r in first] and seen == [(3, True)]
     with pytest.raises(AssertionError, match="run again"):  # other parameters: not the same campaign
-        simulate(Campaign(km=0.3), [3], str(tmp_path))
+        simulate(DriveConfig(km=0.3), [3], str(tmp_path))
 
 
 def test_a_half_written_record_is_run_again_and_fresh_forgets_the_record(tmp_path: Path) -> None:
@@ -53,6 +56,6 @@ def test_a_half_written_record_is_run_again_and_fresh_forgets_the_record(tmp_pat
 
 def test_a_local_dask_cluster_gives_the_runs_one_process_gives(tmp_path: Path) -> None:
     here = simulate(SHORT, [3, 4], str(tmp_path / "here"))
-    there = simulate(SHORT, [3, 4], str(tmp_path / "dask"), ExecutorChoice("dask", 2))
+    there = simulate(SHORT, [3, 4], str(tmp_path / "dask"), ExecutorChoice(ExecutorKind.DASK, 2))
     strip = lambda r: {k: v for k, v in r.to_json().items() if k not in ("wall_s", "plan_ms", "plan_latency_ms")}  # noqa: E731
     assert [strip(r) for r in here] == [strip(r) for r in there]

@@ -1,4 +1,4 @@
-"""Several drives, resumable, run wherever ``ci.executors`` sends them. Each run's seed is printed.
+"""The simulation campaign: several drives, resumable, run wherever ``ci.executors`` sends them.
 
 Every finished run is appended to ``OUT/runs.jsonl`` with the campaign's parameters, so an
 interrupted campaign started again with the same parameters and folder runs only the
@@ -10,33 +10,19 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from ci.executors import IN_PROCESS, ExecutorChoice, run_jobs
 from ci.records import append, open_for_append, read_records
+from sim.parts import DriveConfig
 from sim.report import plot_trace
 from sim.simulator import run_drive
 from sim.summary import RunSummary
-from spec.physical import LOOP
 
 RUNS_FILE = "runs.jsonl"
 
 
-@dataclass(frozen=True, slots=True)
-class Campaign:
-    """What every run of a campaign shares (the seeds differ)."""
-
-    km: float
-    until_failure: bool = False
-    engine: str = "interpreter"
-    strategy: str = "sensible"
-    replan_on_violation: bool = True
-    step_tolerance_cells: float = LOOP.step_tolerance_cells
-    plan_tolerance_cells: float = LOOP.plan_tolerance_cells
-
-
-def simulate(campaign: Campaign, seeds: list[int], out_dir: str, executor: ExecutorChoice = IN_PROCESS,
+def simulate(campaign: DriveConfig, seeds: list[int], out_dir: str, executor: ExecutorChoice = IN_PROCESS,
              on_done: Callable[[RunSummary, bool], None] | None = None, fresh: bool = False,
              on_km: Callable[[tuple[int, float]], None] | None = None) -> list[RunSummary]:
     """Run every seed not already recorded in ``out_dir``; ``on_done(summary, resumed)`` after each, and
@@ -54,27 +40,27 @@ def simulate(campaign: Campaign, seeds: list[int], out_dir: str, executor: Execu
     jobs = [(s, campaign, str(out)) for s in todo]
     with open_for_append(log) as lines:
         for _index, summary in run_jobs(drive_one, jobs, executor, on_km):
-            append(lines, {"campaign": asdict(campaign), "run": summary.to_json()})
+            append(lines, {"campaign": campaign.to_json(), "run": summary.to_json()})
             done[summary.seed] = summary
             trace = out / f"trace-seed{summary.seed}.jsonl"
             if trace.exists() and trace.stat().st_size:
-                plot_trace(trace, out / f"spacetime-seed{summary.seed}.png")
+                plot_trace(trace, out / f"spacetime-seed{summary.seed}.png", campaign.grid)
             if on_done:
                 on_done(summary, False)
     return [done[s] for s in seeds]
 
 
-def drive_one(seed: int, campaign: Campaign, out_dir: str,
+def drive_one(seed: int, campaign: DriveConfig, out_dir: str,
               report: Callable[[tuple[int, float]], None] | None = None) -> RunSummary:
-    """One run of the campaign (what a worker runs): the campaign's parameters go to ``run_drive`` by name."""
-    return run_drive(seed, out_dir=out_dir, report=report, **asdict(campaign))
+    """One run of the campaign (what a worker runs)."""
+    return run_drive(seed, campaign, out_dir, report)
 
 
-def recorded(log: Path, campaign: Campaign) -> dict[int, RunSummary]:
+def recorded(log: Path, campaign: DriveConfig) -> dict[int, RunSummary]:
     """Runs an earlier start of the same campaign finished, by seed."""
     runs = {}
     for record in read_records(log):
-        if record.get("campaign") != asdict(campaign):
+        if record.get("campaign") != campaign.to_json():
             continue
         with contextlib.suppress(KeyError, TypeError):  # a record of another version: run that seed again
             summary = RunSummary.from_json(record["run"])

@@ -1,0 +1,95 @@
+"""What every command shares: the consoles, reading a scenario, option types, printing plans."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+from rich.console import Console
+
+from oracle.render import LEGEND, draw
+from spec.actions import Action
+from spec.answers import Answer, Status, Strategy
+from spec.constants import DEFAULT_HORIZON, MAX_HORIZON
+from spec.errors import OptionError, ScenarioError
+from spec.files import load_scenario
+from spec.grid import grid_for
+from spec.library import builtin
+from spec.models import ModelChoice
+from spec.scenario import Scenario, make_scenario
+from spec.state import State
+
+out = Console(highlight=False, width=None if sys.stdout.isatty() else 120)
+err = Console(stderr=True, highlight=False)
+
+STRATEGY = click.Choice([s.value for s in Strategy])
+MODEL = click.Choice([m.value for m in ModelChoice])
+
+
+def strategy_option(default: Strategy = Strategy.SENSIBLE, choices: tuple[Strategy, ...] = tuple(Strategy)) -> Any:
+    """``--strategy``, handed to the command as a ``Strategy``."""
+    return click.option("--strategy", type=click.Choice([s.value for s in choices]), default=default.value,
+                        show_default=True, callback=lambda _ctx, _param, value: Strategy(value))
+
+
+def horizon_option() -> Any:
+    return click.option("--horizon", type=click.IntRange(0, MAX_HORIZON), default=None,
+                        help=f"Maximum plan length (default: the scenario's, else {DEFAULT_HORIZON}).")
+
+
+def cell_option() -> Any:
+    return click.option("--cell-m", "cell_m", type=float, default=None,
+                        help="Cell length in metres (21, 10.5, 7, 5.25; default: the file's, else 21).")
+
+
+def load(file: str, cell_m: float | None = None) -> Scenario:
+    """A scenario from a file path or the name of a built-in scenario; ``cell_m`` names its grid, which must agree
+    with the grid the file names."""
+    path = Path(file)
+    entry = builtin(file)
+    if not path.exists() and entry is not None:
+        scenario = entry.load()
+    elif not path.exists():
+        raise ScenarioError("file", file, "no such file (nor a built-in scenario: see `overtake scenarios`)")
+    else:
+        scenario = load_scenario(path)
+    if cell_m is None:
+        return scenario
+    grid = grid_for(cell_m)
+    if grid == scenario.grid:
+        return scenario
+    if entry is not None or not scenario.grid.is_paper:
+        raise OptionError("--cell-m", cell_m, f"{file} is on a {scenario.grid.describe()} grid")
+    return make_scenario(scenario.lane, list(scenario.left_lane), list(scenario.right_lane), scenario.targets,
+                         scenario.model, scenario.horizon, grid=grid)
+
+
+def print_json(obj: Any) -> None:
+    click.echo(json.dumps(obj, indent=2))
+
+
+def print_states(scenario: Scenario, actions: tuple[Action, ...], states: tuple[State, ...]) -> None:
+    """Both lanes after every step, with a legend for the marks."""
+    targets = scenario.target_indices
+    out.print("step 0: start")
+    for line in draw(states[0], scenario.grid, targets):
+        out.print(f"  {line}")
+    for n, (action, state) in enumerate(zip(actions, states[1:]), start=1):
+        out.print(f"step {n}: {action.value}")
+        for line in draw(state, scenario.grid, targets):
+            out.print(f"  {line}")
+    out.print(f"  ({LEGEND})")
+
+
+SHORT = {Action.LEFT_LANE_CHANGE: "L", Action.ACCELERATE: "A", Action.RIGHT_LANE_CHANGE: "R", Action.DRIVE: "D",
+         Action.BRAKE: "B"}
+
+
+def abbrev(answer: Answer) -> str:
+    """A plan as letters, or the status when there is none."""
+    if answer.status is not Status.PLAN:
+        return answer.status.value
+    return " ".join(SHORT[a] for a in answer.actions) or "(empty)"

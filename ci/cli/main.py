@@ -1,0 +1,58 @@
+"""The ``overtake`` command: parse, call the layer below, print. One module per command group.
+
+Every error reaches the user as one line on stderr with its exit code, declared once in
+``spec.errors.ExitCode``: 0 plan / valid, 1 no plan / invalid (simulate: a run failed),
+2 bad input, 3 search incomplete, 4 a tool is missing, 5 an engine failed, 6 engines
+disagree, 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import click
+
+from ci.cli import library, planning, simulation
+from spec.errors import ExitCode, SuiteError
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="overtake-mc")
+def cli() -> None:
+    """Plan overtaking manoeuvres by model checking, with cross-validated engines."""
+
+
+for command in (*planning.COMMANDS, *library.COMMANDS, *simulation.COMMANDS):
+    cli.add_command(command)
+
+
+def main() -> None:
+    """Entry point: run the CLI, turning every suite error into one line and its exit code."""
+    try:
+        cli.main(standalone_mode=False)
+    except click.exceptions.Exit as done:
+        sys.exit(done.exit_code)
+    except click.UsageError as error:
+        command = error.ctx.command_path if error.ctx else "overtake"
+        click.echo(f"overtake: error: {error.format_message()} (see `{command} --help`)", err=True)
+        sys.exit(ExitCode.BAD_INPUT)
+    except click.ClickException as error:
+        click.echo(f"overtake: error: {error.format_message()}", err=True)
+        sys.exit(error.exit_code)
+    except (click.exceptions.Abort, KeyboardInterrupt):
+        click.echo("overtake: interrupted", err=True)
+        sys.exit(ExitCode.INTERRUPTED)
+    except SuiteError as error:
+        click.echo(f"overtake: error: {error}", err=True)
+        sys.exit(error.exit_code)
+    except Exception as error:
+        if os.environ.get("OVERTAKE_DEBUG"):
+            raise
+        click.echo(f"overtake: internal error: {type(error).__name__}: {error} (set OVERTAKE_DEBUG=1 for details)",
+                   err=True)
+        sys.exit(ExitCode.ENGINE_FAILED)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,213 @@
+"""Commands about one scenario: plan, validate, promela, explain, shrink."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+from rich.table import Table
+
+from ci.cli.common import (
+    MODEL,
+    abbrev,
+    cell_option,
+    horizon_option,
+    load,
+    out,
+    print_json,
+    print_states,
+    strategy_option,
+)
+from oracle.conform import disagreements
+from oracle.planner import plan as run_plan
+from oracle.planner import validate_pipeline
+from oracle.shrink import engines_disagree, to_toml
+from oracle.shrink import shrink as shrink_scenario
+from spec.actions import parse_action
+from spec.answers import Answer, Limits, Strategy, state_to_json
+from spec.engines import check_strategy, get_engine, load_engines
+from spec.errors import ActionError, ExitCode, OptionError
+from spec.files import scenario_to_dict
+from spec.models import ModelChoice, ModelKind, models_for
+from spec.scenario import Scenario, problem_for
+
+
+@click.command()
+@click.argument("file")
+@strategy_option()
+@click.option("--model", type=MODEL, default=None, help="Default: the scenario's (auto).")
+@horizon_option()
+@cell_option()
+@click.option("--engine", default="interpreter", show_default=True,
+              help="An engine name (see `overtake engines`), or all: every engine that answers the strategy.")
+@click.option("--max-states", type=click.IntRange(min=1), default=Limits().max_states, show_default=True,
+              help="Stored states before the search gives up (answer: incomplete).")
+@click.option("--timeout", type=click.FloatRange(min=0), default=None, help="Seconds before giving up (incomplete).")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
+def plan(file: str, strategy: Strategy, model: str | None, horizon: int | None, cell_m: float | None, engine: str,
+         max_states: int, timeout: float | None, as_json: bool) -> None:
+    """Plan an overtake for a scenario FILE (.json/.toml) or a built-in scenario name."""
+    scenario = load(file, cell_m)
+    choice, limits = ModelChoice(model) if model else None, Limits(max_states, timeout)
+    if engine == "all":
+        sys.exit(_plan_all(scenario, strategy, choice, horizon, limits, as_json))
+    answer = run_plan(scenario, strategy, choice, horizon, engine, limits)
+    if as_json:
+        print_json(answer.to_json())
+    else:
+        _print_answer(scenario, answer)
+    sys.exit(answer.status.exit_code)
+
+
+def _plan_all(scenario: Scenario, strategy: Strategy, model: ModelChoice | None, horizon: int | None, limits: Limits,
+              as_json: bool) -> int:
+    """Run every engine that answers ``strategy``, side by side, and say whether they agree."""
+    engines = [e for e in load_engines().values() if strategy in e.strategies]
+    answers = [run_plan(scenario, strategy, model, horizon, e, limits) for e in engines]
+    problems = disagreements(answers)
+    if as_json:
+        print_json({"strategy": strategy.value, "answers": [a.to_json() for a in answers], "agree": not problems,
+                    "disagreements": problems})
+    else:
+        table = Table(title=f"every engine, strategy {strategy.value}")
+        for col in ("engine", "status", "model", "length", "plan", "ms"):
+            table.add_column(col, overflow="fold")
+        for a in answers:
+            table.add_row(a.engine, a.status.value, a.model.value if a.model else "-", str(len(a.actions)),
+                          abbrev(a), f"{a.elapsed_ms:.1f}")
+        out.print(table)
+        out.print(f"agreement: all {len(answers)} engines agree" if not problems
+                  else "DISAGREEMENT: " + "; ".join(problems))
+    return ExitCode.DISAGREE if problems else answers[0].status.exit_code
+
+
+def _print_answer(scenario: Scenario, answer: Answer) -> None:
+    model = answer.model.value if answer.model else "-"
+    out.print(f"{answer.status.value} ({answer.engine}, {answer.strategy.value}, model {model}, "
+              f"{answer.states_explored} states, {answer.elapsed_ms:.2f} ms)")
+    if answer.detail:
+        out.print(answer.detail)
+    if answer.actions or answer.states:
+        out.print("actions: " + (", ".join(a.value for a in answer.actions) or "(none: the goal already holds)"))
+        print_states(scenario, answer.actions, answer.states)
+
+
+@click.command(name="validate")
+@click.argument("file")
+@click.option("--actions", "actions_text", required=True, help="Comma-separated actions, e.g. accelerate,drive.")
+@click.option("--model", type=MODEL, default=None, help="Default: the scenario's (auto: any model).")
+@horizon_option()
+@cell_option()
+@click.option("--json", "as_json", is_flag=True)
+def validate_cmd(file: str, actions_text: str, model: str | None, horizon: int | None, cell_m: float | None,
+                 as_json: bool) -> None:
+    """Check that an action list is a plan for FILE: enabled, collision-free, goal first at the end."""
+    scenario = load(file, cell_m)
+    names = actions_text.split(",")
+    if any(not name.strip() for name in names) and actions_text.strip():
+        raise ActionError(f"--actions={actions_text!r}: an empty action between commas")
+    actions = tuple(parse_action(a) for a in names if a.strip())
+    checked = validate_pipeline(scenario, actions, ModelChoice(model) if model else None, horizon)
+    verdict = checked.verdict
+    if as_json:
+        print_json({"valid": verdict.valid, "reason": checked.reason, "model": checked.model.value,
+                    "states": [state_to_json(s) for s in verdict.states]})
+    else:
+        out.print(f"{'valid' if verdict.valid else 'invalid'} (model {checked.model.value}): {checked.reason}")
+        print_states(scenario, actions[: len(verdict.states) - 1], verdict.states)
+    sys.exit(ExitCode.OK if verdict.valid else ExitCode.NO)
+
+
+@click.command()
+@click.argument("file")
+@click.option("--model", type=click.Choice([m.value for m in ModelKind]), default=None,
+              help="Default: the model `plan` would use first (the scenario's, or final for auto).")
+@horizon_option()
+@cell_option()
+@click.option("--out", type=click.Path(dir_okay=False, writable=True), default=None,
+              help="Write the model here instead of printing it.")
+def promela(file: str, model: str | None, horizon: int | None, cell_m: float | None, out: str | None) -> None:
+    """Write the Promela model of a scenario, runnable by hand: spin -a; gcc -DSAFETY -o pan pan.c; ./pan -E."""
+    from promela.render import render_for  # Spin's renderer is only loaded when asked for
+
+    scenario = load(file, cell_m)
+    kind = ModelKind(model) if model else models_for(scenario.model)[0]
+    text = render_for(problem_for(scenario, kind, horizon))
+    if out:
+        Path(out).write_text(text)
+        click.echo(f"wrote {out} ({kind.value} model)")
+    else:
+        click.echo(text, nl=False)
+
+
+@click.command()
+@click.argument("file")
+@cell_option()
+@click.option("--json", "as_json", is_flag=True)
+def explain(file: str, cell_m: float | None, as_json: bool) -> None:
+    """Name a minimal set of vehicles that makes the overtake impossible (Z3 unsat core, minimised)."""
+    from oracle.explain import explain as explain_scenario  # loads Z3 only when asked for
+
+    scenario = load(file, cell_m)
+    result = explain_scenario(scenario)
+    if as_json:
+        print_json({
+            "has_plan": result.has_plan,
+            "blocking": [{"lane": lane.value, "index": i, "name": result.name((lane, i))}
+                         for lane, i in result.blocking],
+            "reduced": scenario_to_dict(result.reduced) if result.reduced else None,
+            "removals": [{"removed": result.name(v), "status": a.status.value,
+                          "model": a.model.value if a.model else None, "plan": [x.value for x in a.actions]}
+                         for v, a in result.removals],
+        })
+        return
+    if result.has_plan:
+        out.print(f"{file} has a plan: nothing to explain (`overtake plan {file}` shows it). "
+                  "Which vehicle forced each wait or brake of a plan is not explained yet.")
+        return
+    if not result.blocking:
+        out.print(f"no plan for {file}, and no vehicle is to blame: the horizon of {scenario.horizon} is too short.")
+        return
+    out.print(f"no plan for {file}. These {len(result.blocking)} vehicle(s) alone make the overtake impossible, "
+              "and removing any one of them gives a plan:")
+    for vehicle, answer in result.removals:
+        plan_text = ", ".join(a.value for a in answer.actions) or "(the empty plan)"
+        out.print(f"  {result.name(vehicle)}: without it, {answer.model.value if answer.model else '-'} model: "
+                  f"{plan_text}")
+
+
+@click.command()
+@click.argument("file")
+@click.option("--engine", "engine_names", multiple=True, required=True,
+              help="Two or more engines to compare (repeat the option).")
+@strategy_option()
+@cell_option()
+@click.option("--out", type=click.Path(dir_okay=False, writable=True), default=None,
+              help="Write the reproducer here (TOML) instead of printing it.")
+def shrink(file: str, engine_names: tuple[str, ...], strategy: Strategy, cell_m: float | None,
+           out: str | None) -> None:
+    """Shrink a scenario on which engines disagree to a minimal reproducer."""
+    scenario = load(file, cell_m)
+    engines = [get_engine(n) for n in engine_names]
+    if len(engines) < 2:
+        raise OptionError("--engine", engine_names, "name at least two engines to compare")
+    for engine in engines:
+        check_strategy(engine, strategy)
+    fails = engines_disagree(engines, strategy)
+    if not fails(scenario):
+        click.echo(f"engines {', '.join(engine_names)} agree on {file}: nothing to shrink")
+        sys.exit(ExitCode.OK)
+    small, checks = shrink_scenario(scenario, fails)
+    answers = [run_plan(small, strategy, engine=e) for e in engines]
+    why = "; ".join(disagreements(answers))
+    text = to_toml(small, f"minimal reproducer from {file} ({checks} checks), strategy {strategy.value}:\n{why}")
+    if out:
+        Path(out).write_text(text)
+        click.echo(f"wrote {out}: {why}")
+    else:
+        click.echo(text, nl=False)
+    sys.exit(ExitCode.DISAGREE)
+
+
+COMMANDS = (plan, validate_cmd, promela, explain, shrink)

@@ -1,0 +1,75 @@
+"""The closed-loop command: drive the PyBullet simulator, a campaign of seeds, resumable."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from ci.cli.common import err, out, print_json, strategy_option
+from ci.executors import ExecutorChoice, ExecutorKind, check_executor
+from ci.progress import km_progress
+from spec.answers import Strategy
+from spec.errors import ExitCode
+from spec.physical import LOOP
+
+
+@click.command()
+@click.option("--km", type=click.FloatRange(min=0.01), default=5.0, show_default=True,
+              help="Kilometres per run (with --until-failure: the cap).")
+@click.option("--until-failure", is_flag=True, help="Stop each run at its first failure (capped by --km).")
+@click.option("--seed", type=int, default=1, show_default=True, help="Run i uses seed + i.")
+@click.option("--engine", default="interpreter", show_default=True)
+@strategy_option(choices=(Strategy.SENSIBLE, Strategy.SHORTEST))
+@click.option("--cell-m", "cell_m", type=float, default=21.0, show_default=True,
+              help="The planner's cell length in metres (21, 10.5, 7, 5.25); the world stays the paper's.")
+@click.option("--runs", type=click.IntRange(min=1), default=1, show_default=True)
+@click.option("--workers", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Local processes (with --executor dask and no --scheduler: the local cluster's workers).")
+@click.option("--executor", "executor_kind", type=click.Choice([k.value for k in ExecutorKind]),
+              default=ExecutorKind.PROCESSES.value, show_default=True,
+              help="Where runs go: local processes or a dask.distributed cluster.")
+@click.option("--scheduler", default=None, help="With --executor dask: a running scheduler's address.")
+@click.option("--out", "out_dir", default="out/sim", show_default=True,
+              help="Runs (runs.jsonl, resumable), traces (JSON lines) and plots.")
+@click.option("--fresh", is_flag=True, help="Forget the runs already recorded in --out instead of resuming.")
+@click.option("--step-tolerance", type=click.FloatRange(min=0.0, min_open=True), default=LOOP.step_tolerance_cells,
+              show_default=True, help="Cells one action may add to a vehicle's deviation from the prediction.")
+@click.option("--plan-tolerance", type=click.FloatRange(min=0.0, min_open=True), default=LOOP.plan_tolerance_cells,
+              show_default=True, help="Cells a vehicle may deviate over a plan.")
+@click.option("--paper-replanning", is_flag=True,
+              help="Re-plan only as the paper did (not when a deviation exceeds the tolerance).")
+@click.option("--json", "as_json", is_flag=True)
+def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: Strategy, cell_m: float, runs: int,
+             workers: int, executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool,
+             step_tolerance: float, plan_tolerance: float, paper_replanning: bool, as_json: bool) -> None:
+    """Drive the PyBullet simulator closed-loop and check every action against the model's prediction."""
+    from ci.simulate import RUNS_FILE
+    from ci.simulate import simulate as run_campaign
+    from sim.parts import DriveConfig
+    from sim.tables import deviations_table, paper_table, runs_table, totals_table
+
+    executor = ExecutorChoice(ExecutorKind(executor_kind), workers, scheduler)
+    check_executor(executor)
+    campaign = DriveConfig(km, until_failure, engine, strategy, not paper_replanning, step_tolerance, plan_tolerance,
+                           cell_m)
+    campaign.parts()  # the engine exists and answers the strategy: bad input before any run starts
+    limit = f"{km:g} km" + (" or until failure" if until_failure else "")
+    err.print(f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; engine {engine}, {strategy.value}, "
+              f"{campaign.grid.describe()}; on {executor.describe()}; results in {Path(out_dir) / RUNS_FILE}")
+    resumed = f"already in {RUNS_FILE} (resumed; --fresh runs it again)"
+    with km_progress(err, runs, km, resumed) as bar:
+        results = run_campaign(campaign, list(range(seed, seed + runs)), out_dir, executor, bar.done, fresh,
+                               bar.moved)
+    if as_json:
+        print_json([r.to_json() for r in results])
+    else:
+        for table in (runs_table(results), totals_table(results), deviations_table(results)):
+            out.print(table)
+        if until_failure:
+            out.print(paper_table(results, km))
+    sys.exit(ExitCode.NO if any(r.failures for r in results) else ExitCode.OK)
+
+
+COMMANDS = (simulate,)

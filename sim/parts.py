@@ -1,0 +1,112 @@
+"""What a simulator is assembled from: the parts passed in, and what a drive is asked to do.
+
+Like PyBullet's minitaur environments, a ``Simulator`` builds nothing of its own choosing:
+it receives factories for its scene, its car, its traffic model and its sensor model (each
+factory is handed the simulator's own scene and seeded generator), the planner (engine,
+strategy, grid) and observers. ``Parts()`` is the paper's assembly. Traffic and sensor
+models are registered once, by name, for campaigns and the command line.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from oracle.planner import plan
+from sim.discretiser import discretise
+from sim.observers import Observer
+from sim.scene import Scene
+from sim.sensors import RaySensor, Reading, SensorModel
+from sim.traffic import PaperTraffic, TrafficModel
+from sim.vehicle import WheeledCar
+from spec.answers import Answer, Strategy
+from spec.engines import Engine, check_strategy, get_engine, parse_strategy
+from spec.errors import OptionError
+from spec.grid import PAPER_GRID, Grid, grid_for
+from spec.lanes import Lane
+from spec.physical import LOOP
+from spec.scenario import Scenario
+
+TrafficFactory = Callable[[Scene, np.random.Generator, float], TrafficModel]
+SensorFactory = Callable[[Scene, np.random.Generator], SensorModel]
+
+#: The traffic and sensor models a drive can be assembled with, by name.
+TRAFFIC_MODELS: dict[str, TrafficFactory] = {"paper": PaperTraffic}
+SENSOR_MODELS: dict[str, SensorFactory] = {"exact": RaySensor}
+
+
+def _check_name(option: str, name: str, known: dict[str, Any]) -> None:
+    if name not in known:
+        raise OptionError(option, name, f"unknown model (known: {', '.join(known)})")
+
+
+@dataclass(frozen=True)
+class Planner:
+    """The planner a simulator consults: an engine, a strategy and the grid the snapshot is cut into."""
+
+    engine: Engine
+    strategy: Strategy = Strategy.SENSIBLE
+    grid: Grid = PAPER_GRID
+
+    def __post_init__(self) -> None:
+        check_strategy(self.engine, self.strategy)
+
+    def scenario(self, readings: tuple[Reading, ...], lane: Lane) -> Scenario:
+        """The snapshot as a scenario on this planner's grid (ScenarioError when it is inconsistent)."""
+        return discretise(readings, lane, self.grid)
+
+    def plan(self, scenario: Scenario) -> Answer:
+        return plan(scenario, self.strategy, engine=self.engine)
+
+
+@dataclass(frozen=True)
+class Parts:
+    """Factories for every part of a simulator; the defaults are the paper's world."""
+
+    planner: Planner
+    scene: Callable[[], Scene] = Scene
+    car: Callable[[Scene, float, float], WheeledCar] = WheeledCar
+    traffic: TrafficFactory = PaperTraffic
+    sensor: SensorFactory = RaySensor
+    observers: tuple[Observer, ...] = field(default=())
+
+
+@dataclass(frozen=True, slots=True)
+class DriveConfig:
+    """What every drive of a campaign shares (the seeds differ): a typed value, written whole with each record."""
+
+    km: float
+    until_failure: bool = False
+    engine: str = "interpreter"
+    strategy: Strategy = Strategy.SENSIBLE
+    replan_on_violation: bool = True
+    step_tolerance_cells: float = LOOP.step_tolerance_cells
+    plan_tolerance_cells: float = LOOP.plan_tolerance_cells
+    cell_m: float = PAPER_GRID.cell
+    traffic: str = "paper"
+    sensor: str = "exact"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "strategy", parse_strategy(self.strategy))
+        _check_name("--traffic", self.traffic, TRAFFIC_MODELS)
+        _check_name("--sensor", self.sensor, SENSOR_MODELS)
+        grid_for(self.cell_m)
+
+    @property
+    def grid(self) -> Grid:
+        return grid_for(self.cell_m)
+
+    def parts(self, observers: tuple[Observer, ...] = ()) -> Parts:
+        """The assembly this configuration names."""
+        planner = Planner(get_engine(self.engine), self.strategy, self.grid)
+        return Parts(planner, traffic=TRAFFIC_MODELS[self.traffic], sensor=SENSOR_MODELS[self.sensor],
+                     observers=observers)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"km": self.km, "until_failure": self.until_failure, "engine": self.engine,
+                "strategy": self.strategy.value, "replan_on_violation": self.replan_on_violation,
+                "step_tolerance_cells": self.step_tolerance_cells, "plan_tolerance_cells": self.plan_tolerance_cells,
+                "cell_m": self.cell_m, "traffic": self.traffic, "sensor": self.sensor}

@@ -1,0 +1,91 @@
+"""The engine registry: every engine is registered once, with the strategies it answers.
+
+An engine is a solver of ``Problem``s. The engines live in the layers above (``oracle/``,
+``promela/``), which this module never imports: each is declared as an entry point of the
+group ``overtake_mc.engines`` in ``pyproject.toml`` and registers itself when that entry point
+is loaded, so the registry is complete without a lower layer naming a higher one. Tests are
+parametrised over ``load_engines()`` and fail when an engine skips a strategy it claims.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from importlib.metadata import entry_points
+
+from spec.answers import Limits, SearchResult, Strategy
+from spec.errors import OptionError
+from spec.scenario import Problem
+
+Solver = Callable[[Problem, Strategy, Limits], SearchResult]
+ENTRY_POINTS = "overtake_mc.engines"
+
+
+@dataclass(frozen=True, slots=True)
+class Engine:
+    """A registered engine: its name, the strategies it answers, and how it solves a problem."""
+
+    name: str
+    strategies: tuple[Strategy, ...]
+    solve: Solver
+    description: str
+    #: Given a problem with no plan within the horizon, proves (NO_PLAN) or not that none exists at all.
+    prove_beyond: Callable[[Problem], SearchResult] | None = None
+
+
+ENGINES: dict[str, Engine] = {}
+
+
+def register(engine: Engine) -> Engine:
+    """Add an engine to the registry (once)."""
+    if engine.name in ENGINES:
+        raise ValueError(f"engine {engine.name!r} registered twice")
+    ENGINES[engine.name] = engine
+    return engine
+
+
+def _declared() -> dict[str, object]:
+    """The entry points that declare engines, by name."""
+    return {ep.name: ep for ep in entry_points(group=ENTRY_POINTS)}
+
+
+def load_engines() -> dict[str, Engine]:
+    """Load every declared engine, so that the registry is complete, and return it."""
+    for name, ep in _declared().items():
+        if name not in ENGINES:
+            ep.load()  # type: ignore[attr-defined]
+    return ENGINES
+
+
+def engine_names() -> list[str]:
+    """Every engine's name, registered or declared, without loading any."""
+    return list(dict.fromkeys([*ENGINES, *_declared()]))
+
+
+def get_engine(name: str) -> Engine:
+    """The engine called ``name``, loaded on first use; an unknown name is bad input."""
+    if name not in ENGINES:
+        ep = _declared().get(name)
+        if ep is not None:
+            ep.load()  # type: ignore[attr-defined]
+    if name not in ENGINES:
+        raise OptionError("--engine", name, f"unknown engine (known: {', '.join(engine_names())})")
+    return ENGINES[name]
+
+
+def parse_strategy(text: str | Strategy) -> Strategy:
+    """The strategy called ``text``; an unknown one is bad input, never a default."""
+    if isinstance(text, Strategy):
+        return text
+    try:
+        return Strategy(text)
+    except ValueError:
+        raise OptionError("--strategy", text, f"unknown strategy (known: {', '.join(s.value for s in Strategy)})") \
+            from None
+
+
+def check_strategy(engine: Engine, strategy: Strategy) -> None:
+    """Raise bad input when ``engine`` does not answer ``strategy``."""
+    if strategy not in engine.strategies:
+        answers = ", ".join(s.value for s in engine.strategies)
+        raise OptionError("--strategy", strategy.value, f"engine {engine.name} answers {answers} only")

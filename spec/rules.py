@@ -1,0 +1,86 @@
+"""The rules of the transition system, each written once: guards, the lane encoding, collisions, the goal.
+
+The interpreter evaluates these functions on states; every other engine translates the same
+declarations into its own form (offset sets and bitsets in ``oracle.abstraction``, Z3 terms in
+``oracle.bmc``, Promela in ``promela.render``) and never restates a rule. Each span is a closed
+interval of cells ``(lo, hi)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import cache
+
+from spec.actions import ACTION_RULES, Action
+from spec.grid import Grid
+from spec.lanes import Lane
+from spec.models import GoalRule, ModelRules
+from spec.state import Collision, State
+
+Span = tuple[int, int]
+
+
+def disabled_reason(state: State, action: Action, rules: ModelRules) -> str | None:
+    """Why ``action`` is not enabled in ``state`` (its lane guard, the lane-change limit), or None when it is."""
+    rule = ACTION_RULES[action]
+    if rule.from_lane is not None and state.lane is not rule.from_lane:
+        return f"{action.value} needs the AV in the {rule.from_lane.value} lane"
+    if rule.changes_lane and state.lane_changes >= rules.max_lane_changes:
+        return f"{action.value}: the {rules.kind.value} model allows at most {rules.max_lane_changes} lane changes"
+    return None
+
+
+def lane_after(start: Lane, lane_changes: int) -> Lane:
+    """The lane encoding: after ``lane_changes`` lane changes the AV is in its start lane iff the count is even."""
+    return start if lane_changes % 2 == 0 else start.other
+
+
+@cache
+def collision_span(lane: Lane, rules: ModelRules, grid: Grid) -> Span:
+    """The cells at which a vehicle in ``lane`` collides with the AV when the AV is in that lane.
+
+    A left-lane vehicle collides in the AV's own cell; an oncoming one within the model's
+    danger radius (a distance, in whole cells of the grid) of it.
+    """
+    radius = grid.cells(rules.danger_m, f"the {rules.kind.value} model's danger zone") if lane is Lane.RIGHT else 0
+    return grid.av_cell - radius, grid.av_cell + radius
+
+
+def collision_in(state: State, rules: ModelRules, grid: Grid, tick: int) -> Collision | None:
+    """The collision in ``state``, if any: a vehicle of the AV's lane inside that lane's collision span."""
+    lo, hi = collision_span(state.lane, rules, grid)
+    cells = state.left_lane if state.lane is Lane.LEFT else state.right_lane
+    for i, cell in enumerate(cells):
+        if lo <= cell <= hi:
+            return Collision(state, state.lane, i, cell, tick)
+    return None
+
+
+def passed_line(grid: Grid) -> int:
+    """"Oncoming passed": an oncoming vehicle has passed the AV when its cell is at most this one."""
+    return grid.av_cell
+
+
+def behind_line(grid: Grid) -> int:
+    """"Target behind": a target is behind the AV when its cell is at most this one (below the AV's cell)."""
+    return grid.av_cell - 1
+
+
+@cache
+def nearest_span(goal: GoalRule, grid: Grid) -> Span | None:
+    """Where the nearest target must be for ``goal`` (ahead of the AV, within its distance), or None: anywhere."""
+    if goal.nearest_target_m is None:
+        return None
+    return grid.av_cell + 1, grid.av_cell + grid.cells(goal.nearest_target_m, f"the {goal.kind.value} goal's gap")
+
+
+def goal_holds(state: State, goal: GoalRule, targets: Sequence[int], grid: Grid) -> bool:
+    """Whether ``state`` meets ``goal``, field by field; ``targets`` are indices into ``state.left_lane``."""
+    if goal.av_lane is not None and state.lane is not goal.av_lane:
+        return False
+    if goal.targets_behind and any(state.left_lane[i] > behind_line(grid) for i in targets):
+        return False
+    span = nearest_span(goal, grid)
+    if span is not None and not (targets and span[0] <= state.left_lane[targets[0]] <= span[1]):
+        return False
+    return not (goal.oncoming_passed and any(cell > passed_line(grid) for cell in state.right_lane))

@@ -1,0 +1,25 @@
+"""A same-seed drive is the drive recorded before the simulator was assembled from parts (commit ce09fa1).
+
+The golden files were written by that code: ``run_drive(3, 2.0, out_dir=...)``'s summary (less its
+wall-clock fields) and its trace. The default assembly must reproduce both exactly: the same
+kilometres, overtakes, plans, deviations and every traced number.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from sim.parts import DriveConfig
+from sim.simulator import run_drive
+
+GOLDEN = Path(__file__).parent / "golden"
+WALL_CLOCK = ("wall_s", "plan_ms", "plan_latency_ms")
+
+
+def test_the_default_assembly_drives_the_pinned_drive_exactly(tmp_path: Path) -> None:
+    summary = run_drive(3, DriveConfig(2.0), str(tmp_path)).to_json()
+    for key in WALL_CLOCK:
+        summary.pop(key)
+    assert summary == json.loads((GOLDEN / "drive-seed3-2km.json").read_text())
+    assert (tmp_path / "trace-seed3.jsonl").read_text() == (GOLDEN / "drive-seed3-2km-trace.jsonl").read_text()
