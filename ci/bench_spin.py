@@ -35,7 +35,7 @@ def main() -> None:
     console = Console(width=120)
     scenarios = library_and_generated(args.seed, args.count)
     console.print(f"seed {args.seed}; {len(scenarios)} scenarios (library + generated); "
-                  f"strategy {args.strategy}; {runner.tool_versions()}; {machine()}")
+                  f"strategy {strategy.value}; {runner.tool_versions()}; {machine()}")
     register(COMPILING)
     spin = get_engine("spin")
     for scenario in scenarios:  # warm the cache: every verifier shape the pipeline will need

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.lanes import Lane
-from spec.rules import behind_line, collision_span, lane_after, nearest_span, passed_line
+from spec.rules import behind_line, collision_span, lane_after, left_path, nearest_span, passed_line
 from spec.scenario import Problem
 
 Interval = tuple[int, int]
@@ -48,6 +48,10 @@ class Offsets:
 
     def left_collides(self, l_off: int) -> bool:
         return l_off in self.left_hits
+
+    def left_collides_during(self, l_start: int, shift: int) -> bool:
+        """A collision at any offset the left lane passes through while it shifts from ``l_start``."""
+        return any(l_start + j in self.left_hits for j in left_path(shift))
 
     def right_collides(self, o: int) -> bool:
         return any(lo <= o <= hi for lo, hi in self.right_hits)

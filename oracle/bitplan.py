@@ -51,14 +51,14 @@ class BitSpace:
         self.row_bits = (1 << width) - 1
         self.rep = ((1 << (rows * width)) - 1) // self.row_bits  # bit 0 of every row
         self.lanes = form.lanes
-        left_free = self._rows(lambda off: not form.left_collides(off))
+        left_safe = {s: self._left_safe(s) for s in {m.shift for moves in form.moves for m in moves}}
         right_safe = {t: self._cols([o >= t and not form.right_collides_during(o - t, t) for o in range(width)])
                       for t in {m.ticks for moves in form.moves for m in moves}}
         self.moves: list[list[_Flat]] = []
         for moves in form.moves:
             flat = []
             for move in moves:
-                safe = left_free if form.lanes[move.lc_dst] is Lane.LEFT else right_safe[move.ticks]
+                safe = left_safe[move.shift] if form.lanes[move.lc_dst] is Lane.LEFT else right_safe[move.ticks]
                 flat.append(_Flat(move, move.shift * width + move.ticks, safe, self._smear(move)))
             self.moves.append(flat)
         self.over = self._cols([o > self.sat for o in range(width)])
@@ -73,6 +73,10 @@ class BitSpace:
             if pred(self.l_low + r):
                 mask |= self.row_bits << (r * self.width)
         return mask
+
+    def _left_safe(self, shift: int) -> int:
+        """The rows a shift of ``shift`` may land in without passing a left-lane vehicle through the AV."""
+        return self._rows(lambda end: not self.form.left_collides_during(end - shift, shift))
 
     def _cols(self, cols: list[bool]) -> int:
         """All positions whose column is marked in ``cols``."""

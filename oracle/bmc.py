@@ -26,7 +26,7 @@ from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.answers import Limits, SearchResult, Status, Strategy
 from spec.engines import Engine, register
 from spec.lanes import Lane
-from spec.rules import behind_line, collision_span, nearest_span, passed_line
+from spec.rules import behind_line, collision_span, left_path, nearest_span, passed_line
 from spec.scenario import Problem
 from spec.state import State
 
@@ -63,7 +63,7 @@ class Encoding:
         self.right_hits = {t: [(lo - t, hi) for lo, hi in self.form.right_hits] for t in {*self.ticks.values(), 0}}
         start = self.new_step()
         self.initial = z3.And(start.right == (scenario.lane is Lane.RIGHT), start.lc == 0, start.l == 0, start.o == 0,
-                              self.safe(start.right, start.l, start.o, 0))
+                              self.safe(start.right, start.l, 0, start.o, 0))
 
     def _here(self, lane: Lane, index: int) -> z3.BoolRef | bool:
         return self.present.get((lane, index), True)
@@ -83,21 +83,24 @@ class Encoding:
                       s.o >= min(ticks) * k, s.o <= max(ticks) * k,
                       s.l >= min(shifts) * k, s.l <= max(shifts) * k)
 
-    def safe(self, right: z3.BoolRef, l_off: z3.ArithRef, o_start: z3.ArithRef, ticks: int) -> z3.BoolRef:
-        """No collision after the effect and after each of ``ticks`` oncoming ticks."""
+    def safe(self, right: z3.BoolRef, l_start: z3.ArithRef, shift: int, o_start: z3.ArithRef,
+             ticks: int) -> z3.BoolRef:
+        """No collision while the left lane shifts from ``l_start`` by ``shift`` (one cell at a time), nor after
+        each of ``ticks`` oncoming ticks from ``o_start``."""
         if self.present:
-            return self._safe_per_vehicle(right, l_off, o_start, ticks)
-        left_ok = [l_off != v for v in self.left_hits]
+            return self._safe_per_vehicle(right, l_start, shift, o_start, ticks)
+        bad = sorted({v - j for v in self.left_hits for j in left_path(shift)})
+        left_ok = [l_start != v for v in bad]
         right_ok = [z3.Or(o_start < lo, o_start > hi) for lo, hi in self.right_hits[ticks]]
         return z3.If(right, z3.And(*right_ok, True), z3.And(*left_ok, True))
 
-    def _safe_per_vehicle(self, right: z3.BoolRef, l_off: z3.ArithRef, o_start: z3.ArithRef,
+    def _safe_per_vehicle(self, right: z3.BoolRef, l_start: z3.ArithRef, shift: int, o_start: z3.ArithRef,
                           ticks: int) -> z3.BoolRef:
         """The same condition written per vehicle, each guarded by its presence literal (explanations)."""
         scenario, rules = self.problem.scenario, self.problem.rules
         (l_lo, l_hi), (r_lo, r_hi) = (collision_span(lane, rules, self.grid) for lane in (Lane.LEFT, Lane.RIGHT))
-        left_ok = [z3.Implies(self._here(Lane.LEFT, i), z3.Or(c + l_off < l_lo, c + l_off > l_hi))
-                   for i, c in enumerate(scenario.left_lane)]
+        left_ok = [z3.Implies(self._here(Lane.LEFT, i), z3.Or(c + l_start + j < l_lo, c + l_start + j > l_hi))
+                   for i, c in enumerate(scenario.left_lane) for j in left_path(shift)]
         right_ok = [z3.Implies(self._here(Lane.RIGHT, i), z3.Or(c - (o_start + j) > r_hi, c - (o_start + j) < r_lo))
                     for i, c in enumerate(scenario.right_lane) for j in range(ticks + 1)]
         return z3.If(right, z3.And(*right_ok, True), z3.And(*left_ok, True))
@@ -105,7 +108,8 @@ class Encoding:
     def transition(self, a: Step, action_var: z3.ArithRef, b: Step) -> z3.BoolRef:
         """One decision step from ``a`` to ``b`` by the action numbered ``action_var`` (ACTION_ORDER)."""
         rules, options = self.problem.rules, []
-        safe = {t: self.safe(b.right, b.l, a.o, t) for t in set(self.ticks.values())}
+        effects = {(self.grid.left_shift(action), self.ticks[action]) for action in ACTION_ORDER}
+        safe = {(s, t): self.safe(b.right, a.l, s, a.o, t) for s, t in effects}
         for index, action in enumerate(ACTION_ORDER):
             rule = ACTION_RULES[action]
             guard = [a.lc < rules.max_lane_changes] if rule.changes_lane else []
@@ -114,7 +118,8 @@ class Encoding:
             lane_after = (rule.to_lane is Lane.RIGHT) if rule.to_lane is not None else a.right
             options.append(z3.And(action_var == index, *guard, b.right == lane_after,
                                   b.lc == a.lc + int(rule.changes_lane), b.l == a.l + self.grid.left_shift(action),
-                                  b.o == a.o + self.ticks[action], safe[self.ticks[action]]))
+                                  b.o == a.o + self.ticks[action],
+                                  safe[(self.grid.left_shift(action), self.ticks[action])]))
         return z3.Or(*options)
 
     def goal(self, s: Step) -> z3.BoolRef:

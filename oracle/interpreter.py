@@ -14,7 +14,7 @@ from spec.actions import ACTION_RULES, Action
 from spec.errors import EngineError
 from spec.grid import Grid
 from spec.models import ModelRules
-from spec.rules import collision_in, disabled_reason, goal_holds
+from spec.rules import collision_in, disabled_reason, goal_holds, left_path
 from spec.scenario import Problem
 from spec.state import Collision, State
 
@@ -25,20 +25,20 @@ def enabled_actions(state: State, rules: ModelRules) -> list[Action]:
 
 
 def step(state: State, action: Action, rules: ModelRules, grid: Grid) -> State | Collision:
-    """One decision step: effect, collision check, oncoming ticks each followed by a check."""
+    """One decision step: the effect (the left lane moved one cell at a time, each followed by a collision check),
+    then the oncoming ticks, each followed by a check."""
     reason = disabled_reason(state, action, rules)
     if reason is not None:
         raise ValueError(reason)
     rule = ACTION_RULES[action]
-    shift = grid.left_shift(action)
-    after = replace(
-        state,
-        lane=rule.to_lane or state.lane,
-        left_lane=tuple(cell + shift for cell in state.left_lane),
-        lane_changes=state.lane_changes + int(rule.changes_lane),
-        steps=state.steps + 1,
-    )
-    hit = collision_in(after, rules, grid, 0)
+    base = replace(state, lane=rule.to_lane or state.lane, lane_changes=state.lane_changes + int(rule.changes_lane),
+                   steps=state.steps + 1)
+    after, hit = base, None
+    for moved in left_path(grid.left_shift(action)):
+        after = replace(base, left_lane=tuple(cell + moved for cell in state.left_lane))
+        hit = collision_in(after, rules, grid, 0)
+        if hit is not None:
+            return hit
     for tick in range(1, grid.ticks(action) + 1):
         if hit is not None:
             return hit

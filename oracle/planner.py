@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from oracle.interpreter import Validation, validate
 from spec.actions import Action
 from spec.answers import Answer, Limits, SearchResult, Status, Strategy
-from spec.engines import Engine, check_strategy, get_engine
+from spec.engines import Engine, check_strategy, get_engine, parse_strategy
 from spec.errors import EngineError
 from spec.models import ModelChoice, ModelKind, models_for
 from spec.scenario import Problem, Scenario, problem_for
@@ -18,7 +18,7 @@ from spec.state import State
 
 def plan(
     scenario: Scenario,
-    strategy: Strategy = Strategy.SENSIBLE,
+    strategy: Strategy | str = Strategy.SENSIBLE,
     model: ModelChoice | None = None,
     horizon: int | None = None,
     engine: str | Engine = "interpreter",
@@ -26,6 +26,7 @@ def plan(
 ) -> Answer:
     """Plan for ``scenario`` with one engine; every plan returned has been validated."""
     eng = engine if isinstance(engine, Engine) else get_engine(engine)
+    strategy = parse_strategy(strategy)
     check_strategy(eng, strategy)
     choice = model or scenario.model
     started = time.perf_counter()

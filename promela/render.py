@@ -23,7 +23,7 @@ from spec.constants import MAX_HORIZON
 from spec.grid import PAPER_GRID, Grid
 from spec.lanes import Lane
 from spec.models import GOAL_RULES, MODEL_RULES, GoalKind, GoalRule, ModelKind, ModelRules
-from spec.rules import behind_line, collision_span, nearest_span, passed_line
+from spec.rules import behind_line, collision_span, left_path, nearest_span, passed_line
 from spec.scenario import Problem, Scenario
 
 ENV_VAR = "OVERTAKE_SCENARIO"
@@ -181,8 +181,11 @@ def _option(action: Action, grid: Grid) -> str:
     if rule.changes_lane:
         guard.append("lc < MAX_LC")
         body += [f"lane = {rule.to_lane.name if rule.to_lane else 'lane'}", "lc++"]
-    if grid.left_shift(action):
-        body.append(f"shift_left({grid.left_shift(action)})")
+    path = list(left_path(grid.left_shift(action)))[1:]  # one cell at a time, a collision check after each
+    for k, moved in enumerate(path):
+        body.append(f"shift_left({moved - (path[k - 1] if k else 0)})")
+        if k < len(path) - 1:
+            body.append("collide()")
     body += ["steps++", "collide()"]
     body += ["tick()"] * grid.ticks(action)
     finish = (f'if :: !crashed -> printf("STEP {action.value} "); print_state(); goal_check(); assert(!reached)'

@@ -52,6 +52,7 @@ class Planner:
     grid: Grid = PAPER_GRID
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "strategy", parse_strategy(self.strategy))
         check_strategy(self.engine, self.strategy)
 
     def scenario(self, readings: tuple[Reading, ...], lane: Lane) -> Scenario:

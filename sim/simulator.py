@@ -170,7 +170,7 @@ class Simulator:
                 return self._keep(pending, FailureKind.SENSING, err.reason, str(err))
             self._fail(FailureKind.SENSING, err.reason, str(err))
             self.doing = "waiting after a sensing failure"
-            return self.executor.hold(float(self.grid.time_unit_s), self.grid.speed, self._tick)
+            return self.executor.hold(LOOP.wait_s, self.grid.speed, self._tick)
         self.summary.plans += 1
         self.summary.plan_ms.append(answer.elapsed_ms)
         if answer.status is not Status.PLAN and pending:
@@ -178,7 +178,7 @@ class Simulator:
         if answer.status is not Status.PLAN:
             self._fail(FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
             self.doing = "waiting without a plan"
-            return self.executor.hold(float(self.grid.time_unit_s), self.grid.speed, self._tick)
+            return self.executor.hold(LOOP.wait_s, self.grid.speed, self._tick)
         if not answer.actions:  # nothing to overtake: drive on
             self.doing = "drive (nothing to overtake)"
             self.executor.reset_reference()
@@ -232,8 +232,8 @@ class Simulator:
                     continue  # respawned ahead since the plan started: a different vehicle now
                 cells = states[k + 1].left_lane if lane is Lane.LEFT else states[k + 1].right_lane
                 deviation[(lane, index, body)] = self.summary.tolerance.check(
-                    plan_id, k + 1, action.value, f"{lane.value}_lane[{index}]", cells[index] - start_cell,
-                    start_dx, now[body], deviation[(lane, index, body)], self.grid.cell)
+                    plan_id, k + 1, action.value, f"{lane.value}_lane[{index}]",
+                    (cells[index] - start_cell) * self.grid.cell, start_dx, now[body], deviation[(lane, index, body)])
             new_violations = self.summary.tolerance.violations[violations_before:]
             self._observe(plan_id, k + 1, action, states[k + 1], new_violations)
             if (self.replan_on_violation and new_violations) or {r.body for r in self._sense()} - known:

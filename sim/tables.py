@@ -33,8 +33,8 @@ def runs_table(results: list[RunSummary]) -> Table:
 def totals_table(results: list[RunSummary]) -> Table:
     """The whole campaign in one column: distance, time, overtakes, plans, latency, failures by cause."""
     ms = np.array([m for r in results for m in r.plan_ms]) if any(r.plan_ms for r in results) else np.zeros(1)
-    causes = Counter(f"{f.kind}: {f.cause}" for r in results for f in r.failures)
-    kept = Counter(f"  kept after {f.kind}: {f.cause}" for r in results for f in r.kept_plans)
+    causes = Counter(f"{f.kind.value}: {f.cause}" for r in results for f in r.failures)
+    kept = Counter(f"  kept after {f.kind.value}: {f.cause}" for r in results for f in r.kept_plans)
     table = Table(title="campaign totals", show_header=False)
     rows = [("runs", str(len(results))), ("km", f"{sum(r.km for r in results):.1f}"),
             ("simulated time", hours_minutes(sum(r.sim_time_s for r in results))),

@@ -2,9 +2,10 @@
 
 Displacements are measured since the plan started, so the rounding of the initial
 snapshot does not count: predicted = (predicted cell after step k) - (its cell at the
-start); measured = (true distance now - true distance at the start) / the cell length. The
-deviation is their difference; each action may add at most ``step`` cells of it, and a
-plan may accumulate at most ``plan`` cells.
+start); measured = (true distance now - true distance at the start). Both are reported in
+cells of the paper's 21 m grid (``LOOP.tolerance_unit_m``) whatever grid the planner uses, so
+a tolerance means the same distance on every grid. The deviation is their difference; each
+action may add at most ``step`` cells of it, and a plan may accumulate at most ``plan`` cells.
 """
 
 from __future__ import annotations
@@ -48,10 +49,13 @@ class ToleranceReport:
     violations: list[Violation] = field(default_factory=list)  # this process's, in full (the trace has them too)
     violations_by_action: dict[str, int] = field(default_factory=lambda: defaultdict(int))
 
-    def check(self, plan: int, step: int, action: str, vehicle: str, predicted_cells: float,
-              start_dx_m: float, now_dx_m: float, previous_deviation: float, cell_m: float) -> float:
-        """Record one vehicle after one action; return its deviation so far (cells of ``cell_m``)."""
-        measured = (now_dx_m - start_dx_m) / cell_m
+    def check(self, plan: int, step: int, action: str, vehicle: str, predicted_m: float,
+              start_dx_m: float, now_dx_m: float, previous_deviation: float) -> float:
+        """Record one vehicle after one action (the model's predicted displacement in metres); return its deviation
+        so far, in tolerance units."""
+        unit = LOOP.tolerance_unit_m
+        predicted_cells = predicted_m / unit
+        measured = (now_dx_m - start_dx_m) / unit
         deviation = measured - predicted_cells
         added = abs(deviation - previous_deviation)
         self.largest[action] = max(self.largest[action], added)

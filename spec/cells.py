@@ -6,18 +6,22 @@ the AV's cell (it is on one side of the AV or touching it; the model would read 
 cell as a collision). An oncoming vehicle is put in the nearest cell *towards the AV*
 (rounded towards zero): every rule about oncoming traffic (danger zone, "passed the AV")
 then errs on the side of danger, never by up to half a cell the other way. Targets: the
-first platoon ahead of the AV (consecutive cells, at most ``MAX_TARGETS``).
+first platoon ahead of the AV (each at most ``PLATOON_GAP_M`` behind the next: on the paper's
+grid, consecutive cells; at most ``MAX_TARGETS``).
 """
 
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 
 from spec.grid import Grid
 from spec.lanes import Lane
 
 #: The most left-lane vehicles one plan overtakes (the paper's FV1..FV3).
 MAX_TARGETS = 3
+#: Vehicles at most this far apart are one platoon (the paper's "consecutive cells" of 21 m).
+PLATOON_GAP_M = Fraction(21)
 
 
 def left_cell(dx_m: float, av_lane: Lane, grid: Grid) -> int:
@@ -40,7 +44,8 @@ def first_platoon(left: list[int], av_lane: Lane, grid: Grid) -> int:
     ahead = sorted(c for c in left if c > av_cell or (c == av_cell and av_lane is Lane.RIGHT))
     if not ahead:
         return 0
+    gap = grid.cells(PLATOON_GAP_M, "the platoon gap")
     count = 1
-    while count < min(len(ahead), MAX_TARGETS) and ahead[count] == ahead[count - 1] + 1:
+    while count < min(len(ahead), MAX_TARGETS) and ahead[count] - ahead[count - 1] <= gap:
         count += 1
     return count

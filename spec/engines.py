@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from importlib.metadata import entry_points
 
 from spec.answers import Limits, SearchResult, Strategy
-from spec.errors import OptionError
+from spec.errors import OptionError, ToolMissing
 from spec.scenario import Problem
 
 Solver = Callable[[Problem, Strategy, Limits], SearchResult]
@@ -69,7 +69,11 @@ def get_engine(name: str) -> Engine:
         if ep is not None:
             ep.load()  # type: ignore[attr-defined]
     if name not in ENGINES:
-        raise OptionError("--engine", name, f"unknown engine (known: {', '.join(engine_names())})")
+        known = engine_names()
+        if not known:
+            raise ToolMissing("no engine is declared: overtake-mc is not installed (run `bash ci/setup.sh`, or "
+                              "`pip install -e .` in the checkout)")
+        raise OptionError("--engine", name, f"unknown engine (known: {', '.join(known)})")
     return ENGINES[name]
 
 

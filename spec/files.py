@@ -7,7 +7,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from spec.errors import ScenarioError
+from spec.errors import OptionError, ScenarioError
 from spec.scenario import Scenario, make_scenario
 
 REQUIRED_KEYS = ("lane", "left_lane", "right_lane")
@@ -15,11 +15,18 @@ OPTIONAL_KEYS = ("targets", "model", "horizon", "cell_m")
 SUFFIXES = (".json", ".toml")
 
 
-def load_scenario(path: str | Path) -> Scenario:
-    """The scenario in ``path``; every problem raises ScenarioError naming the file."""
+def load_scenario(path: str | Path, cell_m: object = None) -> Scenario:
+    """The scenario in ``path``; every problem raises ScenarioError naming the file. ``cell_m`` (the ``--cell-m``
+    option) is the grid of a file that names none; a file that names another grid is bad input."""
     source = str(path)
     try:
-        return scenario_from_dict(_read(Path(path)))
+        data = _read(Path(path))
+        if cell_m is not None and "cell_m" in data:
+            if data["cell_m"] != cell_m:
+                raise OptionError("--cell-m", cell_m, f"{source} names cell_m = {data['cell_m']!r}, its own grid")
+        elif cell_m is not None:
+            data = {**data, "cell_m": cell_m}
+        return scenario_from_dict(data)
     except ScenarioError as err:
         raise err.with_source(source) from None
 

@@ -77,8 +77,10 @@ class LoopSpec:
     # A lane change's sideways move is done within this much of the action's time: the model
     # flips the AV's lane before any oncoming tick, so the car must be in its new lane early.
     lane_change_lateral_s: float = 2.0
-    step_tolerance_cells: float = 0.25  # per action
+    step_tolerance_cells: float = 0.25  # per action, in tolerance units
     plan_tolerance_cells: float = 0.5  # accumulated since the plan started
+    tolerance_unit_m: float = _PAPER_CELL_M  # tolerances count cells of the paper's grid, whatever the planner's
+    wait_s: float = float(PAPER_GRID.time_unit_s)  # driving on without a plan (the paper's 3 s time unit)
 
 
 ROAD, CAR, SENSORS, TRAFFIC, LOOP = RoadSpec(), CarSpec(), SensorSpec(), TrafficSpec(), LoopSpec()

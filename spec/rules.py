@@ -46,6 +46,15 @@ def collision_span(lane: Lane, rules: ModelRules, grid: Grid) -> Span:
     return grid.av_cell - radius, grid.av_cell + radius
 
 
+def left_path(shift: int) -> range:
+    """The offsets a left-lane vehicle passes through during an action that shifts it by ``shift`` cells, one cell
+    at a time, from where it starts (0) to where it ends (``shift``): a collision is checked at each, so no vehicle
+    passes through the AV on a grid where an action moves the left lane by more than one cell (on the paper's grid
+    a shift is at most one cell, and this is the start and the landing cell)."""
+    step = -1 if shift < 0 else 1
+    return range(0, shift + step, step)
+
+
 def collision_in(state: State, rules: ModelRules, grid: Grid, tick: int) -> Collision | None:
     """The collision in ``state``, if any: a vehicle of the AV's lane inside that lane's collision span."""
     lo, hi = collision_span(state.lane, rules, grid)

@@ -20,7 +20,7 @@ from spec.models import (
     goal_kind,
     models_for,
 )
-from spec.rules import collision_in
+from spec.rules import collision_in, collision_span
 from spec.state import State
 
 E = TypeVar("E", bound=enum.Enum)
@@ -100,7 +100,7 @@ def make_scenario(
     horizon_v = _check_int("horizon", horizon, 0, MAX_HORIZON)
     scenario = Scenario(lane_v, tuple(sorted(left)), tuple(sorted(right)), targets_v, model_v, horizon_v, grid)
     _check_targets(scenario)
-    _check_no_initial_collision(scenario)
+    _check_no_initial_collision(scenario, left, right)
     return scenario
 
 
@@ -146,11 +146,15 @@ def _check_targets(scenario: Scenario) -> None:
         )
 
 
-def _check_no_initial_collision(scenario: Scenario) -> None:
-    """Reject a start that collides under every model the scenario may use."""
-    start = scenario.initial_state()
-    hits = [collision_in(start, MODEL_RULES[m], scenario.grid, 0) for m in models_for(scenario.model)]
-    hit = hits[-1]
-    if hit is not None and all(hits):
-        what = "vehicle in the AV's cell" if hit.lane is Lane.LEFT else "oncoming vehicle in the AV's danger zone"
-        raise ScenarioError(f"{hit.lane.value}_lane[{hit.vehicle}]", hit.cell, f"initial collision: {what}")
+def _check_no_initial_collision(scenario: Scenario, left: list[int], right: list[int]) -> None:
+    """Reject a start that collides under every model the scenario may use; name the vehicle as the file does."""
+    start, models = scenario.initial_state(), models_for(scenario.model)
+    if not all(collision_in(start, MODEL_RULES[m], scenario.grid, 0) for m in models):
+        return
+    narrowest = min(models, key=lambda m: MODEL_RULES[m].danger_m)  # collides under every model: under this one
+    lo, hi = collision_span(scenario.lane, MODEL_RULES[narrowest], scenario.grid)
+    given = left if scenario.lane is Lane.LEFT else right
+    i = next(k for k, cell in enumerate(given) if lo <= cell <= hi)
+    what = ("vehicle in the AV's cell" if scenario.lane is Lane.LEFT
+            else f"oncoming vehicle within {(hi - lo) // 2} cell(s) of the AV")
+    raise ScenarioError(f"{scenario.lane.value}_lane[{i}]", given[i], f"initial collision: {what}")

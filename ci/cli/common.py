@@ -14,12 +14,11 @@ from oracle.render import LEGEND, draw
 from spec.actions import Action
 from spec.answers import Answer, Status, Strategy
 from spec.constants import DEFAULT_HORIZON, MAX_HORIZON
-from spec.errors import OptionError, ScenarioError
+from spec.errors import ScenarioError
 from spec.files import load_scenario
-from spec.grid import grid_for
 from spec.library import builtin
 from spec.models import ModelChoice
-from spec.scenario import Scenario, make_scenario
+from spec.scenario import Scenario
 from spec.state import State
 
 out = Console(highlight=False, width=None if sys.stdout.isatty() else 120)
@@ -46,25 +45,15 @@ def cell_option() -> Any:
 
 
 def load(file: str, cell_m: float | None = None) -> Scenario:
-    """A scenario from a file path or the name of a built-in scenario; ``cell_m`` names its grid, which must agree
-    with the grid the file names."""
+    """A scenario from a file path or the name of a built-in scenario; ``cell_m`` is the grid of a file that names
+    none (every built-in scenario names the paper's)."""
     path = Path(file)
     entry = builtin(file)
     if not path.exists() and entry is not None:
-        scenario = entry.load()
+        path = entry.path
     elif not path.exists():
         raise ScenarioError("file", file, "no such file (nor a built-in scenario: see `overtake scenarios`)")
-    else:
-        scenario = load_scenario(path)
-    if cell_m is None:
-        return scenario
-    grid = grid_for(cell_m)
-    if grid == scenario.grid:
-        return scenario
-    if entry is not None or not scenario.grid.is_paper:
-        raise OptionError("--cell-m", cell_m, f"{file} is on a {scenario.grid.describe()} grid")
-    return make_scenario(scenario.lane, list(scenario.left_lane), list(scenario.right_lane), scenario.targets,
-                         scenario.model, scenario.horizon, grid=grid)
+    return load_scenario(path, cell_m)
 
 
 def print_json(obj: Any) -> None:

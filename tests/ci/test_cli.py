@@ -148,7 +148,8 @@ def test_plan_on_a_finer_grid_from_the_file_or_the_option(tmp_path: Path) -> Non
     by_option = json.loads(run("plan", plain, "--cell-m", "10.5", "--json", "--strategy", "shortest").stdout)
     assert by_file["actions"] == by_option["actions"] and by_file["status"] == "plan"
     assert by_file["states"][0]["left_lane"] == [24]
-    clash = run("plan", named, "--cell-m", "7")
-    assert clash.returncode == 2 and "--cell-m" in clash.stderr and "10.5 m cells" in clash.stderr
+    for clash in (run("plan", named, "--cell-m", "7"), run("plan", "paper_example", "--cell-m", "10.5")):
+        assert clash.returncode == 2 and "--cell-m" in clash.stderr and "its own grid" in clash.stderr
+        assert len(clash.stderr.strip().splitlines()) == 1
     odd = run("plan", plain, "--cell-m", "10")
     assert odd.returncode == 2 and "not a whole number" in odd.stderr and len(odd.stderr.strip().splitlines()) == 1

@@ -21,7 +21,7 @@ def test_summary_round_trips_through_json() -> None:
     summary = RunSummary(5, km=1.5, sim_time_s=200.0, overtakes=3, plans=7, plan_ms=[0.5, 1.25],
                          failures=[Failure(FailureKind.COLLISION, "collision with an oncoming vehicle", "+4.0 m", 1.4,
                                            199.0)])
-    summary.tolerance.check(1, 1, "accelerate", "left_lane[0]", -1.0, 30.0, 16.0, 0.0, 21.0)
+    summary.tolerance.check(1, 1, "accelerate", "left_lane[0]", -21.0, 30.0, 16.0, 0.0)
     again = RunSummary.from_json(json.loads(json.dumps(summary.to_json())))
     assert again.to_json() == summary.to_json()
     assert again.failure == summary.failures[0] and again.tolerance.violations_by_action == {"accelerate": 1}

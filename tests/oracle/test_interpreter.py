@@ -7,7 +7,7 @@ import pytest
 from oracle.interpreter import step as grid_step
 from oracle.interpreter import validate
 from spec.actions import Action
-from spec.grid import PAPER_GRID
+from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
 from spec.models import GOAL_RULES, MODEL_RULES, GoalKind, GoalRule, ModelKind, ModelRules
 from spec.rules import disabled_reason, goal_holds
@@ -197,3 +197,15 @@ def test_validate_reports_the_collision_and_states_so_far() -> None:
     verdict = validate(problem_for(scenario, ModelKind.FINAL), [Action.ACCELERATE, Action.ACCELERATE])
     assert not verdict.valid and "step 2 (accelerate): collision with left_lane[0] at cell 10" in verdict.reason
     assert len(verdict.states) == 2
+
+
+@pytest.mark.parametrize("grid", [Grid(c) for c in STANDARD_CELLS_M], ids=lambda g: g.describe())
+def test_no_left_lane_vehicle_passes_through_the_av_on_any_grid(grid: Grid) -> None:
+    """On a finer grid an action moves the left lane by several cells: the vehicle passes every cell between."""
+    av, ahead = grid.av_cell, abs(grid.left_shift(Action.ACCELERATE))
+    for cell, action in ((av + 1, Action.ACCELERATE), (av - 1, Action.BRAKE)):
+        hit = grid_step(left([cell]), action, FINAL, grid)
+        assert isinstance(hit, Collision) and hit.cell == av, (cell, action, hit)
+    assert not isinstance(grid_step(left([av + ahead + 1]), Action.ACCELERATE, FINAL, grid), Collision)
+    scenario = make_scenario("left", [av + 1], [], 1, grid=grid)
+    assert not validate(problem_for(scenario, ModelKind.FINAL), [Action.ACCELERATE]).valid

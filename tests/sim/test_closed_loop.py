@@ -97,3 +97,17 @@ def test_a_replan_that_cannot_plan_keeps_the_plan_under_way_and_says_why(monkeyp
         assert [(f.kind, f.cause) for f in sim.summary.failures] == [(FailureKind.SENSING, "two vehicles in one cell")]
     finally:
         sim.close()
+
+
+def test_tables_name_failure_kinds_by_their_value() -> None:
+    from rich.console import Console
+
+    from sim.summary import Failure, RunSummary
+    from sim.tables import totals_table
+
+    summary = RunSummary(1, km=2.0, plan_ms=[1.0], failures=[Failure(FailureKind.COLLISION, "hit", "detail", 1.0, 9.0)],
+                         kept_plans=[Failure(FailureKind.PLANNER, "no_plan", "detail", 0.5, 4.0)])
+    console = Console(record=True, width=200)
+    console.print(totals_table([summary]))
+    text = console.export_text()
+    assert "collision: hit" in text and "kept after planner: no_plan" in text and "FailureKind" not in text

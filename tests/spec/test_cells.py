@@ -41,3 +41,12 @@ def test_targets_are_the_first_platoon_ahead_at_most_three() -> None:
     assert first_platoon([10, 11, 20], Lane.RIGHT, grid) == 2
     assert first_platoon([10, 11, 20], Lane.LEFT, grid) == 1
     assert first_platoon([5], Lane.LEFT, grid) == 0
+
+
+@given(grids)
+def test_a_platoon_is_the_same_vehicles_on_every_grid(grid: Grid) -> None:
+    """Vehicles one paper cell (21 m) apart are one platoon however finely the road is cut."""
+    per = round(PAPER_GRID.cell / grid.cell)
+    ahead = [grid.av_cell + per * k for k in (1, 2, 3, 4)]
+    assert first_platoon(ahead, Lane.LEFT, grid) == 3
+    assert first_platoon([ahead[0], ahead[0] + 2 * per], Lane.LEFT, grid) == 1

@@ -54,7 +54,7 @@ def scenarios(grid: Grid) -> list[Scenario]:
 
 def problems() -> list[tuple[str, Problem]]:
     out = []
-    for grid in (PAPER_GRID, Grid(Fraction(21, 2))):
+    for grid in (PAPER_GRID, Grid(Fraction(21, 2)), Grid(Fraction(21, 4))):
         for scenario in scenarios(grid):
             for name, goal in GOAL_VARIANTS.items():
                 problem = problem_for(scenario, ModelKind.FINAL)
