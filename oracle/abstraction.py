@@ -53,6 +53,14 @@ class Offsets:
         """A collision at any offset the left lane passes through while it shifts from ``l_start``."""
         return any(l_start + j in self.left_hits for j in left_path(shift))
 
+    def left_bad_ends(self, shift: int) -> frozenset[int]:
+        """The offsets a shift of ``shift`` may not end at: it would pass (or end at) a collision."""
+        return frozenset(h - j + shift for h in self.left_hits for j in left_path(shift))
+
+    def right_bad_starts(self, ticks: int) -> frozenset[int]:
+        """The tick counts a move of ``ticks`` ticks may not start from: it would meet a danger zone."""
+        return frozenset(o for lo, hi in self.right_hits for o in range(max(0, lo - ticks), hi + 1))
+
     def right_collides(self, o: int) -> bool:
         return any(lo <= o <= hi for lo, hi in self.right_hits)
 
@@ -106,7 +114,7 @@ def offsets_of(problem: Problem) -> Offsets:
     left_lo, left_hi = collision_span(Lane.LEFT, rules, grid)
     left_hits = frozenset(cell - c for c in scenario.left_lane for cell in range(left_lo, left_hi + 1))
     right_lo, right_hi = collision_span(Lane.RIGHT, rules, grid)
-    right_hits = _merged([(c - right_hi, c - right_lo) for c in scenario.right_lane])
+    right_hits = merged([(c - right_hi, c - right_lo) for c in scenario.right_lane])
     targets = [scenario.left_lane[i] for i in scenario.target_indices]
     l_at_most = behind_line(grid) - max(targets) if goal.targets_behind and targets else None
     span = nearest_span(goal, grid)
@@ -117,7 +125,7 @@ def offsets_of(problem: Problem) -> Offsets:
                    l_at_most, l_within, o_at_least, bool(scenario.left_lane), bool(scenario.right_lane))
 
 
-def _merged(spans: list[Interval]) -> tuple[Interval, ...]:
+def merged(spans: list[Interval]) -> tuple[Interval, ...]:
     """Overlapping or touching intervals joined; those wholly below o = 0 (never reached) dropped."""
     merged: list[Interval] = []
     for lo, hi in sorted(spans):

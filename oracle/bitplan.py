@@ -51,9 +51,10 @@ class BitSpace:
         self.row_bits = (1 << width) - 1
         self.rep = ((1 << (rows * width)) - 1) // self.row_bits  # bit 0 of every row
         self.lanes = form.lanes
-        left_safe = {s: self._left_safe(s) for s in {m.shift for moves in form.moves for m in moves}}
-        right_safe = {t: self._cols([o >= t and not form.right_collides_during(o - t, t) for o in range(width)])
-                      for t in {m.ticks for moves in form.moves for m in moves}}
+        every = (1 << (rows * width)) - 1
+        left_safe = {s: every & ~self._rows_at(form.left_bad_ends(s)) for s in {m.shift for moves in form.moves
+                                                                               for m in moves}}
+        right_safe = {t: self._right_safe(t) for t in {m.ticks for moves in form.moves for m in moves}}
         self.moves: list[list[_Flat]] = []
         for moves in form.moves:
             flat = []
@@ -74,9 +75,19 @@ class BitSpace:
                 mask |= self.row_bits << (r * self.width)
         return mask
 
-    def _left_safe(self, shift: int) -> int:
-        """The rows a shift of ``shift`` may land in without passing a left-lane vehicle through the AV."""
-        return self._rows(lambda end: not self.form.left_collides_during(end - shift, shift))
+    def _rows_at(self, offsets: frozenset[int]) -> int:
+        """All positions whose row's ``l`` is one of ``offsets``."""
+        mask = 0
+        for off in offsets:
+            r = off - self.l_low
+            if 0 <= r < self.rows:
+                mask |= self.row_bits << (r * self.width)
+        return mask
+
+    def _right_safe(self, ticks: int) -> int:
+        """The destination columns a move of ``ticks`` ticks may reach without meeting a danger zone."""
+        bad = self.form.right_bad_starts(ticks)
+        return self._cols([o >= ticks and o - ticks not in bad for o in range(self.width)])
 
     def _cols(self, cols: list[bool]) -> int:
         """All positions whose column is marked in ``cols``."""

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import z3
 
-from oracle.abstraction import offsets_of
+from oracle.abstraction import merged, offsets_of
 from oracle.interpreter import problem_step, replay
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.answers import Limits, SearchResult, Status, Strategy
@@ -58,9 +58,9 @@ class Encoding:
         self.targets = list(scenario.target_indices)
         self.grid = problem.grid
         self.form = offsets_of(problem)
-        self.left_hits = sorted(self.form.left_hits)
         self.ticks = {a: self.grid.ticks(a) for a in ACTION_ORDER}
-        self.right_hits = {t: [(lo - t, hi) for lo, hi in self.form.right_hits] for t in {*self.ticks.values(), 0}}
+        self.right_hits = {t: list(merged([(lo - t, hi) for lo, hi in self.form.right_hits]))
+                           for t in {*self.ticks.values(), 0}}  # starting tick counts that meet a danger zone
         start = self.new_step()
         self.initial = z3.And(start.right == (scenario.lane is Lane.RIGHT), start.lc == 0, start.l == 0, start.o == 0,
                               self.safe(start.right, start.l, 0, start.o, 0))
@@ -83,24 +83,24 @@ class Encoding:
                       s.o >= min(ticks) * k, s.o <= max(ticks) * k,
                       s.l >= min(shifts) * k, s.l <= max(shifts) * k)
 
-    def safe(self, right: z3.BoolRef, l_start: z3.ArithRef, shift: int, o_start: z3.ArithRef,
+    def safe(self, right: z3.BoolRef, l_end: z3.ArithRef, shift: int, o_start: z3.ArithRef,
              ticks: int) -> z3.BoolRef:
-        """No collision while the left lane shifts from ``l_start`` by ``shift`` (one cell at a time), nor after
+        """No collision while the left lane shifts by ``shift`` (one cell at a time) to ``l_end``, nor after
         each of ``ticks`` oncoming ticks from ``o_start``."""
         if self.present:
-            return self._safe_per_vehicle(right, l_start, shift, o_start, ticks)
-        bad = sorted({v - j for v in self.left_hits for j in left_path(shift)})
-        left_ok = [l_start != v for v in bad]
+            return self._safe_per_vehicle(right, l_end, shift, o_start, ticks)
+        left_ok = [l_end != v for v in sorted(self.form.left_bad_ends(shift))]
         right_ok = [z3.Or(o_start < lo, o_start > hi) for lo, hi in self.right_hits[ticks]]
         return z3.If(right, z3.And(*right_ok, True), z3.And(*left_ok, True))
 
-    def _safe_per_vehicle(self, right: z3.BoolRef, l_start: z3.ArithRef, shift: int, o_start: z3.ArithRef,
+    def _safe_per_vehicle(self, right: z3.BoolRef, l_end: z3.ArithRef, shift: int, o_start: z3.ArithRef,
                           ticks: int) -> z3.BoolRef:
         """The same condition written per vehicle, each guarded by its presence literal (explanations)."""
         scenario, rules = self.problem.scenario, self.problem.rules
         (l_lo, l_hi), (r_lo, r_hi) = (collision_span(lane, rules, self.grid) for lane in (Lane.LEFT, Lane.RIGHT))
-        left_ok = [z3.Implies(self._here(Lane.LEFT, i), z3.Or(c + l_start + j < l_lo, c + l_start + j > l_hi))
-                   for i, c in enumerate(scenario.left_lane) for j in left_path(shift)]
+        passed = [(i, c - shift + j) for i, c in enumerate(scenario.left_lane) for j in left_path(shift)]
+        left_ok = [z3.Implies(self._here(Lane.LEFT, i), z3.Or(cell + l_end < l_lo, cell + l_end > l_hi))
+                   for i, cell in passed]
         right_ok = [z3.Implies(self._here(Lane.RIGHT, i), z3.Or(c - (o_start + j) > r_hi, c - (o_start + j) < r_lo))
                     for i, c in enumerate(scenario.right_lane) for j in range(ticks + 1)]
         return z3.If(right, z3.And(*right_ok, True), z3.And(*left_ok, True))
@@ -108,8 +108,9 @@ class Encoding:
     def transition(self, a: Step, action_var: z3.ArithRef, b: Step) -> z3.BoolRef:
         """One decision step from ``a`` to ``b`` by the action numbered ``action_var`` (ACTION_ORDER)."""
         rules, options = self.problem.rules, []
-        effects = {(self.grid.left_shift(action), self.ticks[action]) for action in ACTION_ORDER}
-        safe = {(s, t): self.safe(b.right, a.l, s, a.o, t) for s, t in effects}
+        effects = {self._effect(action): action for action in ACTION_ORDER}  # equal conditions built once
+        safe = {key: self.safe(b.right, b.l, self.grid.left_shift(action), a.o, self.ticks[action])
+                for key, action in effects.items()}
         for index, action in enumerate(ACTION_ORDER):
             rule = ACTION_RULES[action]
             guard = [a.lc < rules.max_lane_changes] if rule.changes_lane else []
@@ -119,8 +120,12 @@ class Encoding:
             options.append(z3.And(action_var == index, *guard, b.right == lane_after,
                                   b.lc == a.lc + int(rule.changes_lane), b.l == a.l + self.grid.left_shift(action),
                                   b.o == a.o + self.ticks[action],
-                                  safe[(self.grid.left_shift(action), self.ticks[action])]))
+                                  safe[self._effect(action)]))
         return z3.Or(*options)
+
+    def _effect(self, action: Action) -> tuple[frozenset[int], int]:
+        """What a step's collision condition depends on: the offsets it may not end at, and its ticks."""
+        return self.form.left_bad_ends(self.grid.left_shift(action)), self.ticks[action]
 
     def goal(self, s: Step) -> z3.BoolRef:
         """The problem's goal on the state ``s``, field by field from the GoalRule."""

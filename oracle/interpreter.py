@@ -25,8 +25,8 @@ def enabled_actions(state: State, rules: ModelRules) -> list[Action]:
 
 
 def step(state: State, action: Action, rules: ModelRules, grid: Grid) -> State | Collision:
-    """One decision step: the effect (the left lane moved one cell at a time, each followed by a collision check),
-    then the oncoming ticks, each followed by a check."""
+    """One decision step: the effect (the left lane moved one cell at a time, each followed by a collision check:
+    ``spec.rules.left_path``), then the oncoming ticks, each followed by a check."""
     reason = disabled_reason(state, action, rules)
     if reason is not None:
         raise ValueError(reason)

@@ -14,7 +14,6 @@ from oracle.search import depth_first, trivial_answer
 from spec.actions import Action
 from spec.answers import Limits, SearchResult, Status
 from spec.lanes import Lane
-from spec.rules import left_path
 from spec.scenario import Problem
 
 Key = tuple[int, int, int, int]  # lane changes, left offset, oncoming ticks, steps
@@ -29,12 +28,8 @@ class OffsetSearch:
         self.track_left, self.track_right = form.track_left, form.track_right
         self.moves = [[(m.action, m.lc_dst, form.lanes[m.lc_dst] is Lane.LEFT, m.shift, m.ticks) for m in moves]
                       for moves in form.moves]
-        shifts = {m.shift for moves in form.moves for m in moves}
-        self.left_bad = {s: frozenset(h - j for h in form.left_hits for j in left_path(s))
-                         for s in shifts}  # starting offsets from which a shift of s passes a collision
-        ticks = {m.ticks for moves in form.moves for m in moves}
-        self.right_bad = {t: frozenset(o for lo, hi in form.right_hits for o in range(max(0, lo - t), hi + 1))
-                          for t in ticks}  # starting tick counts from which a move of t ticks meets a danger zone
+        self.left_bad_end = {s: form.left_bad_ends(s) for s in {m.shift for moves in form.moves for m in moves}}
+        self.right_bad = {t: form.right_bad_starts(t) for t in {m.ticks for moves in form.moves for m in moves}}
 
     def goal(self, key: Key) -> bool:
         lc, l_off, o, _ = key
@@ -47,7 +42,7 @@ class OffsetSearch:
         out = []
         for action, lc_dst, to_left, shift, ticks in self.moves[lc]:
             l2 = l_off + shift
-            if (l_off in self.left_bad[shift]) if to_left else (o in self.right_bad[ticks]):
+            if (l2 in self.left_bad_end[shift]) if to_left else (o in self.right_bad[ticks]):
                 continue
             out.append((action, (lc_dst, l2 if self.track_left else 0, o + ticks if self.track_right else 0,
                                  steps + 1)))

@@ -181,7 +181,8 @@ def _option(action: Action, grid: Grid) -> str:
     if rule.changes_lane:
         guard.append("lc < MAX_LC")
         body += [f"lane = {rule.to_lane.name if rule.to_lane else 'lane'}", "lc++"]
-    path = list(left_path(grid.left_shift(action)))[1:]  # one cell at a time, a collision check after each
+    shift = grid.left_shift(action)
+    path = list(left_path(shift)) if shift else []  # one cell at a time, a collision check after each
     for k, moved in enumerate(path):
         body.append(f"shift_left({moved - (path[k - 1] if k else 0)})")
         if k < len(path) - 1:

@@ -47,12 +47,15 @@ def collision_span(lane: Lane, rules: ModelRules, grid: Grid) -> Span:
 
 
 def left_path(shift: int) -> range:
-    """The offsets a left-lane vehicle passes through during an action that shifts it by ``shift`` cells, one cell
-    at a time, from where it starts (0) to where it ends (``shift``): a collision is checked at each, so no vehicle
-    passes through the AV on a grid where an action moves the left lane by more than one cell (on the paper's grid
-    a shift is at most one cell, and this is the start and the landing cell)."""
+    """The offsets at which a left-lane vehicle is checked for a collision during an action that shifts it by
+    ``shift`` cells: every cell it moves through, one at a time, up to where it ends (``shift``), so no vehicle
+    passes through the AV on a grid where an action moves the left lane by more than one cell; without a shift,
+    where it stands (the AV may have changed lanes). Where it started was checked in the state before. On the
+    paper's grid a shift is at most one cell, and this is the landing cell alone."""
+    if shift == 0:
+        return range(0, 1)
     step = -1 if shift < 0 else 1
-    return range(0, shift + step, step)
+    return range(step, shift + step, step)
 
 
 def collision_in(state: State, rules: ModelRules, grid: Grid, tick: int) -> Collision | None:
