@@ -19,8 +19,8 @@ from oracle.planner import plan
 from sim.discretiser import discretise
 from sim.observers import Observer
 from sim.scene import Scene
-from sim.sensors import RaySensor, Reading, SensorModel
-from sim.traffic import PaperTraffic, TrafficModel
+from sim.sensors import NoisySensor, RaySensor, Reading, SensorModel
+from sim.traffic import FollowingTraffic, PaperTraffic, SpreadTraffic, TrafficModel
 from sim.vehicle import WheeledCar
 from spec.answers import Answer, Strategy
 from spec.engines import Engine, check_strategy, get_engine, parse_strategy
@@ -34,8 +34,9 @@ TrafficFactory = Callable[[Scene, np.random.Generator, float], TrafficModel]
 SensorFactory = Callable[[Scene, np.random.Generator], SensorModel]
 
 #: The traffic and sensor models a drive can be assembled with, by name.
-TRAFFIC_MODELS: dict[str, TrafficFactory] = {"paper": PaperTraffic}
-SENSOR_MODELS: dict[str, SensorFactory] = {"exact": RaySensor}
+TRAFFIC_MODELS: dict[str, TrafficFactory] = {"paper": PaperTraffic, "spread": SpreadTraffic,
+                                             "following": FollowingTraffic}
+SENSOR_MODELS: dict[str, SensorFactory] = {"exact": RaySensor, "noisy": NoisySensor}
 
 
 def _check_name(option: str, name: str, known: dict[str, Any]) -> None:

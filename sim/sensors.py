@@ -11,7 +11,7 @@ vehicle and reports those the ray reaches first.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 import numpy as np
@@ -19,7 +19,7 @@ import numpy as np
 from sim.scene import Scene
 from sim.vehicle import KinematicCar
 from spec.lanes import Lane
-from spec.physical import CAR, SENSORS, SensorSpec
+from spec.physical import CAR, NOISE, SENSORS, NoiseSpec, SensorSpec
 
 
 @dataclass(frozen=True, slots=True)
@@ -92,3 +92,22 @@ class RaySensor:
         hits = self.scene.client.rayTestBatch(starts, ends)
         return tuple(r for r, hit in zip(truth.readings, hits, strict=True) if hit[0] == r.body)
 
+
+
+class NoisySensor(RaySensor):
+    """The paper's sensors with range noise and missed detections (``spec.physical.NoiseSpec``): each reading the
+    rays report is dropped with probability ``miss_rate``, else its distance gets Gaussian noise."""
+
+    def __init__(self, scene: Scene, rng: np.random.Generator, spec: SensorSpec = SENSORS,
+                 noise: NoiseSpec = NOISE) -> None:
+        super().__init__(scene, rng, spec)
+        self.noise = noise
+
+    def read(self, truth: Truth) -> tuple[Reading, ...]:
+        seen = []
+        for reading in super().read(truth):
+            missed = self.rng.random() < self.noise.miss_rate
+            error_m = float(self.rng.normal(0.0, self.noise.range_sd_m))
+            if not missed:
+                seen.append(replace(reading, dx_m=reading.dx_m + error_m))
+        return tuple(seen)

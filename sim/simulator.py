@@ -26,6 +26,7 @@ from sim.discretiser import in_window, reading_cell
 from sim.executor import Executor, action_speed_mps, plan_profiles, ramp_gain_m, reference_offset_m
 from sim.observers import StepEvent, TraceWriter
 from sim.parts import DriveConfig, Parts
+from sim.safety import SafetyMonitor
 from sim.sensors import Reading, in_range
 from sim.summary import Failure, RunSummary
 from sim.tolerance import ToleranceReport, Violation
@@ -34,7 +35,7 @@ from spec.answers import Answer, Status
 from spec.errors import ScenarioError
 from spec.kinds import FailureKind
 from spec.lanes import Lane
-from spec.physical import LOOP
+from spec.physical import CAR, LOOP
 from spec.scenario import Scenario
 from spec.state import State
 
@@ -59,6 +60,9 @@ class Simulator:
         self.sensor = parts.sensor(self.scene, self.rng)
         self.executor = Executor(self.scene, self.car, Lane.LEFT, self.grid)
         self.summary = RunSummary(seed, tolerance=tolerance or ToleranceReport())
+        self.safety = SafetyMonitor()
+        self.summary.safety = self.safety.report
+        self._implied: dict[int, float] = {}  # body -> the gap the plan under way implies at the action's end
         self.pending: tuple[Action, ...] = ()  # the rest of the plan under way when a re-plan starts
         self.doing = "start-up"  # what the AV was executing: recorded with every collision
         self.origin_km = 0.0
@@ -68,11 +72,17 @@ class Simulator:
     def _tick(self, dt_s: float) -> bool:
         """After each control step: move traffic, look for contacts, count overtakes, re-centre."""
         self.summary.sim_time_s += dt_s
-        self.traffic.advance(dt_s)
-        x = self.car.pose().x_m
+        pose = self.car.pose()
+        self.traffic.advance(dt_s, pose)
+        x = pose.x_m
+        self.safety.observe(pose, Executor.lane_of(pose.y_m), self.traffic.left, self.traffic.oncoming,
+                            self.summary.km, self.summary.sim_time_s, self.doing, self._implied.get)
         for car in self.traffic.cars():
             if self.scene.client.getContactPoints(self.car.body, car.body):
-                lane = "left-lane" if car in self.traffic.left else "oncoming"
+                in_left = car in self.traffic.left
+                self.safety.contact(car, Lane.LEFT if in_left else Lane.RIGHT, pose, self.summary.km,
+                                    self.summary.sim_time_s, self.doing, self._implied.get(car.body))
+                lane = "left-lane" if in_left else "oncoming"
                 self._fail(FailureKind.COLLISION, f"collision with a{'n' if lane == 'oncoming' else ''} {lane} vehicle",
                            f"{car.x_m - x:+.1f} m ahead, during {self.doing}")
                 return False
@@ -112,6 +122,7 @@ class Simulator:
             if until_failure and self.summary.failures:
                 break
         self.summary.wall_s = time.perf_counter() - started
+        self.summary.traffic_collisions = self.traffic.collisions
         return self.summary
 
     def _sense(self) -> tuple[Reading, ...]:
@@ -222,7 +233,10 @@ class Simulator:
         executed = actions[: LOOP.replan_after_actions]
         for k, (action, profile) in enumerate(zip(executed, plan_profiles(executed, speed_mps, self.grid))):
             self.doing = f"{action.value} (plan {plan_id}, step {k + 1} of {len(actions)})"
-            if not self.executor.run(action, self._tick, profile):
+            self._implied = self._implied_gaps(tracked, states[k + 1])
+            ok = self.executor.run(action, self._tick, profile)
+            self._implied = {}
+            if not ok:
                 return False
             self.summary.actions += 1
             violations_before = len(self.summary.tolerance.violations)
@@ -242,6 +256,15 @@ class Simulator:
                 return True
         self.pending = actions[len(executed):]
         return True
+
+    def _implied_gaps(self, tracked: dict[tuple[Lane, int, int], tuple[float, int]],
+                      predicted: State) -> dict[int, float]:
+        """Per tracked vehicle, the bumper-to-bumper gap ahead of the AV its predicted cell's centre implies."""
+        gaps = {}
+        for lane, index, body in tracked:
+            cells = predicted.left_lane if lane is Lane.LEFT else predicted.right_lane
+            gaps[body] = (cells[index] - self.grid.av_cell) * self.grid.cell - CAR.length_m
+        return gaps
 
     def _tracked(self, seen: tuple[Reading, ...], start: State) -> dict[tuple[Lane, int, int], tuple[float, int]]:
         """Each sensed vehicle in the window, keyed by its lane and index in the scenario, with its start."""

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from sim.safety import SafetyReport
 from sim.tolerance import ToleranceReport
 from spec.kinds import FailureKind
 
@@ -43,6 +44,8 @@ class RunSummary:
     plan_ms: list[float] = field(default_factory=list)
     failures: list[Failure] = field(default_factory=list)
     tolerance: ToleranceReport = field(default_factory=ToleranceReport)
+    safety: SafetyReport = field(default_factory=SafetyReport)
+    traffic_collisions: int = 0  # other vehicles touching each other (the traffic models that do not keep to the grid)
 
     def of_kind(self, kind: FailureKind) -> list[Failure]:
         return [f for f in self.failures if f.kind is kind]
@@ -74,7 +77,8 @@ class RunSummary:
                 "frame_fallbacks": self.frame_fallbacks, "actions": self.actions,
                 "plan_ms": [round(m, 3) for m in self.plan_ms],
                 "plan_latency_ms": self.latency_ms(), "failures": [failure_json(f) for f in self.failures],
-                "failure": failure_json(failure) if failure else None, "tolerance": self.tolerance.to_json()}
+                "failure": failure_json(failure) if failure else None, "tolerance": self.tolerance.to_json(),
+                "safety": self.safety.to_json(), "traffic_collisions": self.traffic_collisions}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> RunSummary:
@@ -83,7 +87,8 @@ class RunSummary:
                    kept_plans=[failure_from(f) for f in data["kept_plans"]],
                    frame_fallbacks=data["frame_fallbacks"], actions=data["actions"], plan_ms=list(data["plan_ms"]),
                    failures=[failure_from(f) for f in data["failures"]],
-                   tolerance=ToleranceReport.from_json(data["tolerance"]))
+                   tolerance=ToleranceReport.from_json(data["tolerance"]),
+                   safety=SafetyReport.from_json(data["safety"]), traffic_collisions=data["traffic_collisions"])
 
 
 def failure_json(failure: Failure) -> dict[str, Any]:

@@ -68,6 +68,65 @@ class TrafficSpec:
 
 
 @dataclass(frozen=True, slots=True)
+class SpeedSpec:
+    """Per-vehicle speeds of the traffic models that do not keep to the grid (``spread``, ``following``).
+
+    Normal around the paper's 7 m/s with a coefficient of variation of 0.1 (free-flow speeds on
+    one road are commonly reported with a coefficient of variation of about 0.1-0.15; the low
+    end is taken so that the AV at 7 m/s can still overtake the faster ones), cut at 3 sd.
+    """
+
+    mean_mps: float = PAPER_GRID.speed
+    sd_mps: float = 0.1 * PAPER_GRID.speed
+    cut_sd: float = 3.0
+
+
+@dataclass(frozen=True, slots=True)
+class IdmSpec:
+    """The Intelligent Driver Model's parameters as published (Treiber, Hennecke and Helbing, Phys. Rev. E 62,
+    1805 (2000), Table I), except the desired speed, which is drawn per vehicle around the paper's 7 m/s
+    (``SpeedSpec``) instead of their 120 km/h; deceleration is bounded by what a car can do."""
+
+    time_gap_s: float = 1.6  # T
+    min_gap_m: float = 2.0  # s0, bumper to bumper
+    accel_mps2: float = 0.73  # a
+    comfortable_decel_mps2: float = 1.67  # b
+    exponent: float = 4.0  # delta
+    max_decel_mps2: float = 9.0  # a physical bound (about 0.9 g) on what the model may ask for
+
+
+@dataclass(frozen=True, slots=True)
+class EventSpec:
+    """Events of the traffic models that do not keep to the grid, at stated rates (stress parameters, not
+    measurements: every audit states them, and the command line can change them)."""
+
+    stop_rate_per_h: float = 0.5  # a left-lane vehicle brakes to a standstill, per vehicle-hour
+    stop_decel_mps2: float = 3.0  # a firm, not an emergency, stop
+    stop_hold_s: float = 5.0  # standing still before it drives on
+    min_spawn_gap_m: float = 3.0  # spawns are continuous in metres: bumper-to-bumper gaps down to this
+
+
+@dataclass(frozen=True, slots=True)
+class NoiseSpec:
+    """The noisy sensor model: Gaussian range noise and missed detections, each reading independently.
+
+    Assumed values to be swept, not a sensor's datasheet: 0.5 m is the order of an automotive
+    radar's range accuracy at 100 m; 1% of readings missed.
+    """
+
+    range_sd_m: float = 0.5
+    miss_rate: float = 0.01
+
+
+@dataclass(frozen=True, slots=True)
+class SafetySpec:
+    """What counts as a near miss (gap bumper to bumper, time to collision with the vehicle ahead in the AV's lane)."""
+
+    near_gap_m: float = 2.0
+    near_ttc_s: float = 1.5
+
+
+@dataclass(frozen=True, slots=True)
 class LoopSpec:
     """Closed-loop driving: when to re-plan, how finely to simulate, how much to tolerate."""
 
@@ -84,3 +143,4 @@ class LoopSpec:
 
 
 ROAD, CAR, SENSORS, TRAFFIC, LOOP = RoadSpec(), CarSpec(), SensorSpec(), TrafficSpec(), LoopSpec()
+SPEEDS, IDM, EVENTS, NOISE, SAFETY = SpeedSpec(), IdmSpec(), EventSpec(), NoiseSpec(), SafetySpec()
