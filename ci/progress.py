@@ -13,7 +13,7 @@ from sim.summary import RunSummary
 
 
 class KmProgress:
-    """A bar over every run's kilometres: runs report (seed, km) while they drive, and once when they finish.
+    """A bar over every run's kilometres: runs report (key, km) while they drive, and once when they finish.
 
     Kilometres arrive from a thread draining the workers' reports, so every update is locked;
     a finished run fills its share of the bar, wherever it stopped.
@@ -32,18 +32,19 @@ class KmProgress:
         self.progress.update(self.task, completed=share, km=sum(self.km_by_seed.values()), failed=self.failed)
 
     def moved(self, update: tuple[int, float]) -> None:
-        """A run reports how far it has driven."""
+        """A run (by its key: a seed, or a job's index) reports how far it has driven."""
         with self.lock:
             self.km_by_seed[update[0]] = update[1]
             self._show()
 
-    def done(self, summary: RunSummary, resumed: bool) -> None:
-        """A run finished (or was found finished in the record)."""
+    def done(self, summary: RunSummary, resumed: bool, key: int | None = None, name: str = "") -> None:
+        """A run finished (or was found finished in the record); ``key`` defaults to its seed."""
+        key = summary.seed if key is None else key
         if resumed:
-            self.progress.console.print(f"seed {summary.seed}: {self.resumed_line}")
+            self.progress.console.print(f"{name or f'seed {summary.seed}'}: {self.resumed_line}")
         with self.lock:
-            self.km_by_seed[summary.seed] = summary.km
-            self.finished.add(summary.seed)
+            self.km_by_seed[key] = summary.km
+            self.finished.add(key)
             self.failed += bool(summary.failures)
             self._show()
 

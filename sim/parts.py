@@ -9,6 +9,8 @@ models are registered once, by name, for campaigns and the command line.
 
 from __future__ import annotations
 
+import functools
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -27,7 +29,7 @@ from spec.engines import Engine, check_strategy, get_engine, parse_strategy
 from spec.errors import OptionError
 from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
-from spec.physical import LOOP
+from spec.physical import EVENTS, LOOP, NOISE, EventSpec, NoiseSpec
 from spec.scenario import Scenario
 
 TrafficFactory = Callable[[Scene, np.random.Generator, float], TrafficModel]
@@ -90,12 +92,29 @@ class DriveConfig:
     cell_m: float = PAPER_GRID.cell
     traffic: str = "paper"
     sensor: str = "exact"
+    stop_rate_per_h: float = EVENTS.stop_rate_per_h  # the traffic models that do not keep to the grid
+    min_spawn_gap_m: float = EVENTS.min_spawn_gap_m
+    range_sd_m: float = NOISE.range_sd_m  # the noisy sensor
+    miss_rate: float = NOISE.miss_rate
+    snapshots: int = 0  # scenarios kept per run (every 10th plan's), to replay with every engine
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "strategy", parse_strategy(self.strategy))
         _check_name("--traffic", self.traffic, TRAFFIC_MODELS)
         _check_name("--sensor", self.sensor, SENSOR_MODELS)
         grid_for(self.cell_m)
+        for option, value, high in (("--km", self.km, math.inf), ("--stop-rate-per-h", self.stop_rate_per_h, math.inf),
+                                    ("--min-spawn-gap-m", self.min_spawn_gap_m, math.inf),
+                                    ("--range-sd-m", self.range_sd_m, math.inf), ("--miss-rate", self.miss_rate, 1.0)):
+            check_number(option, value, high)
+
+    @property
+    def events(self) -> EventSpec:
+        return EventSpec(stop_rate_per_h=self.stop_rate_per_h, min_spawn_gap_m=self.min_spawn_gap_m)
+
+    @property
+    def noise(self) -> NoiseSpec:
+        return NoiseSpec(range_sd_m=self.range_sd_m, miss_rate=self.miss_rate)
 
     @property
     def grid(self) -> Grid:
@@ -104,11 +123,33 @@ class DriveConfig:
     def parts(self, observers: tuple[Observer, ...] = ()) -> Parts:
         """The assembly this configuration names."""
         planner = Planner(get_engine(self.engine), self.strategy, self.grid)
-        return Parts(planner, traffic=TRAFFIC_MODELS[self.traffic], sensor=SENSOR_MODELS[self.sensor],
-                     observers=observers)
+        traffic, sensor = TRAFFIC_MODELS[self.traffic], SENSOR_MODELS[self.sensor]
+        if self.traffic != "paper":
+            traffic = functools.partial(traffic, events=self.events)  # type: ignore[call-arg]
+        if self.sensor != "exact":
+            sensor = functools.partial(sensor, noise=self.noise)  # type: ignore[call-arg]
+        return Parts(planner, traffic=traffic, sensor=sensor, observers=observers)
 
     def to_json(self) -> dict[str, Any]:
         return {"km": self.km, "until_failure": self.until_failure, "engine": self.engine,
                 "strategy": self.strategy.value, "replan_on_violation": self.replan_on_violation,
                 "step_tolerance_cells": self.step_tolerance_cells, "plan_tolerance_cells": self.plan_tolerance_cells,
-                "cell_m": self.cell_m, "traffic": self.traffic, "sensor": self.sensor}
+                "cell_m": self.cell_m, "traffic": self.traffic, "sensor": self.sensor,
+                "stop_rate_per_h": self.stop_rate_per_h, "min_spawn_gap_m": self.min_spawn_gap_m,
+                "range_sd_m": self.range_sd_m, "miss_rate": self.miss_rate, "snapshots": self.snapshots}
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> DriveConfig:
+        return cls(**data)
+
+
+def check_number(option: str, value: object, high: float = math.inf, low: float = 0.0) -> float:
+    """A finite number in ``low .. high``; anything else (NaN, infinity, a negative rate) is bad input."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise OptionError(option, value, "must be a number")
+    if not math.isfinite(value):
+        raise OptionError(option, value, "must be a finite number")
+    if not low <= value <= high:
+        bound = f"between {low:g} and {high:g}" if math.isfinite(high) else f"at least {low:g}"
+        raise OptionError(option, value, f"must be {bound}")
+    return float(value)

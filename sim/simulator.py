@@ -33,6 +33,7 @@ from sim.tolerance import ToleranceReport, Violation
 from spec.actions import Action
 from spec.answers import Answer, Status
 from spec.errors import ScenarioError
+from spec.files import scenario_to_dict
 from spec.kinds import FailureKind
 from spec.lanes import Lane
 from spec.physical import CAR, LOOP
@@ -40,6 +41,7 @@ from spec.scenario import Scenario
 from spec.state import State
 
 RECENTRE_M = 1000.0
+SNAPSHOT_EVERY = 10
 Report = Callable[[tuple[int, float]], None]
 
 
@@ -48,7 +50,8 @@ class Simulator:
     generator."""
 
     def __init__(self, seed: int, parts: Parts, replan_on_violation: bool = True,
-                 tolerance: ToleranceReport | None = None, report: Report | None = None) -> None:
+                 tolerance: ToleranceReport | None = None, report: Report | None = None, snapshots: int = 0) -> None:
+        self.snapshots = snapshots  # keep every SNAPSHOT_EVERY-th plan's scenario, up to this many
         self.report, self._next_report_km = report, 1.0  # (seed, km) after every kilometre
         self.replan_on_violation = replan_on_violation
         self.rng = np.random.default_rng(seed)
@@ -184,6 +187,8 @@ class Simulator:
             return self.executor.hold(LOOP.wait_s, self.grid.speed, self._tick)
         self.summary.plans += 1
         self.summary.plan_ms.append(answer.elapsed_ms)
+        if len(self.summary.snapshots) < self.snapshots and self.summary.plans % SNAPSHOT_EVERY == 0:
+            self.summary.snapshots.append(scenario_to_dict(scenario))
         if answer.status is not Status.PLAN and pending:
             return self._keep(pending, FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
         if answer.status is not Status.PLAN:
@@ -301,6 +306,7 @@ def run_drive(seed: int, config: DriveConfig, out_dir: str | None = None, report
             Path(out_dir).mkdir(parents=True, exist_ok=True)
             observers = (TraceWriter(stack.enter_context((Path(out_dir) / f"trace-seed{seed}.jsonl").open("w"))),)
         tolerance = ToleranceReport(config.step_tolerance_cells, config.plan_tolerance_cells)
-        sim = Simulator(seed, config.parts(observers), config.replan_on_violation, tolerance, report)
+        sim = Simulator(seed, config.parts(observers), config.replan_on_violation, tolerance, report,
+                        config.snapshots)
         stack.callback(sim.close)
         return sim.drive(config.km, config.until_failure)

@@ -46,6 +46,7 @@ class RunSummary:
     tolerance: ToleranceReport = field(default_factory=ToleranceReport)
     safety: SafetyReport = field(default_factory=SafetyReport)
     traffic_collisions: int = 0  # other vehicles touching each other (the traffic models that do not keep to the grid)
+    snapshots: list[dict[str, Any]] = field(default_factory=list)  # scenarios planned for, as files write them
 
     def of_kind(self, kind: FailureKind) -> list[Failure]:
         return [f for f in self.failures if f.kind is kind]
@@ -78,7 +79,8 @@ class RunSummary:
                 "plan_ms": [round(m, 3) for m in self.plan_ms],
                 "plan_latency_ms": self.latency_ms(), "failures": [failure_json(f) for f in self.failures],
                 "failure": failure_json(failure) if failure else None, "tolerance": self.tolerance.to_json(),
-                "safety": self.safety.to_json(), "traffic_collisions": self.traffic_collisions}
+                "safety": self.safety.to_json(), "traffic_collisions": self.traffic_collisions,
+                "snapshots": self.snapshots}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> RunSummary:
@@ -88,7 +90,8 @@ class RunSummary:
                    frame_fallbacks=data["frame_fallbacks"], actions=data["actions"], plan_ms=list(data["plan_ms"]),
                    failures=[failure_from(f) for f in data["failures"]],
                    tolerance=ToleranceReport.from_json(data["tolerance"]),
-                   safety=SafetyReport.from_json(data["safety"]), traffic_collisions=data["traffic_collisions"])
+                   safety=SafetyReport.from_json(data["safety"]), traffic_collisions=data["traffic_collisions"],
+                   snapshots=list(data["snapshots"]))
 
 
 def failure_json(failure: Failure) -> dict[str, Any]:

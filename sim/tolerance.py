@@ -17,6 +17,9 @@ from typing import Any
 from spec.kinds import ViolationKind
 from spec.physical import LOOP
 
+#: The deviation histograms' bin width and how many bins (beyond the last: one overflow bin), in tolerance units.
+HISTOGRAM_BIN, HISTOGRAM_BINS = 0.02, 50
+
 
 @dataclass(frozen=True, slots=True)
 class Violation:
@@ -48,6 +51,8 @@ class ToleranceReport:
     checks: dict[str, int] = field(default_factory=lambda: defaultdict(int))
     violations: list[Violation] = field(default_factory=list)  # this process's, in full (the trace has them too)
     violations_by_action: dict[str, int] = field(default_factory=lambda: defaultdict(int))
+    #: per action, how many checks added a deviation in each bin of HISTOGRAM_BIN cells (the last: beyond)
+    histogram: dict[str, list[int]] = field(default_factory=dict)
 
     def check(self, plan: int, step: int, action: str, vehicle: str, predicted_m: float,
               start_dx_m: float, now_dx_m: float, previous_deviation: float) -> float:
@@ -60,6 +65,8 @@ class ToleranceReport:
         added = abs(deviation - previous_deviation)
         self.largest[action] = max(self.largest[action], added)
         self.checks[action] += 1
+        bins = self.histogram.setdefault(action, [0] * (HISTOGRAM_BINS + 1))
+        bins[min(HISTOGRAM_BINS, int(added / HISTOGRAM_BIN))] += 1
         kind = (ViolationKind.STEP if added > self.step_tolerance
                 else ViolationKind.PLAN if abs(deviation) > self.plan_tolerance else None)
         if kind is not None:
@@ -76,7 +83,8 @@ class ToleranceReport:
         return {"step_tolerance_cells": self.step_tolerance, "plan_tolerance_cells": self.plan_tolerance,
                 "checks": dict(self.checks), "violations": self.violation_count,
                 "violations_by_action": dict(self.violations_by_action),
-                "largest_step_deviation_cells": {k: round(v, 3) for k, v in self.largest.items()}}
+                "largest_step_deviation_cells": {k: round(v, 3) for k, v in self.largest.items()},
+                "added_histogram": {"bin_cells": HISTOGRAM_BIN, "counts": self.histogram}}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> ToleranceReport:
@@ -85,4 +93,16 @@ class ToleranceReport:
         report.checks.update(data["checks"])
         report.largest.update(data["largest_step_deviation_cells"])
         report.violations_by_action.update(data["violations_by_action"])
+        report.histogram.update(data["added_histogram"]["counts"])
         return report
+
+
+
+def histogram_quantile(bins: list[int], q: float) -> float | None:
+    """The ``q`` quantile of a deviation histogram (the upper edge of its bin; None: empty or in the overflow bin)."""
+    target, seen = q * sum(bins), 0
+    for i, count in enumerate(bins[:-1]):
+        seen += count
+        if count and seen >= target:
+            return round((i + 1) * HISTOGRAM_BIN, 3)
+    return None

@@ -1,0 +1,124 @@
+"""The audit command: the grid abstraction against traffic and sensing that do not keep to it."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+from rich.table import Table
+
+from ci.cli.common import err, out, print_json
+from ci.executors import ExecutorChoice, ExecutorKind, check_executor
+from ci.progress import km_progress
+from spec.errors import ExitCode, OptionError
+from spec.grid import STANDARD_CELLS_M, grid_for
+from spec.physical import EVENTS, NOISE
+
+
+def _names(option: str, text: str, known: dict[str, object] | None = None) -> tuple[str, ...]:
+    names = tuple(n.strip() for n in text.split(",") if n.strip())
+    if not names:
+        raise OptionError(option, text, "name at least one")
+    for name in names:
+        if known is not None and name not in known:
+            raise OptionError(option, name, f"unknown model (known: {', '.join(known)})")
+    return names
+
+
+def _cells(text: str) -> tuple[float, ...]:
+    cells = []
+    for word in _names("--cells", text):
+        try:
+            value = float(word)
+        except ValueError:
+            raise OptionError("--cells", word, "must be a number of metres") from None
+        grid_for(value)  # bad input names --cell-m: say which list it came from
+        cells.append(value)
+    return tuple(cells)
+
+
+@click.command()
+@click.option("--cells", default=",".join(f"{float(c):g}" for c in STANDARD_CELLS_M), show_default=True,
+              help="Cell lengths in metres, comma-separated.")
+@click.option("--traffic", "traffic_text", default="paper,spread,following", show_default=True)
+@click.option("--sensing", "sensing_text", default="exact,noisy", show_default=True)
+@click.option("--km", type=float, default=10.0, show_default=True, help="Kilometres per run.")
+@click.option("--runs", type=click.IntRange(min=1), default=1, show_default=True, help="Seeds per combination.")
+@click.option("--seed", type=click.IntRange(min=0), default=1, show_default=True, help="Run i uses seed + i.")
+@click.option("--engine", default="interpreter", show_default=True, help="The planner in the loop.")
+@click.option("--engines", "cost_engines", default="interpreter,spin,z3", show_default=True,
+              help="Engines whose planning cost is measured on the scenarios the planner saw.")
+@click.option("--snapshots", type=click.IntRange(min=0), default=20, show_default=True,
+              help="Scenarios kept per run for the planning cost.")
+@click.option("--stop-rate-per-h", type=float, default=EVENTS.stop_rate_per_h, show_default=True,
+              help="Left-lane vehicles braking to a standstill, per vehicle-hour (spread, following).")
+@click.option("--min-spawn-gap-m", type=float, default=EVENTS.min_spawn_gap_m, show_default=True,
+              help="Smallest bumper-to-bumper spawn gap (spread, following).")
+@click.option("--range-sd-m", type=float, default=NOISE.range_sd_m, show_default=True,
+              help="Range noise of the noisy sensor (standard deviation).")
+@click.option("--miss-rate", type=float, default=NOISE.miss_rate, show_default=True,
+              help="Missed detections of the noisy sensor, per reading.")
+@click.option("--workers", type=click.IntRange(min=1), default=2, show_default=True)
+@click.option("--executor", "executor_kind", type=click.Choice([k.value for k in ExecutorKind]),
+              default=ExecutorKind.PROCESSES.value, show_default=True)
+@click.option("--scheduler", default=None, help="With --executor dask: a running scheduler's address.")
+@click.option("--out", "out_dir", default="out/audit", show_default=True,
+              help="audit.jsonl (resumable), audit.json, audit.md and plots.")
+@click.option("--fresh", is_flag=True, help="Forget the runs already recorded in --out instead of resuming.")
+@click.option("--json", "as_json", is_flag=True)
+def audit(cells: str, traffic_text: str, sensing_text: str, km: float, runs: int, seed: int, engine: str,
+          cost_engines: str, snapshots: int, stop_rate_per_h: float, min_spawn_gap_m: float, range_sd_m: float,
+          miss_rate: float, workers: int, executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool,
+          as_json: bool) -> None:
+    """Audit the grid abstraction: cell size x traffic model x sensing model x seeds, driven closed-loop."""
+    from ci.audit import AuditPlan, planning_cost, rows, run_audit, write_reports
+    from sim.parts import SENSOR_MODELS, TRAFFIC_MODELS, DriveConfig
+    from spec.engines import get_engine
+
+    executor = ExecutorChoice(ExecutorKind(executor_kind), workers, scheduler)
+    check_executor(executor)
+    engines = _names("--engines", cost_engines)
+    for name in engines:
+        get_engine(name)
+    base = DriveConfig(km, engine=engine, stop_rate_per_h=stop_rate_per_h, min_spawn_gap_m=min_spawn_gap_m,
+                       range_sd_m=range_sd_m, miss_rate=miss_rate, snapshots=snapshots)
+    plan = AuditPlan(_cells(cells), _names("--traffic", traffic_text, dict(TRAFFIC_MODELS)),
+                     _names("--sensing", sensing_text, dict(SENSOR_MODELS)), tuple(range(seed, seed + runs)), base)
+    configs = plan.configs()
+    configs[0].parts()  # the engine exists and answers: bad input before any run starts
+    total = len(configs) * runs
+    err.print(f"audit: {len(configs)} combination(s) x seeds {seed}..{seed + runs - 1} = {total} run(s) of {km:g} km; "
+              f"planner {engine}; on {executor.describe()}; results in {out_dir}")
+    names = {i: f"{c.cell_m:g} m, {c.traffic}, {c.sensor}, seed {s}"
+             for i, (c, s) in enumerate((c, s) for c in configs for s in plan.seeds)}
+    with km_progress(err, total, km, "already in audit.jsonl (resumed; --fresh runs it again)") as bar:
+        results = run_audit(plan, out_dir, executor, fresh,
+                            lambda i, done, resumed: bar.done(done.summary, resumed, i, names[i]), bar.moved)
+    err.print("audit: planning cost on the scenarios the planner saw ...")
+    audit_rows, costs = rows(results), planning_cost(results, engines)
+    paths = write_reports(audit_rows, costs, plan, out_dir)
+    if as_json:
+        print_json({"combinations": [r.to_json() for r in audit_rows], "planning_cost": [c.to_json() for c in costs]})
+    else:
+        table = Table(title="the grid abstraction against traffic and sensing that do not keep to it")
+        for col in ("cell m", "traffic", "sensing", "km", "collisions /1000 km", "near misses /1000 km",
+                    "traffic collisions", "min gap ahead m", "violations", "plan ms"):
+            table.add_column(col, justify="right")
+        for r in audit_rows:
+            table.add_row(f"{r.cell_m:g}", r.traffic, r.sensing, f"{r.km:.1f}",
+                          f"{r.collisions} ({r.collisions_per_1000_km:.1f})",
+                          f"{r.near_misses} ({r.near_misses_per_1000_km:.1f})", str(r.traffic_collisions),
+                          str(r.min_gap_left_m), str(r.violations), str(r.plan_ms_median))
+        out.print(table)
+        cost_table = Table(title="planning cost on the scenarios the planner saw (shortest)")
+        for col in ("cell m", "engine", "n", "median ms", "p99 ms", "median states", "incomplete"):
+            cost_table.add_column(col, justify="right")
+        for c in costs:
+            cost_table.add_row(f"{c.cell_m:g}", c.engine, str(c.n), str(c.median_ms), str(c.p99_ms),
+                               str(c.median_states), str(c.incomplete))
+        out.print(cost_table)
+        out.print("written: " + ", ".join(str(p) for p in paths))
+    sys.exit(ExitCode.OK)
+
+
+COMMANDS = (audit,)
