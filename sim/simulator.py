@@ -264,11 +264,12 @@ class Simulator:
 
     def _implied_gaps(self, tracked: dict[tuple[Lane, int, int], tuple[float, int]],
                       predicted: State) -> dict[int, float]:
-        """Per tracked vehicle, the bumper-to-bumper gap ahead of the AV its predicted cell's centre implies."""
+        """Per tracked vehicle, the bumper-to-bumper gap to the AV (ahead or behind) its predicted cell's centre
+        implies."""
         gaps = {}
         for lane, index, body in tracked:
             cells = predicted.left_lane if lane is Lane.LEFT else predicted.right_lane
-            gaps[body] = (cells[index] - self.grid.av_cell) * self.grid.cell - CAR.length_m
+            gaps[body] = abs(cells[index] - self.grid.av_cell) * self.grid.cell - CAR.length_m
         return gaps
 
     def _tracked(self, seen: tuple[Reading, ...], start: State) -> dict[tuple[Lane, int, int], tuple[float, int]]:
