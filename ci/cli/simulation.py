@@ -12,6 +12,7 @@ from ci.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.progress import km_progress
 from spec.answers import Strategy
 from spec.errors import ExitCode
+from spec.grid import PAPER_GRID
 from spec.physical import LOOP
 
 
@@ -22,7 +23,7 @@ from spec.physical import LOOP
 @click.option("--seed", type=int, default=1, show_default=True, help="Run i uses seed + i.")
 @click.option("--engine", default="interpreter", show_default=True)
 @strategy_option(choices=(Strategy.SENSIBLE, Strategy.SHORTEST))
-@click.option("--cell-m", "cell_m", type=float, default=21.0, show_default=True,
+@click.option("--cell-m", "cell_m", type=float, default=PAPER_GRID.cell, show_default=True,
               help="The planner's cell length in metres (21, 10.5, 7, 5.25); the world stays the paper's.")
 @click.option("--runs", type=click.IntRange(min=1), default=1, show_default=True)
 @click.option("--workers", type=click.IntRange(min=1), default=1, show_default=True,
