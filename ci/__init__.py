@@ -1,1 +1,1 @@
-"""Scripts shared by CI and people: benchmarks, campaigns, scenario generators."""
+"""The top layer: the overtake CLI, campaigns (conformance, simulation, audit), executors, records, benchmarks."""

@@ -1,1 +1,1 @@
-"""Reference engines: the Python interpreter and planners, and (later) the Z3 encoding."""
+"""The Python engines: the reference interpreter and its planners, the offset abstraction, and the Z3 encoding."""

@@ -1,1 +1,1 @@
-"""Promela templates rendered from spec/ and the Spin engine (see issue: Spin engine)."""
+"""The Spin engine: Promela rendered from spec/, verifiers compiled once and cached."""

@@ -1,1 +1,1 @@
-"""The PyBullet simulator (see issue: simulator)."""
+"""The PyBullet simulator, assembled from parts: a closed loop that checks plans against physics."""
