@@ -126,3 +126,19 @@ def test_incomplete_when_the_state_limit_is_hit() -> None:
     problem = problem_for(make_scenario("left", [12, 14, 16], [40], 3), ModelKind.FINAL)
     assert search.sensible(problem, max_states=5).status is Status.INCOMPLETE
     assert search.shortest_reference(problem, max_states=5).status is Status.INCOMPLETE
+
+
+def test_the_merged_end_row_reaches_every_row_a_long_shift_can_reach() -> None:
+    """On a 10.5 m grid brake shifts the left lane by 2 cells: from the merged end row (every l beyond it) the
+    over-approximation must reach the end row itself and both rows after it, or "no plan at all" is unsound."""
+    from spec.actions import Action
+    from spec.grid import Grid
+
+    problem = problem_for(make_scenario("left", [], [], 0, grid=Grid(10.5)), ModelKind.FINAL)
+    space = bitplan.BitSpace(problem, -6, 6, merged_ends=True)
+    brake = next(f for f in space.moves[0] if f.move.action is Action.BRAKE)
+    assert brake.move.shift == 2 and space.pad == 2
+    row = space.row_bits
+    reached = space.image(brake, 1 << (space.pad * space.width))  # the low end row, o = 0
+    rows = [r for r in range(space.rows) if (reached >> (r * space.width)) & row]
+    assert rows == [space.pad, space.pad + 1, space.pad + 2]
