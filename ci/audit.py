@@ -31,7 +31,7 @@ from oracle.planner import plan
 from sim.parts import DriveConfig
 from sim.simulator import run_drive
 from sim.summary import RunSummary
-from sim.tolerance import histogram_quantile
+from sim.tolerance import HISTOGRAM_BIN, HISTOGRAM_BINS, histogram_quantile
 from spec.answers import Limits, Status, Strategy
 from spec.files import scenario_from_dict
 from spec.grid import STANDARD_CELLS_M
@@ -164,7 +164,8 @@ def rows(results: Iterable[Done]) -> list[Row]:
 
 def _row(key: tuple[float, str, str], runs: list[RunSummary]) -> Row:
     encounters = [e for r in runs for e in r.safety.encounters]
-    causes = Counter(f"{e.kind}: {e.lane}, {e.rule}, {e.doing.split(' ')[0]}" for e in encounters)
+    causes = Counter(f"{e.kind}: {e.lane}, {e.rule}, {e.doing.split(' ')[0]}"
+                     + (" (kept plan)" if "kept plan" in e.doing else "") for e in encounters)
     worst = sorted(encounters, key=lambda e: e.gap_m)[:5]
     deviation = {}
     for action in ACTIONS:
@@ -233,7 +234,7 @@ def write_reports(audit_rows: list[Row], costs: list[Cost], audit: AuditPlan, ou
     """``audit.json``, ``audit.md`` and the two plots in ``out_dir``; the files written."""
     out = Path(out_dir)
     per_combination = ("cell_m", "traffic", "sensor")
-    settings = {k: v for k, v in audit.base.to_json().items() if k not in per_combination}
+    settings = {k: v for k, v in audit.base.all_json().items() if k not in per_combination}
     settings |= {"cells_m": list(audit.cells_m), "traffic": list(audit.traffic), "sensing": list(audit.sensing),
                  "seeds": list(audit.seeds)}
     data = {"settings": settings, "combinations": [r.to_json() for r in audit_rows],
@@ -269,7 +270,8 @@ def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any])
     lines += ["", "## Deviation each action added (cells of 21 m: p50 / p95 as histogram bin edges of 0.02 / max)", "",
               "| cell m | traffic | sensing | " + " | ".join(ACTIONS) + " |", "|---|---|---|" + "---|" * len(ACTIONS)]
     for r in audit_rows:
-        cells = [("{p50} / {p95} / {max}".format(**r.deviation[a]) if a in r.deviation else "-") for a in ACTIONS]
+        cells = [" / ".join(_edge(r.deviation[a][k]) for k in ("p50", "p95", "max")) if a in r.deviation else "-"
+                 for a in ACTIONS]
         lines.append(f"| {r.cell_m:g} | {r.traffic} | {r.sensing} | " + " | ".join(cells) + " |")
     lines += ["", "## Planning cost on the scenarios the planner saw (shortest, whole pipeline)", "",
               "| cell m | engine | n | median ms | p99 ms | median states explored | incomplete |",
@@ -277,6 +279,13 @@ def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any])
     lines += [f"| {c.cell_m:g} | {c.engine} | {c.n} | {c.median_ms} | {c.p99_ms} | {c.median_states} | "
               f"{c.incomplete} |" for c in costs]
     return "\n".join(lines) + "\n"
+
+
+def _edge(value: float | None) -> str:
+    """A quantile as the report prints it: beyond the histogram's last edge is "> 1"."""
+    if value is None:
+        return "-"
+    return f"> {HISTOGRAM_BIN * HISTOGRAM_BINS:g}" if math.isinf(value) else f"{value:g}"
 
 
 def _plot_safety(audit_rows: list[Row], png: Path) -> None:

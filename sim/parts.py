@@ -131,6 +131,17 @@ class DriveConfig:
         return Parts(planner, traffic=traffic, sensor=sensor, observers=observers)
 
     def to_json(self) -> dict[str, Any]:
+        """The configuration as records keep it; event and noise parameters only where the models use them, so that
+        changing them does not make paper-traffic or exact-sensing runs look like another campaign."""
+        data = self.all_json()
+        if self.traffic == "paper":
+            del data["stop_rate_per_h"], data["min_spawn_gap_m"]
+        if self.sensor == "exact":
+            del data["range_sd_m"], data["miss_rate"]
+        return data
+
+    def all_json(self) -> dict[str, Any]:
+        """Every parameter, whether its models use it or not."""
         return {"km": self.km, "until_failure": self.until_failure, "engine": self.engine,
                 "strategy": self.strategy.value, "replan_on_violation": self.replan_on_violation,
                 "step_tolerance_cells": self.step_tolerance_cells, "plan_tolerance_cells": self.plan_tolerance_cells,

@@ -42,6 +42,7 @@ from spec.state import State
 
 RECENTRE_M = 1000.0
 SNAPSHOT_EVERY = 10
+SENSOR_STREAM = 1  # the second word of the sensor's seed: [seed, 1]
 Report = Callable[[tuple[int, float]], None]
 
 
@@ -60,7 +61,8 @@ class Simulator:
         self.scene = parts.scene()
         self.car = parts.car(self.scene, 0.0, self.scene.lane_y(Lane.LEFT))
         self.traffic = parts.traffic(self.scene, self.rng, 0.0)
-        self.sensor = parts.sensor(self.scene, self.rng)
+        # sensing draws from its own stream, so exact and noisy sensing meet the same traffic draws
+        self.sensor = parts.sensor(self.scene, np.random.default_rng([seed, SENSOR_STREAM]))
         self.executor = Executor(self.scene, self.car, Lane.LEFT, self.grid)
         self.summary = RunSummary(seed, tolerance=tolerance or ToleranceReport())
         self.safety = SafetyMonitor()
@@ -187,7 +189,7 @@ class Simulator:
             return self.executor.hold(LOOP.wait_s, self.grid.speed, self._tick)
         self.summary.plans += 1
         self.summary.plan_ms.append(answer.elapsed_ms)
-        if len(self.summary.snapshots) < self.snapshots and self.summary.plans % SNAPSHOT_EVERY == 0:
+        if len(self.summary.snapshots) < self.snapshots and self.summary.plans % SNAPSHOT_EVERY == 1:
             self.summary.snapshots.append(scenario_to_dict(scenario))
         if answer.status is not Status.PLAN and pending:
             return self._keep(pending, FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
@@ -238,7 +240,8 @@ class Simulator:
         executed = actions[: LOOP.replan_after_actions]
         for k, (action, profile) in enumerate(zip(executed, plan_profiles(executed, speed_mps, self.grid))):
             self.doing = f"{action.value} (plan {plan_id}, step {k + 1} of {len(actions)})"
-            self._implied = self._implied_gaps(tracked, states[k + 1])
+            self._implied = self._implied_gaps({key: v for key, v in tracked.items()
+                                                if cars[key[2]].respawns == generation[key[2]]}, states[k + 1])
             ok = self.executor.run(action, self._tick, profile)
             self._implied = {}
             if not ok:

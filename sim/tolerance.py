@@ -10,6 +10,7 @@ action may add at most ``step`` cells of it, and a plan may accumulate at most `
 
 from __future__ import annotations
 
+import math
 from collections import defaultdict
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -99,10 +100,13 @@ class ToleranceReport:
 
 
 def histogram_quantile(bins: list[int], q: float) -> float | None:
-    """The ``q`` quantile of a deviation histogram (the upper edge of its bin; None: empty or in the overflow bin)."""
+    """The ``q`` quantile of a deviation histogram: the upper edge of its bin, ``math.inf`` in the overflow bin
+    (beyond the last edge), None for an empty histogram."""
+    if not sum(bins):
+        return None
     target, seen = q * sum(bins), 0
     for i, count in enumerate(bins[:-1]):
         seen += count
         if count and seen >= target:
             return round((i + 1) * HISTOGRAM_BIN, 3)
-    return None
+    return math.inf

@@ -151,7 +151,8 @@ class SpreadTraffic(PaperTraffic):
 
     def _spacing_m(self, cells: int) -> float:
         cell_m, floor_m = self.spec.cell_m, CAR.length_m + self.events.min_spawn_gap_m
-        return max(floor_m, float(self.rng.uniform((cells - 1) * cell_m, (cells + 1) * cell_m)))
+        low = max(floor_m, (cells - 1) * cell_m)
+        return float(self.rng.uniform(low, max(low, (cells + 1) * cell_m)))
 
     def _spawn(self, car: KinematicCar, lane: Lane) -> KinematicCar:
         speed = draw_speed_mps(self.rng, self.speeds)
@@ -168,20 +169,20 @@ class SpreadTraffic(PaperTraffic):
         av_in_left = av.y_m >= 0
         for lane, cars, sign in ((Lane.LEFT, self.left, 1.0), (Lane.RIGHT, self.oncoming, -1.0)):
             ahead_first = sorted(cars, key=lambda c: -sign * c.x_m)  # the front-most (in its direction) first
-            leaders: list[tuple[float, float]] = []  # (x, speed) of the vehicle ahead, in travel order
+            leaders: list[tuple[float, float, KinematicCar | None]] = []  # (x, speed, car; None: the AV)
             if lane is Lane.LEFT and av_in_left:
-                leaders.append((av.x_m, av.speed_mps))
+                leaders.append((av.x_m, av.speed_mps, None))
             for car in ahead_first:
                 driver = self.drivers[car.body]
-                ahead = [(x, v) for x, v in leaders if sign * (x - car.x_m) > 0]
-                leader_x, leader_mps = min(ahead, key=lambda xv: sign * (xv[0] - car.x_m)) if ahead else (None, 0.0)
-                gap_m = math.inf if leader_x is None else sign * (leader_x - car.x_m) - CAR.length_m
-                if gap_m < 0 and not driver.wrecked:
-                    self._wreck(car, leader_x)
-                self._drive(car, driver, lane, gap_m, leader_mps, dt_s)
+                ahead = [item for item in leaders if sign * (item[0] - car.x_m) > 0]
+                leader = min(ahead, key=lambda item: sign * (item[0] - car.x_m)) if ahead else None
+                gap_m = math.inf if leader is None else sign * (leader[0] - car.x_m) - CAR.length_m
+                if gap_m < 0 and leader is not None and leader[2] is not None and not driver.wrecked:
+                    self._wreck(car, leader[2])  # touching the AV is the AV's collision: PyBullet reports it
+                self._drive(car, driver, lane, gap_m, 0.0 if leader is None else leader[1], dt_s)
                 car.velocity_mps = sign * driver.speed_mps
                 car.advance(dt_s)
-                leaders.append((car.x_m, driver.speed_mps))
+                leaders.append((car.x_m, driver.speed_mps, car))
 
     def _drive(self, car: KinematicCar, driver: Driver, lane: Lane, gap_m: float, leader_mps: float,
                dt_s: float) -> None:
@@ -206,13 +207,11 @@ class SpreadTraffic(PaperTraffic):
             return
         driver.speed_mps = max(0.0, driver.speed_mps + accel * dt_s)
 
-    def _wreck(self, car: KinematicCar, leader_x: float | None) -> None:
+    def _wreck(self, car: KinematicCar, leader: KinematicCar) -> None:
         """Two vehicles touched: both stop where they are."""
         self.collisions += 1
         self.drivers[car.body].wrecked = True
-        for other in self.cars():
-            if leader_x is not None and other.x_m == leader_x:
-                self.drivers[other.body].wrecked = True
+        self.drivers[leader.body].wrecked = True
 
 
 class FollowingTraffic(SpreadTraffic):

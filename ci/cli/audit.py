@@ -19,6 +19,8 @@ def _names(option: str, text: str, known: dict[str, object] | None = None) -> tu
     names = tuple(n.strip() for n in text.split(",") if n.strip())
     if not names:
         raise OptionError(option, text, "name at least one")
+    if len(set(names)) < len(names):
+        raise OptionError(option, text, "a name given twice")
     for name in names:
         if known is not None and name not in known:
             raise OptionError(option, name, f"unknown model (known: {', '.join(known)})")
@@ -34,6 +36,8 @@ def _cells(text: str) -> tuple[float, ...]:
             raise OptionError("--cells", word, "must be a number of metres") from None
         grid_for(value)  # bad input names --cell-m: say which list it came from
         cells.append(value)
+    if len(set(cells)) < len(cells):
+        raise OptionError("--cells", text, "a cell length given twice")
     return tuple(cells)
 
 

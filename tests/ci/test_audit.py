@@ -32,7 +32,20 @@ def test_an_audit_drives_every_combination_and_resumes_without_driving_again(tmp
     table = rows(again)
     assert [(r.cell_m, r.traffic, r.runs) for r in table] == [(21.0, "paper", 1), (21.0, "following", 1),
                                                                (10.5, "paper", 1), (10.5, "following", 1)]
-    assert all(r.km >= 0.0 for r in table) and table[0].deviation  # deviations measured per action
+    assert all(r.km > 0.2 for r in table) and table[0].deviation  # deviations measured per action
+    assert all(d.summary.snapshots for d in first)  # the first plan's scenario is always kept
+
+
+def test_rates_are_per_1000_km_driven_over_every_run_of_a_combination() -> None:
+    from ci.audit import Done
+    from sim.summary import Failure, RunSummary
+    from spec.kinds import FailureKind
+
+    hit = Failure(FailureKind.COLLISION, "collision", "", 1.0, 1.0)
+    config = DriveConfig(5.0)
+    done = [Done(config, RunSummary(1, km=1.5, failures=[hit])), Done(config, RunSummary(2, km=2.5))]
+    (row,) = rows(done)
+    assert (row.runs, row.km, row.collisions) == (2, 4.0, 1) and row.collisions_per_1000_km == 250.0
 
 
 def test_the_audit_command_writes_its_reports(tmp_path: Path) -> None:
@@ -42,7 +55,7 @@ def test_the_audit_command_writes_its_reports(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr
     result = json.loads(done.stdout)
     assert [(c["cell_m"], c["sensing"]) for c in result["combinations"]] == [(21.0, "exact"), (21.0, "noisy")]
-    assert result["planning_cost"][0]["engine"] == "interpreter"
+    assert result["planning_cost"][0]["engine"] == "interpreter" and result["planning_cost"][0]["n"] >= 2
     for name in ("audit.json", "audit.md", "audit-safety.png", "audit-latency.png", AUDIT_FILE):
         assert (tmp_path / name).stat().st_size > 0
 
@@ -56,6 +69,7 @@ def test_the_audit_command_writes_its_reports(tmp_path: Path) -> None:
     (("--miss-rate", "2"), ["--miss-rate", "between 0 and 1"]),
     (("--km", "nan"), ["--km", "finite"]),
     (("--engines", "interpreter,quantum"), ["--engine", "unknown engine"]),
+    (("--traffic", "paper,paper"), ["--traffic", "given twice"]),
 ])
 def test_bad_audit_input_is_one_line_exit_two(tmp_path: Path, args: tuple[str, ...], words: list[str]) -> None:
     done = run("audit", *args, "--out", str(tmp_path))

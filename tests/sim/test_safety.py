@@ -48,3 +48,12 @@ def test_a_report_round_trips_through_json() -> None:
     monitor.contact(car(1, 5.0, 7.0), Lane.LEFT, Pose(0.0, 1.8, 0.0, 9.0), 0.5, 3.1, "accelerate", None)  # type: ignore[arg-type]
     again = SafetyReport.from_json(monitor.report.to_json())
     assert again.to_json() == monitor.report.to_json() and again.contacts == 1 and again.near_misses == 1
+
+
+def test_deviation_quantiles_name_an_empty_histogram_and_the_overflow_bin_apart() -> None:
+    from sim.tolerance import HISTOGRAM_BINS, histogram_quantile
+
+    assert histogram_quantile([0] * (HISTOGRAM_BINS + 1), 0.5) is None
+    bins = [0] * (HISTOGRAM_BINS + 1)
+    bins[2], bins[-1] = 9, 1
+    assert histogram_quantile(bins, 0.5) == 0.06 and histogram_quantile(bins, 0.95) == math.inf

@@ -133,3 +133,24 @@ def test_the_noisy_sensor_misses_and_blurs_at_the_stated_rates(scene: Scene) -> 
 def test_the_registries_name_every_model() -> None:
     assert set(TRAFFIC_MODELS) == {"paper", "spread", "following"}
     assert set(SENSOR_MODELS) == {"exact", "noisy"}
+
+
+def test_the_av_is_a_leader_in_the_left_lane_and_touching_it_is_not_a_traffic_collision(scene: Scene) -> None:
+    traffic = FollowingTraffic(scene, np.random.default_rng(SEED), 0.0, events=EventSpec(stop_rate_per_h=0.0))
+    last = min(traffic.left, key=lambda c: c.x_m)
+    av = Pose(last.x_m + CAR.length_m + 6.0, 1.8, 0.0, 0.0)  # standing 6 m ahead of the last car
+    for _ in range(20 * 30):
+        traffic.advance(1 / 30, av)
+    assert traffic.drivers[last.body].speed_mps < 0.05 and av.x_m - last.x_m - CAR.length_m > 0
+    assert traffic.collisions == 0
+
+
+def test_two_vehicles_that_touch_are_one_traffic_collision_and_both_stop(scene: Scene) -> None:
+    traffic = SpreadTraffic(scene, np.random.default_rng(SEED), 0.0, events=EventSpec(stop_rate_per_h=0.0))
+    front, behind = sorted(traffic.left, key=lambda c: -c.x_m)[:2]
+    behind.place(front.x_m - 2.0)  # overlapping
+    traffic.advance(1 / 30, FAR_BEHIND)
+    assert traffic.collisions == 1
+    assert traffic.drivers[front.body].wrecked and traffic.drivers[behind.body].wrecked
+    traffic.advance(1 / 30, FAR_BEHIND)
+    assert traffic.collisions == 1 and traffic.drivers[behind.body].speed_mps == 0.0
