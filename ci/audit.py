@@ -13,7 +13,6 @@ explored. A run ends at its first collision: the km column is what was driven.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
 import time
@@ -23,10 +22,15 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+import matplotlib
 import numpy as np
 
+matplotlib.use("Agg")  # files only, never a window
+import matplotlib.pyplot as plt
+
 from ci.executors import ExecutorChoice, run_jobs
-from ci.records import append, open_for_append, read_records
+from ci.records import append, open_for_append
+from ci.simulate import campaign_key, recorded_runs
 from oracle.planner import plan
 from sim.parts import DriveConfig
 from sim.simulator import run_drive
@@ -82,10 +86,10 @@ def run_audit(audit: AuditPlan, out_dir: str, executor: ExecutorChoice, fresh: b
     if fresh:
         log.unlink(missing_ok=True)
     jobs = [(config, seed) for config in audit.configs() for seed in audit.seeds]
-    recorded = _recorded(log)
+    recorded = recorded_runs(log)
     results: dict[int, Done] = {}
     for index, (config, seed) in enumerate(jobs):
-        summary = recorded.get((json.dumps(config.to_json(), sort_keys=True), seed))
+        summary = recorded.get((campaign_key(config), seed))
         if summary is not None:
             results[index] = Done(config, summary)
             if on_done:
@@ -99,15 +103,6 @@ def run_audit(audit: AuditPlan, out_dir: str, executor: ExecutorChoice, fresh: b
             if on_done:
                 on_done(index, results[index], False)
     return [results[i] for i in range(len(jobs))]
-
-
-def _recorded(log: Path) -> dict[tuple[str, int], RunSummary]:
-    runs = {}
-    for record in read_records(log):
-        with contextlib.suppress(KeyError, TypeError, ValueError):  # a record of another version: run it again
-            summary = RunSummary.from_json(record["run"])
-            runs[(json.dumps(record["campaign"], sort_keys=True), summary.seed)] = summary
-    return runs
 
 
 # -- what the audit reports -----------------------------------------------------------------------
@@ -289,11 +284,6 @@ def _edge(value: float | None) -> str:
 
 
 def _plot_safety(audit_rows: list[Row], png: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
     for ax, what in zip(axes, ("collisions_per_1000_km", "near_misses_per_1000_km")):
         for traffic in dict.fromkeys(r.traffic for r in audit_rows):
@@ -312,11 +302,6 @@ def _plot_safety(audit_rows: list[Row], png: Path) -> None:
 
 
 def _plot_latency(costs: list[Cost], png: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     fig, ax = plt.subplots(figsize=(6, 4))
     for engine in dict.fromkeys(c.engine for c in costs):
         mine = sorted((c.cell_m, c.median_ms) for c in costs if c.engine == engine and c.median_ms is not None)

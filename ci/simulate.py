@@ -9,8 +9,10 @@ seeds it has no line for (a half-written last line is run again). Each run leave
 from __future__ import annotations
 
 import contextlib
+import json
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from ci.executors import IN_PROCESS, ExecutorChoice, run_jobs
 from ci.records import append, open_for_append, read_records
@@ -56,13 +58,22 @@ def drive_one(seed: int, campaign: DriveConfig, out_dir: str,
     return run_drive(seed, campaign, out_dir, report)
 
 
-def recorded(log: Path, campaign: DriveConfig) -> dict[int, RunSummary]:
-    """Runs an earlier start of the same campaign finished, by seed."""
+def campaign_key(config: DriveConfig | dict[str, Any]) -> str:
+    """What a record's drive configuration is compared by."""
+    return json.dumps(config.to_json() if isinstance(config, DriveConfig) else config, sort_keys=True)
+
+
+def recorded_runs(log: Path) -> dict[tuple[str, int], RunSummary]:
+    """Every run recorded in ``log``, by (campaign key, seed); a record of another version is left out (run again)."""
     runs = {}
     for record in read_records(log):
-        if record.get("campaign") != campaign.to_json():
-            continue
-        with contextlib.suppress(KeyError, TypeError):  # a record of another version: run that seed again
+        with contextlib.suppress(KeyError, TypeError, ValueError):
             summary = RunSummary.from_json(record["run"])
-            runs[summary.seed] = summary
+            runs[(campaign_key(record["campaign"]), summary.seed)] = summary
     return runs
+
+
+def recorded(log: Path, campaign: DriveConfig) -> dict[int, RunSummary]:
+    """Runs an earlier start of the same campaign finished, by seed."""
+    key = campaign_key(campaign)
+    return {seed: run for (other, seed), run in recorded_runs(log).items() if other == key}

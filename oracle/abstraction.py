@@ -46,12 +46,15 @@ class Offsets:
     track_left: bool  # an empty lane's offset is not part of the state: it stays 0
     track_right: bool
 
-    def left_collides(self, l_off: int) -> bool:
-        return l_off in self.left_hits
+    @property
+    def shifts(self) -> frozenset[int]:
+        """Every left-lane shift an enabled action makes."""
+        return frozenset(m.shift for moves in self.moves for m in moves)
 
-    def left_collides_during(self, l_start: int, shift: int) -> bool:
-        """A collision at any offset the left lane passes through while it shifts from ``l_start``."""
-        return any(l_start + j in self.left_hits for j in left_path(shift))
+    @property
+    def tick_counts(self) -> frozenset[int]:
+        """Every number of oncoming ticks an enabled action makes."""
+        return frozenset(m.ticks for moves in self.moves for m in moves)
 
     def left_bad_ends(self, shift: int) -> frozenset[int]:
         """The offsets a shift of ``shift`` may not end at: it would pass (or end at) a collision."""
@@ -60,13 +63,6 @@ class Offsets:
     def right_bad_starts(self, ticks: int) -> frozenset[int]:
         """The tick counts a move of ``ticks`` ticks may not start from: it would meet a danger zone."""
         return frozenset(o for lo, hi in self.right_hits for o in range(max(0, lo - ticks), hi + 1))
-
-    def right_collides(self, o: int) -> bool:
-        return any(lo <= o <= hi for lo, hi in self.right_hits)
-
-    def right_collides_during(self, o_start: int, ticks: int) -> bool:
-        """A collision after the effect (at ``o_start``) or after any of ``ticks`` oncoming ticks."""
-        return any(lo - ticks <= o_start <= hi for lo, hi in self.right_hits)
 
     def goal(self, lc: int, l_off: int, o: int) -> bool:
         """The goal, field by field, on offsets."""

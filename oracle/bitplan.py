@@ -40,11 +40,12 @@ class _Flat:
 class BitSpace:
     """The grid of one problem over rows ``l_low .. l_high``; optionally merging ``pad`` rows at each end."""
 
-    def __init__(self, problem: Problem, l_low: int, l_high: int, merged_ends: bool = False) -> None:
-        form = self.form = offsets_of(problem)
+    def __init__(self, problem: Problem, l_low: int, l_high: int, merged_ends: bool = False,
+                 form: Offsets | None = None) -> None:
+        form = self.form = form or offsets_of(problem)
         self.problem, self.l_low, self.merged = problem, l_low, merged_ends
         self.max_ticks = problem.grid.max_ticks
-        self.pad = max(abs(m.shift) for moves in form.moves for m in moves) or 1
+        self.pad = _pad(form)
         self.sat = form.o_saturation
         width = self.width = self.sat + self.max_ticks + 1
         rows = self.rows = l_high - l_low + 1
@@ -52,9 +53,8 @@ class BitSpace:
         self.rep = ((1 << (rows * width)) - 1) // self.row_bits  # bit 0 of every row
         self.lanes = form.lanes
         every = (1 << (rows * width)) - 1
-        left_safe = {s: every & ~self._rows_at(form.left_bad_ends(s)) for s in {m.shift for moves in form.moves
-                                                                               for m in moves}}
-        right_safe = {t: self._right_safe(t) for t in {m.ticks for moves in form.moves for m in moves}}
+        left_safe = {s: every & ~self._rows_at(form.left_bad_ends(s)) for s in form.shifts}
+        right_safe = {t: self._right_safe(t) for t in form.tick_counts}
         self.moves: list[list[_Flat]] = []
         for moves in form.moves:
             flat = []
@@ -181,8 +181,12 @@ class BitSpace:
 
 def _l_range(form: Offsets, horizon: int) -> tuple[int, int]:
     """Every l reachable within ``horizon`` actions."""
-    shifts = [m.shift for moves in form.moves for m in moves]
-    return min(0, min(shifts) * horizon), max(0, max(shifts) * horizon)
+    return min(0, min(form.shifts) * horizon), max(0, max(form.shifts) * horizon)
+
+
+def _pad(form: Offsets) -> int:
+    """Rows of padding at each end of a merged grid: the longest shift (at least one)."""
+    return max(abs(s) for s in form.shifts) or 1
 
 
 def shortest(problem: Problem) -> SearchResult:
@@ -190,7 +194,8 @@ def shortest(problem: Problem) -> SearchResult:
     trivial = trivial_answer(problem)
     if trivial is not None:
         return trivial
-    space = BitSpace(problem, *_l_range(offsets_of(problem), problem.horizon))
+    form = offsets_of(problem)
+    space = BitSpace(problem, *_l_range(form, problem.horizon), form=form)
     layers = [[space.start()] + [0] * (len(space.lanes) - 1)]
     explored = 1
     for _ in range(problem.horizon):
@@ -209,8 +214,8 @@ def beyond_horizon(problem: Problem, explored: int = 0) -> SearchResult:
     """After an exhaustive bounded search: is there no plan at all, or none within the horizon?"""
     form = offsets_of(problem)
     points = form.interesting_l()
-    pad = max(abs(m.shift) for moves in form.moves for m in moves) or 1
-    space = BitSpace(problem, min(points) - 1 - pad, max(points) + 1 + pad, merged_ends=True)
+    pad = _pad(form)
+    space = BitSpace(problem, min(points) - 1 - pad, max(points) + 1 + pad, merged_ends=True, form=form)
     reach = [space.start()] + [0] * (len(space.lanes) - 1)
     frontier = reach
     while any(frontier):

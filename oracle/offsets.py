@@ -28,8 +28,8 @@ class OffsetSearch:
         self.track_left, self.track_right = form.track_left, form.track_right
         self.moves = [[(m.action, m.lc_dst, form.lanes[m.lc_dst] is Lane.LEFT, m.shift, m.ticks) for m in moves]
                       for moves in form.moves]
-        self.left_bad_end = {s: form.left_bad_ends(s) for s in {m.shift for moves in form.moves for m in moves}}
-        self.right_bad = {t: form.right_bad_starts(t) for t in {m.ticks for moves in form.moves for m in moves}}
+        self.left_bad_end = {s: form.left_bad_ends(s) for s in form.shifts}
+        self.right_bad = {t: form.right_bad_starts(t) for t in form.tick_counts}
 
     def goal(self, key: Key) -> bool:
         lc, l_off, o, _ = key

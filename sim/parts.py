@@ -41,7 +41,8 @@ TRAFFIC_MODELS: dict[str, TrafficFactory] = {"paper": PaperTraffic, "spread": Sp
 SENSOR_MODELS: dict[str, SensorFactory] = {"exact": RaySensor, "noisy": NoisySensor}
 
 
-def _check_name(option: str, name: str, known: dict[str, Any]) -> None:
+def check_name(option: str, name: str, known: dict[str, Any]) -> None:
+    """A registered model's name; anything else is bad input naming the option and the known names."""
     if name not in known:
         raise OptionError(option, name, f"unknown model (known: {', '.join(known)})")
 
@@ -100,8 +101,8 @@ class DriveConfig:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "strategy", parse_strategy(self.strategy))
-        _check_name("--traffic", self.traffic, TRAFFIC_MODELS)
-        _check_name("--sensor", self.sensor, SENSOR_MODELS)
+        check_name("--traffic", self.traffic, TRAFFIC_MODELS)
+        check_name("--sensor", self.sensor, SENSOR_MODELS)
         grid_for(self.cell_m)
         for option, value, high in (("--km", self.km, math.inf), ("--stop-rate-per-h", self.stop_rate_per_h, math.inf),
                                     ("--min-spawn-gap-m", self.min_spawn_gap_m, math.inf),

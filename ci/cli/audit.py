@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from typing import Any
 
 import click
 from rich.table import Table
@@ -15,15 +16,18 @@ from spec.grid import STANDARD_CELLS_M, grid_for
 from spec.physical import EVENTS, NOISE
 
 
-def _names(option: str, text: str, known: dict[str, object] | None = None) -> tuple[str, ...]:
+def _names(option: str, text: str, known: dict[str, Any] | None = None) -> tuple[str, ...]:
+    """A comma-separated list of distinct names, each registered in ``known`` when given."""
+    from sim.parts import check_name
+
     names = tuple(n.strip() for n in text.split(",") if n.strip())
     if not names:
         raise OptionError(option, text, "name at least one")
     if len(set(names)) < len(names):
         raise OptionError(option, text, "a name given twice")
     for name in names:
-        if known is not None and name not in known:
-            raise OptionError(option, name, f"unknown model (known: {', '.join(known)})")
+        if known is not None:
+            check_name(option, name, known)
     return names
 
 

@@ -24,7 +24,6 @@ from spec.state import State
 out = Console(highlight=False, width=None if sys.stdout.isatty() else 120)
 err = Console(stderr=True, highlight=False)
 
-STRATEGY = click.Choice([s.value for s in Strategy])
 MODEL = click.Choice([m.value for m in ModelChoice])
 
 
@@ -62,13 +61,10 @@ def print_json(obj: Any) -> None:
 
 def print_states(scenario: Scenario, actions: tuple[Action, ...], states: tuple[State, ...]) -> None:
     """Both lanes after every step, with a legend for the marks."""
-    targets = scenario.target_indices
-    out.print("step 0: start")
-    for line in draw(states[0], scenario.grid, targets):
-        out.print(f"  {line}")
-    for n, (action, state) in enumerate(zip(actions, states[1:]), start=1):
-        out.print(f"step {n}: {action.value}")
-        for line in draw(state, scenario.grid, targets):
+    labels = ["start", *(a.value for a in actions)]
+    for n, (label, state) in enumerate(zip(labels, states)):
+        out.print(f"step {n}: {label}")
+        for line in draw(state, scenario.grid, scenario.target_indices):
             out.print(f"  {line}")
     out.print(f"  ({LEGEND})")
 
