@@ -8,7 +8,11 @@ per 1,000 km, each with its cause (the action under way, the model rule that sho
 the vehicle away, the true gap beside the gap the plan's cells implied), the deviation each
 action type added (quantiles over every check), and, on the scenarios the planner actually saw
 at that cell size (``snapshots`` per run), what planning costs each engine: latency and states
-explored. A run ends at its first collision: the km column is what was driven.
+explored. A collision does not end a run: the drive starts again where it stands
+(``restart_after_collision``), so collisions per 1,000 km are over the whole distance. Missed
+opportunities (``sim.opportunity``): decisions where the planner did not start an overtake but a
+canonical overtake replayed in physics from that moment succeeded, estimated per 1,000 km from
+the sampled checks.
 """
 
 from __future__ import annotations
@@ -32,6 +36,7 @@ from ci.executors import ExecutorChoice, run_jobs
 from ci.records import append, open_for_append
 from ci.simulate import campaign_key, recorded_runs
 from oracle.planner import plan
+from sim.opportunity import Refusal
 from sim.parts import DriveConfig
 from sim.simulator import run_drive
 from sim.summary import RunSummary
@@ -41,6 +46,7 @@ from spec.files import scenario_from_dict
 from spec.grid import STANDARD_CELLS_M
 
 AUDIT_FILE = "audit.jsonl"
+MISSED_EXAMPLES = 3  # missed opportunities reported per combination with their scenario
 ACTIONS = ("accelerate", "brake", "drive", "left_lane_change", "right_lane_change")
 
 
@@ -52,7 +58,8 @@ class AuditPlan:
     traffic: tuple[str, ...] = ("paper", "spread", "following")
     sensing: tuple[str, ...] = ("exact", "noisy")
     seeds: tuple[int, ...] = (1,)
-    base: DriveConfig = field(default_factory=lambda: DriveConfig(km=10.0, snapshots=20))
+    base: DriveConfig = field(default_factory=lambda: DriveConfig(km=25.0, snapshots=20, restart_after_collision=True,
+                                                                  opportunity_checks=50))
 
     def configs(self) -> list[DriveConfig]:
         """One drive configuration per combination, in table order (validated: bad input raises here)."""
@@ -125,6 +132,8 @@ class Row:
     deviation: dict[str, dict[str, float | None]]  # action -> p50, p95, max of what one action added (cells)
     violations: int
     plan_ms_median: float | None
+    opportunities: dict[str, dict[str, int]]  # refusal -> qualifying, checked and each outcome's count
+    missed_examples: list[dict[str, Any]]  # the first missed opportunities, each with its scenario
 
     @property
     def collisions_per_1000_km(self) -> float:
@@ -134,6 +143,33 @@ class Row:
     def near_misses_per_1000_km(self) -> float:
         return 1000 * self.near_misses / self.km if self.km else math.nan
 
+    def opportunity_total(self, what: str) -> int:
+        return sum(counts.get(what, 0) for counts in self.opportunities.values())
+
+    @property
+    def missed_per_1000_km(self) -> float:
+        """Missed opportunities proper: the planner found no overtake (refused, or nothing in its window)."""
+        return self._estimated_per_1000_km((Refusal.REFUSED, Refusal.OUTSIDE_WINDOW))
+
+    @property
+    def delayed_per_1000_km(self) -> float:
+        """Overtakes planned to start later where one started now succeeded in physics."""
+        return self._estimated_per_1000_km((Refusal.DELAYED,))
+
+    def _estimated_per_1000_km(self, refusals: tuple[Refusal, ...]) -> float:
+        """Per refusal, the share of checked decisions whose replay succeeded, times the decisions that qualified;
+        NaN when a refusal that qualified was never checked."""
+        if not self.km:
+            return math.nan
+        total = 0.0
+        for refusal in refusals:
+            counts = self.opportunities.get(refusal.value, {})
+            if counts.get("qualifying", 0):
+                if not counts.get("checked", 0):
+                    return math.nan
+                total += counts.get("missed", 0) / counts["checked"] * counts["qualifying"]
+        return 1000 * total / self.km
+
     def to_json(self) -> dict[str, Any]:
         return {"cell_m": self.cell_m, "traffic": self.traffic, "sensing": self.sensing, "runs": self.runs,
                 "km": round(self.km, 2), "collisions": self.collisions, "near_misses": self.near_misses,
@@ -142,7 +178,10 @@ class Row:
                 "traffic_collisions": self.traffic_collisions, "causes": self.causes, "worst": self.worst,
                 "min_gap_left_m": self.min_gap_left_m, "min_gap_oncoming_m": self.min_gap_oncoming_m,
                 "deviation_cells": self.deviation, "violations": self.violations,
-                "plan_ms_median": self.plan_ms_median}
+                "plan_ms_median": self.plan_ms_median, "opportunities": self.opportunities,
+                "missed_opportunities_per_1000_km_estimated": _num(self.missed_per_1000_km),
+                "delayed_overtakes_per_1000_km_estimated": _num(self.delayed_per_1000_km),
+                "missed_examples": self.missed_examples}
 
 
 def _num(value: float | None) -> float | None:
@@ -173,12 +212,18 @@ def _row(key: tuple[float, str, str], runs: list[RunSummary]) -> Row:
     gaps_left = [r.safety.min_gap_left_m for r in runs if math.isfinite(r.safety.min_gap_left_m)]
     gaps_oncoming = [r.safety.min_gap_oncoming_m for r in runs if math.isfinite(r.safety.min_gap_oncoming_m)]
     plan_ms = [m for r in runs for m in r.plan_ms]
+    opportunities: dict[str, Counter[str]] = {}
+    for r in runs:
+        for refusal, counts in r.opportunities.counts.items():
+            opportunities.setdefault(refusal, Counter()).update(counts)
+    missed = [o.to_json() for r in runs for o in r.opportunities.missed][:MISSED_EXAMPLES]
     return Row(key[0], key[1], key[2], len(runs), sum(r.km for r in runs),
                sum(len(r.collisions) for r in runs), sum(r.safety.near_misses for r in runs),
                sum(r.traffic_collisions for r in runs), dict(causes.most_common()), [e.to_json() for e in worst],
                _num(min(gaps_left)) if gaps_left else None, _num(min(gaps_oncoming)) if gaps_oncoming else None,
                deviation, sum(r.tolerance.violation_count for r in runs),
-               _num(float(np.median(plan_ms))) if plan_ms else None)
+               _num(float(np.median(plan_ms))) if plan_ms else None,
+               {k: dict(v) for k, v in sorted(opportunities.items())}, missed)
 
 
 @dataclass(slots=True)
@@ -247,11 +292,15 @@ def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any])
     lines = ["# Audit of the grid abstraction", "",
              "Settings: " + ", ".join(f"{k} {v}" for k, v in settings.items()), "",
              "| cell m | traffic | sensing | runs | km | collisions | per 1,000 km | near misses | per 1,000 km | "
+             "overtakes not started, replays that succeeded (checked) | missed per 1,000 km (est.) | "
+             "delayed per 1,000 km (est.) | "
              "traffic collisions | min gap ahead m | min gap oncoming m | violations | plan ms median |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in audit_rows:
         lines.append(f"| {r.cell_m:g} | {r.traffic} | {r.sensing} | {r.runs} | {r.km:.1f} | {r.collisions} | "
                      f"{r.collisions_per_1000_km:.1f} | {r.near_misses} | {r.near_misses_per_1000_km:.1f} | "
+                     f"{r.opportunity_total('missed')} ({r.opportunity_total('checked')}) | "
+                     f"{r.missed_per_1000_km:.1f} | {r.delayed_per_1000_km:.1f} | "
                      f"{r.traffic_collisions} | {r.min_gap_left_m} | {r.min_gap_oncoming_m} | {r.violations} | "
                      f"{r.plan_ms_median} |")
     lines += ["", "## Causes (contacts and near misses)", ""]
@@ -262,6 +311,21 @@ def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any])
             for e in r.worst[:3]:
                 lines.append(f"  - {e['kind']} at {e['km']} km during {e['doing']}: true gap {e['gap_m']} m, "
                              f"the plan's cells implied {e['implied_gap_m']} m")
+    lines += ["", "## Missed opportunities (decisions without an overtake start, by reason; how the replays ended)", "",
+              "Qualifying: in the AV's own lane, a vehicle ahead within 100 m, and no overtake started "
+              "(refused: the final model found no plan; outside_window: nothing to overtake in the model's window; "
+              "these two are missed opportunities when a replay succeeds; delayed: the final model's plan starts "
+              "its overtake later). A sample is replayed in physics: change lanes, accelerate 1..6 times, change "
+              "back, keep the lane 3 s, with no contact and no near miss (sim.opportunity).", ""]
+    for r in audit_rows:
+        if r.opportunities:
+            lines.append(f"- {r.cell_m:g} m, {r.traffic}, {r.sensing}: " + "; ".join(
+                f"{refusal}: " + ", ".join(f"{k} {v}" for k, v in counts.items())
+                for refusal, counts in r.opportunities.items()))
+            for o in r.missed_examples[:1]:
+                lines.append(f"  - at {o['km']} km ({o['refusal']}: {o['answer']}), target {o['target_gap_m']} m "
+                             f"ahead: change, accelerate x{o['accelerates']}, change back succeeded; "
+                             f"the planner's scenario is in audit.json")
     lines += ["", "## Deviation each action added (cells of 21 m: p50 / p95 as histogram bin edges of 0.02 / max)", "",
               "| cell m | traffic | sensing | " + " | ".join(ACTIONS) + " |", "|---|---|---|" + "---|" * len(ACTIONS)]
     for r in audit_rows:

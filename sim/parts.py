@@ -98,6 +98,8 @@ class DriveConfig:
     range_sd_m: float = NOISE.range_sd_m  # the noisy sensor
     miss_rate: float = NOISE.miss_rate
     snapshots: int = 0  # scenarios kept per run (every 10th plan's), to replay with every engine
+    restart_after_collision: bool = False  # go on from a fresh start after a collision (the audit) or stop (default)
+    opportunity_checks: int = 0  # decisions without an overtake replayed in physics per run (``sim.opportunity``)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "strategy", parse_strategy(self.strategy))
@@ -139,6 +141,9 @@ class DriveConfig:
             del data["stop_rate_per_h"], data["min_spawn_gap_m"]
         if self.sensor == "exact":
             del data["range_sd_m"], data["miss_rate"]
+        for key, default in (("restart_after_collision", False), ("opportunity_checks", 0)):
+            if data[key] == default:  # records written before these existed stay the same campaign
+                del data[key]
         return data
 
     def all_json(self) -> dict[str, Any]:
@@ -148,7 +153,9 @@ class DriveConfig:
                 "step_tolerance_cells": self.step_tolerance_cells, "plan_tolerance_cells": self.plan_tolerance_cells,
                 "cell_m": self.cell_m, "traffic": self.traffic, "sensor": self.sensor,
                 "stop_rate_per_h": self.stop_rate_per_h, "min_spawn_gap_m": self.min_spawn_gap_m,
-                "range_sd_m": self.range_sd_m, "miss_rate": self.miss_rate, "snapshots": self.snapshots}
+                "range_sd_m": self.range_sd_m, "miss_rate": self.miss_rate, "snapshots": self.snapshots,
+                "restart_after_collision": self.restart_after_collision,
+                "opportunity_checks": self.opportunity_checks}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> DriveConfig:

@@ -103,6 +103,10 @@ class SafetyMonitor:
         self.spec, self.report = spec, SafetyReport()
         self._open: dict[int, Encounter] = {}  # body -> the near miss under way with it
 
+    def forget(self) -> None:
+        """Close every near miss under way (a new scene: its vehicles are new bodies)."""
+        self._open.clear()
+
     def observe(self, pose: Pose, lane: Lane, left: Sequence[KinematicCar], oncoming: Sequence[KinematicCar],
                 km: float, t_s: float, doing: str, implied_gap_m: Callable[[int], float | None]) -> None:
         car, gap, closing = ahead_in_lane(pose, lane, left, oncoming)

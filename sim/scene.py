@@ -8,6 +8,7 @@ Each Simulator owns one Scene, so simulators never share a physics world.
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import sys
 from collections.abc import Iterator
@@ -47,6 +48,11 @@ class Scene:
         ground = self.client.createCollisionShape(p.GEOM_PLANE)
         self.ground = self.client.createMultiBody(0, ground)
         self.client.changeDynamics(self.ground, -1, lateralFriction=1.0, restitution=0.0)
+        # the calls made on every physics step, bound once: BulletClient looks each call up by name otherwise
+        own = {"physicsClientId": self.client._client}
+        self._step = functools.partial(p.stepSimulation, **own)
+        self._reset_pose = functools.partial(p.resetBasePositionAndOrientation, **own)
+        self._contacts = functools.partial(p.getContactPoints, **own)
 
     @staticmethod
     def lane_y(lane: Lane) -> float:
@@ -56,7 +62,15 @@ class Scene:
 
     def step(self) -> None:
         """One physics step of ``dt_s``."""
-        self.client.stepSimulation()
+        self._step()
+
+    def place(self, body: int, xyz: tuple[float, float, float]) -> None:
+        """Put a body at ``xyz``, unrotated (kinematic traffic)."""
+        self._reset_pose(body, xyz, (0, 0, 0, 1))
+
+    def touching(self, body: int) -> set[int]:
+        """The bodies in contact with ``body`` after the last step."""
+        return {point[2] for point in self._contacts(bodyA=body)}
 
     def close(self) -> None:
         """Release the physics world."""

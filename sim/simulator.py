@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from sim import opportunity
 from sim.discretiser import in_window, reading_cell
 from sim.executor import Executor, action_speed_mps, plan_profiles, ramp_gain_m, reference_offset_m
 from sim.observers import StepEvent, TraceWriter
@@ -36,12 +37,16 @@ from spec.errors import ScenarioError
 from spec.files import scenario_to_dict
 from spec.kinds import FailureKind
 from spec.lanes import Lane
+from spec.models import ModelKind
 from spec.physical import CAR, LOOP
 from spec.scenario import Scenario
 from spec.state import State
 
 RECENTRE_M = 1000.0
+START_UP_S = 4.0  # holding the lane from standstill at the start (and after a restart): reach the common speed
+MIN_EPISODE_KM = 0.001  # a collision again before the AV has moved a metre since the last one ends the drive
 SNAPSHOT_EVERY = 10
+NO_OVERTAKE = (Status.NO_PLAN, Status.NO_PLAN_WITHIN_HORIZON)  # the final model's answers that refuse an overtake
 SENSOR_STREAM = 1  # the second word of the sensor's seed: [seed, 1]
 Report = Callable[[tuple[int, float]], None]
 
@@ -51,26 +56,37 @@ class Simulator:
     generator."""
 
     def __init__(self, seed: int, parts: Parts, replan_on_violation: bool = True,
-                 tolerance: ToleranceReport | None = None, report: Report | None = None, snapshots: int = 0) -> None:
+                 tolerance: ToleranceReport | None = None, report: Report | None = None, snapshots: int = 0,
+                 restart_after_collision: bool = False, opportunity_checks: int = 0) -> None:
         self.snapshots = snapshots  # keep every SNAPSHOT_EVERY-th plan's scenario, up to this many
         self.report, self._next_report_km = report, 1.0  # (seed, km) after every kilometre
         self.replan_on_violation = replan_on_violation
+        self.restart_after_collision = restart_after_collision
+        self.opportunity_checks = opportunity_checks  # missed-opportunity replays per run, at most
         self.rng = np.random.default_rng(seed)
+        # sensing and sampling draw from their own streams, so exact and noisy sensing meet the same traffic draws
+        self.sensor_rng = np.random.default_rng([seed, SENSOR_STREAM])
+        self.sample_rng = np.random.default_rng([seed, opportunity.STREAM])
+        self.parts = parts
         self.planner, self.observers = parts.planner, parts.observers
         self.grid = parts.planner.grid
-        self.scene = parts.scene()
-        self.car = parts.car(self.scene, 0.0, self.scene.lane_y(Lane.LEFT))
-        self.traffic = parts.traffic(self.scene, self.rng, 0.0)
-        # sensing draws from its own stream, so exact and noisy sensing meet the same traffic draws
-        self.sensor = parts.sensor(self.scene, np.random.default_rng([seed, SENSOR_STREAM]))
-        self.executor = Executor(self.scene, self.car, Lane.LEFT, self.grid)
         self.summary = RunSummary(seed, tolerance=tolerance or ToleranceReport())
         self.safety = SafetyMonitor()
         self.summary.safety = self.safety.report
+        self.origin_km = 0.0
+        self._assemble()
+
+    def _assemble(self) -> None:
+        """A scene with the AV at the origin of its lane and traffic around it (at the start, and after a restart)."""
+        self.scene = self.parts.scene()
+        self.car = self.parts.car(self.scene, 0.0, self.scene.lane_y(Lane.LEFT))
+        self.traffic = self.parts.traffic(self.scene, self.rng, 0.0)
+        self.sensor = self.parts.sensor(self.scene, self.sensor_rng)
+        self.executor = Executor(self.scene, self.car, Lane.LEFT, self.grid)
+        self.safety.forget()
         self._implied: dict[int, float] = {}  # body -> the gap the plan under way implies at the action's end
         self.pending: tuple[Action, ...] = ()  # the rest of the plan under way when a re-plan starts
         self.doing = "start-up"  # what the AV was executing: recorded with every collision
-        self.origin_km = 0.0
         self._side = {car.body: car.x_m > 0 for car in self.traffic.left}
 
     # -- the physics clock ------------------------------------------------------------------
@@ -82,8 +98,9 @@ class Simulator:
         x = pose.x_m
         self.safety.observe(pose, Executor.lane_of(pose.y_m), self.traffic.left, self.traffic.oncoming,
                             self.summary.km, self.summary.sim_time_s, self.doing, self._implied.get)
+        touching = self.scene.touching(self.car.body)
         for car in self.traffic.cars():
-            if self.scene.client.getContactPoints(self.car.body, car.body):
+            if car.body in touching:
                 in_left = car in self.traffic.left
                 self.safety.contact(car, Lane.LEFT if in_left else Lane.RIGHT, pose, self.summary.km,
                                     self.summary.sim_time_s, self.doing, self._implied.get(car.body))
@@ -119,16 +136,34 @@ class Simulator:
 
     # -- the decision clock ------------------------------------------------------------------
     def drive(self, km: float, until_failure: bool = False) -> RunSummary:
-        """Drive ``km`` kilometres (or until the first failure); stop at any collision."""
+        """Drive ``km`` kilometres (or until the first failure); at a collision stop, or with
+        ``restart_after_collision`` start again where the drive stands (``_restart``)."""
         started = time.perf_counter()
-        ok = self.executor.hold(4.0, self.grid.speed, self._tick)  # start-up: reach the common speed
-        while ok and self.summary.km < km:
+        ok = self.executor.hold(START_UP_S, self.grid.speed, self._tick)  # start-up: reach the common speed
+        episode_km = 0.0
+        while self.summary.km < km and not (until_failure and self.summary.failures):
+            if not ok:
+                if not self.restart_after_collision or self.summary.km - episode_km < MIN_EPISODE_KM:
+                    break  # a collision ends the drive; so does one that comes again before the AV has moved
+                episode_km = self.summary.km
+                ok = self._restart()
+                continue
             ok = self._one_plan()
-            if until_failure and self.summary.failures:
-                break
         self.summary.wall_s = time.perf_counter() - started
-        self.summary.traffic_collisions = self.traffic.collisions
+        self.summary.traffic_collisions += self.traffic.collisions
         return self.summary
+
+    def _restart(self) -> bool:
+        """After a collision: a fresh scene, AV and traffic (drawn from the drive's generator as it stands); the
+        distance, the failures and every report go on, so an audit measures collisions per km over long runs
+        (as the paper's simulation counted kilometres between failures)."""
+        self.summary.restarts += 1
+        self.summary.traffic_collisions += self.traffic.collisions
+        self.origin_km = self.summary.km
+        self.scene.close()
+        self._assemble()
+        self.doing = "start-up after a collision"
+        return self.executor.hold(START_UP_S, self.grid.speed, self._tick)
 
     def _sense(self) -> tuple[Reading, ...]:
         pose = self.car.pose()
@@ -189,6 +224,8 @@ class Simulator:
             return self.executor.hold(LOOP.wait_s, self.grid.speed, self._tick)
         self.summary.plans += 1
         self.summary.plan_ms.append(answer.elapsed_ms)
+        if lane is Lane.LEFT:
+            self._opportunity(answer, scenario)
         if len(self.summary.snapshots) < self.snapshots and self.summary.plans % SNAPSHOT_EVERY == 1:
             self.summary.snapshots.append(scenario_to_dict(scenario))
         if answer.status is not Status.PLAN and pending:
@@ -203,6 +240,40 @@ class Simulator:
             profile = plan_profiles((Action.DRIVE,), pose.speed_mps, self.grid)[0]
             return self.executor.run(Action.DRIVE, self._tick, profile)
         return self._execute(answer.actions, answer.states, seen, pose.speed_mps, frame_mps)
+
+    def _opportunity(self, answer: Answer, scenario: Scenario) -> None:
+        """A decision in the AV's own lane: when the planner does not start an overtake with a target in sight, count
+        it, and on a sample of such decisions replay the canonical overtakes (``sim.opportunity``); the world is
+        left exactly as it was."""
+        x = self.car.pose().x_m
+        target = opportunity.target_ahead(x, self.traffic.left)
+        refusal = None if target is None else self._refusal(answer)
+        if target is None or refusal is None:
+            return
+        report = self.summary.opportunities
+        report.count(refusal, "qualifying")
+        if report.total("checked") >= self.opportunity_checks or self.sample_rng.random() >= opportunity.SAMPLE:
+            return
+        report.count(refusal, "checked")
+        gap_m = target.x_m - x - CAR.length_m
+        outcome, accelerates = opportunity.Replay(self.scene, self.car, self.traffic, self.grid).first_success(target)
+        report.count(refusal, outcome.value)
+        if outcome is opportunity.Outcome.MISSED and len(report.missed) < opportunity.MAX_RECORDS:
+            said = " ".join(a.value for a in answer.actions[:4]) or answer.status.value
+            report.missed.append(opportunity.Opportunity(round(self.summary.km, 3), round(self.summary.sim_time_s, 1),
+                                                         refusal.value, said, accelerates, gap_m,
+                                                         scenario_to_dict(scenario)))
+
+    @staticmethod
+    def _refusal(answer: Answer) -> opportunity.Refusal | None:
+        """Why ``answer`` does not start an overtake now, or None when it does (or could not tell: incomplete)."""
+        if any(kind is ModelKind.FINAL and status in NO_OVERTAKE for kind, status, _ in answer.stages):
+            return opportunity.Refusal.REFUSED
+        if answer.status is not Status.PLAN:
+            return None
+        if not answer.actions:
+            return opportunity.Refusal.OUTSIDE_WINDOW
+        return None if answer.actions[0] is Action.RIGHT_LANE_CHANGE else opportunity.Refusal.DELAYED
 
     @staticmethod
     def _no_plan(answer: Answer, scenario: Scenario) -> str:
@@ -311,6 +382,6 @@ def run_drive(seed: int, config: DriveConfig, out_dir: str | None = None, report
             observers = (TraceWriter(stack.enter_context((Path(out_dir) / f"trace-seed{seed}.jsonl").open("w"))),)
         tolerance = ToleranceReport(config.step_tolerance_cells, config.plan_tolerance_cells)
         sim = Simulator(seed, config.parts(observers), config.replan_on_violation, tolerance, report,
-                        config.snapshots)
+                        config.snapshots, config.restart_after_collision, config.opportunity_checks)
         stack.callback(sim.close)
         return sim.drive(config.km, config.until_failure)

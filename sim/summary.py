@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from sim.opportunity import OpportunityReport
 from sim.safety import SafetyReport
 from sim.tolerance import ToleranceReport
 from spec.kinds import FailureKind
@@ -47,6 +48,8 @@ class RunSummary:
     safety: SafetyReport = field(default_factory=SafetyReport)
     traffic_collisions: int = 0  # other vehicles touching each other (the traffic models that do not keep to the grid)
     snapshots: list[dict[str, Any]] = field(default_factory=list)  # scenarios planned for, as files write them
+    restarts: int = 0  # fresh starts after a collision (``restart_after_collision``)
+    opportunities: OpportunityReport = field(default_factory=OpportunityReport)
 
     def of_kind(self, kind: FailureKind) -> list[Failure]:
         return [f for f in self.failures if f.kind is kind]
@@ -80,7 +83,7 @@ class RunSummary:
                 "plan_latency_ms": self.latency_ms(), "failures": [failure_json(f) for f in self.failures],
                 "failure": failure_json(failure) if failure else None, "tolerance": self.tolerance.to_json(),
                 "safety": self.safety.to_json(), "traffic_collisions": self.traffic_collisions,
-                "snapshots": self.snapshots}
+                "snapshots": self.snapshots, "restarts": self.restarts, "opportunities": self.opportunities.to_json()}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> RunSummary:
@@ -91,7 +94,9 @@ class RunSummary:
                    failures=[failure_from(f) for f in data["failures"]],
                    tolerance=ToleranceReport.from_json(data["tolerance"]),
                    safety=SafetyReport.from_json(data["safety"]), traffic_collisions=data["traffic_collisions"],
-                   snapshots=list(data["snapshots"]))
+                   snapshots=list(data["snapshots"]), restarts=data.get("restarts", 0),
+                   opportunities=OpportunityReport.from_json(data["opportunities"]) if "opportunities" in data
+                   else OpportunityReport())
 
 
 def failure_json(failure: Failure) -> dict[str, Any]:

@@ -20,9 +20,10 @@ that touch each other stop where they are (wrecks) until they are left behind.
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -56,6 +57,8 @@ class TrafficModel(Protocol):
     def advance(self, dt_s: float, av: Pose) -> None: ...
     def respawn_behind(self, av_x_m: float) -> int: ...
     def shift_x(self, dx_m: float) -> None: ...
+    def save(self) -> dict[str, Any]: ...
+    def restore(self, saved: dict[str, Any]) -> None: ...
 
 
 class PaperTraffic:
@@ -121,6 +124,18 @@ class PaperTraffic:
     def shift_x(self, dx_m: float) -> None:
         for car in self.cars():
             car.place(car.x_m + dx_m)
+
+    def save(self) -> dict[str, Any]:
+        """Everything that moves or draws, to put back with ``restore`` (a what-if replay leaves no trace)."""
+        return {"cars": [(car.x_m, car.velocity_mps, car.respawns) for car in self.cars()], "run": self.run,
+                "collisions": self.collisions, "rng": copy.deepcopy(self.rng.bit_generator.state)}
+
+    def restore(self, saved: dict[str, Any]) -> None:
+        for car, (x_m, velocity_mps, respawns) in zip(self.cars(), saved["cars"], strict=True):
+            car.place(x_m)
+            car.velocity_mps, car.respawns = velocity_mps, respawns
+        self.run, self.collisions = saved["run"], saved["collisions"]
+        self.rng.bit_generator.state = copy.deepcopy(saved["rng"])
 
 
 @dataclass(slots=True)
@@ -206,6 +221,13 @@ class SpreadTraffic(PaperTraffic):
             driver.speed_mps = min(driver.speed_mps, leader_mps) if close else driver.desired_mps
             return
         driver.speed_mps = max(0.0, driver.speed_mps + accel * dt_s)
+
+    def save(self) -> dict[str, Any]:
+        return {**super().save(), "drivers": copy.deepcopy(self.drivers), "t_s": self.t_s}
+
+    def restore(self, saved: dict[str, Any]) -> None:
+        super().restore(saved)
+        self.drivers, self.t_s = copy.deepcopy(saved["drivers"]), saved["t_s"]
 
     def _wreck(self, car: KinematicCar, leader: KinematicCar) -> None:
         """Two vehicles touched: both stop where they are."""

@@ -102,7 +102,7 @@ class KinematicCar:
 
     def place(self, x_m: float) -> None:
         self.x_m = x_m
-        self.scene.client.resetBasePositionAndOrientation(self.body, (x_m, self.y_m, self.z_m), (0, 0, 0, 1))
+        self.scene.place(self.body, (x_m, self.y_m, self.z_m))
 
     def advance(self, dt_s: float) -> None:
         self.place(self.x_m + self.velocity_mps * dt_s)

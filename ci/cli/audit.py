@@ -50,14 +50,17 @@ def _cells(text: str) -> tuple[float, ...]:
               help="Cell lengths in metres, comma-separated.")
 @click.option("--traffic", "traffic_text", default="paper,spread,following", show_default=True)
 @click.option("--sensing", "sensing_text", default="exact,noisy", show_default=True)
-@click.option("--km", type=float, default=10.0, show_default=True, help="Kilometres per run.")
-@click.option("--runs", type=click.IntRange(min=1), default=1, show_default=True, help="Seeds per combination.")
+@click.option("--km", type=float, default=25.0, show_default=True,
+              help="Kilometres per run (a collision does not end a run: it starts again where it stands).")
+@click.option("--runs", type=click.IntRange(min=1), default=4, show_default=True, help="Seeds per combination.")
 @click.option("--seed", type=click.IntRange(min=0), default=1, show_default=True, help="Run i uses seed + i.")
 @click.option("--engine", default="interpreter", show_default=True, help="The planner in the loop.")
 @click.option("--engines", "cost_engines", default="interpreter,spin,z3", show_default=True,
               help="Engines whose planning cost is measured on the scenarios the planner saw.")
 @click.option("--snapshots", type=click.IntRange(min=0), default=20, show_default=True,
               help="Scenarios kept per run for the planning cost.")
+@click.option("--opportunity-checks", type=click.IntRange(min=0), default=50, show_default=True,
+              help="Decisions without an overtake replayed in physics per run, at most (a 1 in 4 sample).")
 @click.option("--stop-rate-per-h", type=float, default=EVENTS.stop_rate_per_h, show_default=True,
               help="Left-lane vehicles braking to a standstill, per vehicle-hour (spread, following).")
 @click.option("--min-spawn-gap-m", type=float, default=EVENTS.min_spawn_gap_m, show_default=True,
@@ -75,9 +78,9 @@ def _cells(text: str) -> tuple[float, ...]:
 @click.option("--fresh", is_flag=True, help="Forget the runs already recorded in --out instead of resuming.")
 @click.option("--json", "as_json", is_flag=True)
 def audit(cells: str, traffic_text: str, sensing_text: str, km: float, runs: int, seed: int, engine: str,
-          cost_engines: str, snapshots: int, stop_rate_per_h: float, min_spawn_gap_m: float, range_sd_m: float,
-          miss_rate: float, workers: int, executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool,
-          as_json: bool) -> None:
+          cost_engines: str, snapshots: int, opportunity_checks: int, stop_rate_per_h: float,
+          min_spawn_gap_m: float, range_sd_m: float, miss_rate: float, workers: int, executor_kind: str,
+          scheduler: str | None, out_dir: str, fresh: bool, as_json: bool) -> None:
     """Audit the grid abstraction: cell size x traffic model x sensing model x seeds, driven closed-loop."""
     from ci.audit import AuditPlan, planning_cost, rows, run_audit, write_reports
     from sim.parts import SENSOR_MODELS, TRAFFIC_MODELS, DriveConfig
@@ -89,7 +92,8 @@ def audit(cells: str, traffic_text: str, sensing_text: str, km: float, runs: int
     for name in engines:
         get_engine(name)
     base = DriveConfig(km, engine=engine, stop_rate_per_h=stop_rate_per_h, min_spawn_gap_m=min_spawn_gap_m,
-                       range_sd_m=range_sd_m, miss_rate=miss_rate, snapshots=snapshots)
+                       range_sd_m=range_sd_m, miss_rate=miss_rate, snapshots=snapshots, restart_after_collision=True,
+                       opportunity_checks=opportunity_checks)
     plan = AuditPlan(_cells(cells), _names("--traffic", traffic_text, dict(TRAFFIC_MODELS)),
                      _names("--sensing", sensing_text, dict(SENSOR_MODELS)), tuple(range(seed, seed + runs)), base)
     configs = plan.configs()
@@ -110,12 +114,16 @@ def audit(cells: str, traffic_text: str, sensing_text: str, km: float, runs: int
     else:
         table = Table(title="the grid abstraction against traffic and sensing that do not keep to it")
         for col in ("cell m", "traffic", "sensing", "km", "collisions /1000 km", "near misses /1000 km",
-                    "traffic collisions", "min gap ahead m", "violations", "plan ms"):
+                    "not started: succeeded (checked)", "missed /1000 km est.", "delayed /1000 km est.",
+                    "traffic collisions", "min gap ahead m", "violations",
+                    "plan ms"):
             table.add_column(col, justify="right")
         for r in audit_rows:
             table.add_row(f"{r.cell_m:g}", r.traffic, r.sensing, f"{r.km:.1f}",
                           f"{r.collisions} ({r.collisions_per_1000_km:.1f})",
-                          f"{r.near_misses} ({r.near_misses_per_1000_km:.1f})", str(r.traffic_collisions),
+                          f"{r.near_misses} ({r.near_misses_per_1000_km:.1f})",
+                          f"{r.opportunity_total('missed')} ({r.opportunity_total('checked')})",
+                          f"{r.missed_per_1000_km:.1f}", f"{r.delayed_per_1000_km:.1f}", str(r.traffic_collisions),
                           str(r.min_gap_left_m), str(r.violations), str(r.plan_ms_median))
         out.print(table)
         cost_table = Table(title="planning cost on the scenarios the planner saw (shortest)")

@@ -48,6 +48,24 @@ def test_rates_are_per_1000_km_driven_over_every_run_of_a_combination() -> None:
     assert (row.runs, row.km, row.collisions) == (2, 4.0, 1) and row.collisions_per_1000_km == 250.0
 
 
+def test_missed_opportunities_are_estimated_per_reason_from_the_checked_share() -> None:
+    from collections import Counter
+
+    from ci.audit import Done
+    from sim.opportunity import OpportunityReport
+    from sim.summary import RunSummary
+
+    config = DriveConfig(5.0)
+    seen = OpportunityReport({"refused": Counter(qualifying=8, checked=4, missed=1, near_miss=3),
+                              "delayed": Counter(qualifying=10, checked=5, missed=5)})
+    (row,) = rows([Done(config, RunSummary(1, km=2.0, opportunities=seen))])
+    assert row.missed_per_1000_km == 1000 * (1 / 4 * 8) / 2.0  # refused and outside the window only
+    assert row.delayed_per_1000_km == 1000 * 10 / 2.0
+    unchecked = OpportunityReport({"outside_window": Counter(qualifying=3)})
+    (row,) = rows([Done(config, RunSummary(1, km=2.0, opportunities=unchecked))])
+    assert row.missed_per_1000_km != row.missed_per_1000_km  # NaN: qualified, never checked
+
+
 def test_the_audit_command_writes_its_reports(tmp_path: Path) -> None:
     done = run("audit", "--cells", "21", "--traffic", "paper", "--sensing", "exact,noisy", "--km", "0.3",
                "--workers", "1", "--engines", "interpreter", "--snapshots", "2", "--out", str(tmp_path), "--json",

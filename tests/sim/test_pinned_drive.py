@@ -3,7 +3,7 @@
 The golden files were written by that code: ``run_drive(3, 2.0, out_dir=...)``'s summary (less its
 wall-clock fields) and its trace. The default assembly must reproduce both exactly: the same
 kilometres, overtakes, plans, deviations and every traced number. Figures added to the summary
-since (safety, traffic collisions) are not part of that record.
+since (safety, traffic collisions, restarts, opportunities) are not part of that record.
 """
 
 from __future__ import annotations
@@ -22,8 +22,9 @@ def test_the_default_assembly_drives_the_pinned_drive_exactly(tmp_path: Path) ->
     summary = run_drive(3, DriveConfig(2.0), str(tmp_path)).to_json()
     golden = json.loads((GOLDEN / "drive-seed3-2km.json").read_text())
     assert subset(golden, summary) == golden
-    assert set(summary) - set(golden) - set(WALL_CLOCK) == {"safety", "traffic_collisions", "snapshots"}
-    assert summary["traffic_collisions"] == 0 and summary["safety"]["contacts"] == 0
+    assert set(summary) - set(golden) - set(WALL_CLOCK) == {"safety", "traffic_collisions", "snapshots", "restarts",
+                                                            "opportunities"}
+    assert summary["traffic_collisions"] == 0 and summary["safety"]["contacts"] == 0 and summary["restarts"] == 0
     assert (tmp_path / "trace-seed3.jsonl").read_text() == (GOLDEN / "drive-seed3-2km-trace.jsonl").read_text()
 
 

@@ -1,0 +1,201 @@
+"""Missed opportunities: where the planner found no overtake, would one have succeeded in physics?
+
+The definition the audit measures. A decision *qualifies* when the AV is in its own (left)
+lane, the truth has a left-lane vehicle ahead within the left sensor's range (the *target*),
+and the planner does not start an overtake now, for one of three reasons (``Refusal``): the
+final model (the one that plans overtakes) answers no plan, proved or within the horizon
+(``refused``); it plans an overtake that starts later, after waiting or preparing
+(``delayed``); or the model's window holds nothing to overtake although the sensor sees the
+target (``outside_window``). For a
+checked decision the world is saved and the canonical overtakes are replayed in it, open loop,
+on the same physics and the same traffic model: change to the right lane, accelerate ``m``
+times (``m`` = 1 .. ``MAX_ACCELERATES``), change back, then keep the lane for ``LOOP.wait_s``.
+A refused or outside-window decision is a *missed opportunity* when one of them succeeds (a
+delayed one, a *delayed overtake*: the planner did find one): no contact and no near miss
+(``spec.physical.SafetySpec``, the audit's own thresholds; a near miss already under way with
+the same vehicle when the decision was taken is not the overtake's) at any moment of the
+replay, the AV back in its own lane, and the target behind the AV by at least the near-miss
+gap. The world is then put back exactly as it was (PyBullet's state, the traffic model's
+vehicles and generator, the AV's wheel command), so the drive goes on as though nothing had
+been tried.
+
+Replays cost about 0.15 s of wall time per decision (a drive makes 5 or so qualifying
+decisions per km), so each qualifying decision is checked with probability ``SAMPLE`` (from its
+own random stream, ``[seed, 2]``) up to a budget per run (once the budget is spent, later
+decisions of that run go unchecked: a long run's sample leans to its start); every
+qualifying decision is counted, so missed opportunities per km are estimated as
+missed / checked x qualifying / km, per reason.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import asdict, dataclass, field
+from enum import Enum
+from typing import Any
+
+from sim.executor import Executor, plan_profiles
+from sim.safety import SafetyMonitor
+from sim.scene import Scene
+from sim.traffic import TrafficModel
+from sim.vehicle import KinematicCar, WheeledCar
+from spec.actions import Action
+from spec.grid import Grid
+from spec.lanes import Lane
+from spec.physical import CAR, LOOP, SAFETY, SENSORS
+
+MAX_ACCELERATES = 6  # 18 s at twice the common speed: 126 m gained on a vehicle at 7 m/s
+SAMPLE = 0.25  # the share of qualifying decisions replayed (a quarter: about +10% on a drive's wall time)
+STREAM = 2  # the second word of the sampling stream's seed: [seed, 2]
+MAX_RECORDS = 20  # missed opportunities kept per run with their scenario (the counts are exact beyond it)
+
+
+class Refusal(Enum):
+    """Why the planner did not start an overtake at a qualifying decision."""
+
+    REFUSED = "refused"  # the final model found no plan
+    DELAYED = "delayed"  # the final model's plan starts its overtake later
+    OUTSIDE_WINDOW = "outside_window"  # the sensed target is not in the model's window: nothing to overtake
+
+
+class Outcome(Enum):
+    """How the longest overtake tried at one decision ended (or that one succeeded)."""
+
+    MISSED = "missed"  # an overtake succeeded in physics: the planner missed it
+    CONTACT = "contact"
+    NEAR_MISS = "near_miss"
+    NOT_PASSED = "target_not_passed"
+
+
+def overtake(accelerates: int) -> tuple[Action, ...]:
+    """The canonical overtake with ``accelerates`` steps at twice the common speed in the right lane."""
+    return (Action.RIGHT_LANE_CHANGE,) + (Action.ACCELERATE,) * accelerates + (Action.LEFT_LANE_CHANGE,)
+
+
+@dataclass(slots=True)
+class Opportunity:
+    """One missed opportunity: where, the planner's answer and scenario, and the overtake that succeeded."""
+
+    km: float
+    t_s: float
+    refusal: str  # why the planner did not start an overtake (``Refusal``)
+    answer: str  # the planner's first actions, or the final model's status
+    accelerates: int
+    target_gap_m: float  # bumper to bumper, when the decision was taken
+    scenario: dict[str, Any]  # what the planner was asked, as a scenario file writes it
+
+    def to_json(self) -> dict[str, Any]:
+        return {**asdict(self), "target_gap_m": round(self.target_gap_m, 2)}
+
+
+@dataclass(slots=True)
+class OpportunityReport:
+    """One run's decisions without an overtake, per ``Refusal``: how many qualified ("qualifying"), how many were
+    checked ("checked"), and how the checks ended (one count per ``Outcome``)."""
+
+    counts: dict[str, Counter[str]] = field(default_factory=dict)
+    missed: list[Opportunity] = field(default_factory=list)  # the first MAX_RECORDS
+
+    def count(self, refusal: Refusal, what: str) -> None:
+        self.counts.setdefault(refusal.value, Counter())[what] += 1
+
+    def total(self, what: str) -> int:
+        """Over every refusal: "qualifying", "checked" or an ``Outcome`` value."""
+        return sum(c[what] for c in self.counts.values())
+
+    def to_json(self) -> dict[str, Any]:
+        return {"counts": {k: dict(v) for k, v in self.counts.items()}, "missed": [o.to_json() for o in self.missed]}
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> OpportunityReport:
+        return cls({k: Counter(v) for k, v in data["counts"].items()}, [Opportunity(**o) for o in data["missed"]])
+
+
+class WorldSave:
+    """The whole world at one moment, to put back after a what-if replay."""
+
+    def __init__(self, scene: Scene, car: WheeledCar, traffic: TrafficModel) -> None:
+        self.scene, self.car, self.traffic = scene, car, traffic
+        self.state_id = scene.client.saveState()
+        self.wheel_target_mps = car.wheel_target_mps
+        self.traffic_state = traffic.save()
+
+    def restore(self) -> None:
+        self.scene.client.restoreState(stateId=self.state_id)
+        self.car.wheel_target_mps = self.wheel_target_mps
+        self.traffic.restore(self.traffic_state)
+
+    def close(self) -> None:
+        self.restore()
+        self.scene.client.removeState(self.state_id)
+
+
+def target_ahead(av_x_m: float, left: list[KinematicCar]) -> KinematicCar | None:
+    """The nearest left-lane vehicle ahead within the left sensor's range: what an overtake would pass."""
+    ahead = [c for c in left if 0 < c.x_m - av_x_m <= SENSORS.left_range_m]
+    return min(ahead, key=lambda c: c.x_m) if ahead else None
+
+
+class Replay:
+    """Canonical overtakes replayed from one saved moment (see the module's docstring)."""
+
+    def __init__(self, scene: Scene, car: WheeledCar, traffic: TrafficModel, grid: Grid) -> None:
+        self.scene, self.car, self.traffic, self.grid = scene, car, traffic, grid
+
+    def first_success(self, target: KinematicCar) -> tuple[Outcome, int]:
+        """The outcome of the shortest overtake that succeeds (and its accelerates), or of the longest tried.
+
+        Overtakes share their start (a lane change, then accelerating), so one that fails before its return
+        ends the search: every longer one fails there too."""
+        saved = WorldSave(self.scene, self.car, self.traffic)
+        outcome = Outcome.NOT_PASSED
+        try:
+            for accelerates in range(1, MAX_ACCELERATES + 1):
+                outcome, in_return = self._one(overtake(accelerates), target)
+                saved.restore()
+                if outcome is Outcome.MISSED:
+                    return outcome, accelerates
+                if outcome is not Outcome.NOT_PASSED and not in_return:
+                    break
+        finally:
+            saved.close()
+        return outcome, 0
+
+    def _one(self, actions: tuple[Action, ...], target: KinematicCar) -> tuple[Outcome, bool]:
+        """Replay one overtake; its outcome, and whether a failure came only in its return (the last lane change
+        or the hold after it)."""
+        monitor = SafetyMonitor(SAFETY)
+        executor = Executor(self.scene, self.car, Lane.LEFT, self.grid)
+        respawns = target.respawns
+        first = True  # a near miss open on the first step was under way before the overtake began
+        failed: list[Outcome] = []
+
+        def tick(dt_s: float) -> bool:
+            nonlocal first
+            pose = self.car.pose()
+            self.traffic.advance(dt_s, pose)
+            touching = self.scene.touching(self.car.body)
+            for car in self.traffic.cars():
+                if car.body in touching:
+                    failed.append(Outcome.CONTACT)
+                    return False
+            before = monitor.report.near_misses
+            monitor.observe(pose, Executor.lane_of(pose.y_m), self.traffic.left, self.traffic.oncoming,
+                            0.0, 0.0, "", lambda body: None)
+            if not first and monitor.report.near_misses > before:
+                failed.append(Outcome.NEAR_MISS)
+                return False
+            first = False
+            self.traffic.respawn_behind(pose.x_m)
+            return True
+
+        profiles = plan_profiles(actions, self.car.pose().speed_mps, self.grid)
+        for k, (action, profile) in enumerate(zip(actions, profiles)):
+            if not executor.run(action, tick, profile):
+                return failed[0], k == len(actions) - 1
+        if not executor.hold(LOOP.wait_s, self.grid.speed, tick):
+            return failed[0], True
+        pose = self.car.pose()
+        passed = target.respawns != respawns or target.x_m < pose.x_m - CAR.length_m - SAFETY.near_gap_m
+        back = Executor.lane_of(pose.y_m) is Lane.LEFT
+        return (Outcome.MISSED, False) if passed and back else (Outcome.NOT_PASSED, True)
