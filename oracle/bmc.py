@@ -24,16 +24,12 @@ from oracle.abstraction import merged, offsets_of
 from oracle.interpreter import problem_step, replay
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.answers import Limits, SearchResult, Status, Strategy
+from spec.cost import COST_DOC, COST_TERMS
 from spec.engines import Engine, register
 from spec.lanes import Lane
 from spec.rules import behind_line, collision_span, left_path, nearest_span, passed_line
 from spec.scenario import Problem
 from spec.state import State
-
-#: The cost ``optimal`` minimises, most important first (see COST_DOC).
-COST_TERMS = ("lane_changes", "right_lane_steps", "brakes", "length")
-COST_DOC = ("lexicographic: lane changes, then actions that end in the right lane, then brakes, "
-            "then plan length; over every plan of at most `horizon` actions")
 
 
 @dataclass(frozen=True, slots=True)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from oracle.interpreter import Validation, validate
 from spec.actions import Action
@@ -24,7 +24,25 @@ def plan(
     engine: str | Engine = "interpreter",
     limits: Limits | None = None,
 ) -> Answer:
-    """Plan for ``scenario`` with one engine; every plan returned has been validated."""
+    """Plan for ``scenario`` with one engine; every plan returned has been validated (an invalid one, or one whose
+    states differ from the interpreter's, is an ``EngineError``)."""
+    eng = engine if isinstance(engine, Engine) else get_engine(engine)
+    answer = solve(scenario, strategy, model, horizon, eng, limits)
+    if answer.status is not Status.PLAN or answer.model is None:
+        return answer
+    return replace(answer, states=_checked_states(eng, problem_for(scenario, answer.model, horizon), answer))
+
+
+def solve(
+    scenario: Scenario,
+    strategy: Strategy | str = Strategy.SENSIBLE,
+    model: ModelChoice | None = None,
+    horizon: int | None = None,
+    engine: str | Engine = "interpreter",
+    limits: Limits | None = None,
+) -> Answer:
+    """The pipeline's answer as the engine gives it, unchecked: a plan's states are the engine's own (empty when it
+    reports none). Conformance checks use it to judge each plan themselves; everything else uses ``plan``."""
     eng = engine if isinstance(engine, Engine) else get_engine(engine)
     strategy = parse_strategy(strategy)
     check_strategy(eng, strategy)
@@ -43,8 +61,7 @@ def plan(
             break
     elapsed_ms = (time.perf_counter() - started) * 1000
     if result.status is Status.PLAN:
-        states = _checked_states(eng, problem, result)
-        return Answer(Status.PLAN, kind, eng.name, strategy, result.actions, states, explored, elapsed_ms,
+        return Answer(Status.PLAN, kind, eng.name, strategy, result.actions, result.states, explored, elapsed_ms,
                       result.detail, tuple(stages), result.extra)
     if result.status is not Status.INCOMPLETE:
         _prove_beyond(eng, scenario, horizon, stages)
@@ -53,7 +70,7 @@ def plan(
                   result.extra)
 
 
-def _checked_states(engine: Engine, problem: Problem, result: SearchResult) -> tuple[State, ...]:
+def _checked_states(engine: Engine, problem: Problem, result: SearchResult | Answer) -> tuple[State, ...]:
     """The states of a plan, after checking it with the interpreter: an invalid plan is an engine error."""
     verdict = validate(problem, result.actions)
     if not verdict.valid:

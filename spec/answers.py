@@ -17,7 +17,7 @@ class Strategy(enum.Enum):
 
     SENSIBLE = "sensible"  # the first plan of the depth-first search in the action order (Spin's default)
     SHORTEST = "shortest"  # a plan of the fewest actions (the first in the action order, for the interpreter)
-    OPTIMAL = "optimal"  # the least lexicographic cost (``oracle.bmc.COST_DOC``)
+    OPTIMAL = "optimal"  # the least lexicographic cost (``spec.cost.COST_DOC``)
 
 
 class Status(enum.Enum):

@@ -55,6 +55,11 @@ class Grid:
             _whole(units, self.cell_m, f"{action.value}'s duration ({rule.duration_s} s)", "time units")
             _whole(units * (1 - rule.speed_factor), self.cell_m, f"{action.value}'s left-lane shift")
             _whole(units * (1 + rule.speed_factor), self.cell_m, f"{action.value}'s oncoming ticks")
+        object.__setattr__(self, "_hash", hash((self.cell_m, self.speed_mps)))
+
+    def __hash__(self) -> int:
+        """Hashed once: a grid keys the rules' caches on every step, and hashing its fractions each time is slow."""
+        return self._hash  # type: ignore[attr-defined]
 
     # -- the grid's own numbers ----------------------------------------------------------------
     @property

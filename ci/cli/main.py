@@ -13,7 +13,7 @@ import sys
 
 import click
 
-from ci.cli import audit, library, planning, simulation
+from ci.cli import audit, crossval, library, planning, simulation
 from spec.errors import ExitCode, SuiteError
 
 
@@ -23,7 +23,8 @@ def cli() -> None:
     """Plan overtaking manoeuvres by model checking, with cross-validated engines."""
 
 
-for command in (*planning.COMMANDS, *library.COMMANDS, *simulation.COMMANDS, *audit.COMMANDS):
+for command in (*planning.COMMANDS, *library.COMMANDS, *simulation.COMMANDS, *audit.COMMANDS,
+                *crossval.COMMANDS):
     cli.add_command(command)
 
 

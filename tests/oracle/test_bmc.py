@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from oracle import bitplan, bmc, offsets
 from oracle.interpreter import validate
 from spec.answers import Limits, Status
+from spec.cost import COST_TERMS
 from spec.library import BUILTINS
 from spec.models import ModelKind
 from spec.scenario import Scenario, make_scenario, problem_for
@@ -31,7 +32,7 @@ def check_shortest(scenario: Scenario, model: ModelKind) -> None:
 
 def cost_key(problem, actions) -> tuple[int, ...]:
     cost = bmc.plan_cost(problem, actions)
-    return tuple(cost[name] for name in bmc.COST_TERMS)
+    return tuple(cost[name] for name in COST_TERMS)
 
 
 def check_optimal(scenario: Scenario, model: ModelKind) -> None:

@@ -115,7 +115,7 @@ def _answer(status: Status, actions: tuple[Action, ...], stages: tuple[tuple[Mod
 
 @pytest.mark.parametrize(("answer", "refusal"), [
     (_answer(Status.PLAN, overtake(2), ((ModelKind.FINAL, Status.PLAN, ""),)), None),
-    (_answer(Status.PLAN, (Action.DRIVE,) + overtake(2), ((ModelKind.FINAL, Status.PLAN, ""),)), Refusal.DELAYED),
+    (_answer(Status.PLAN, (Action.DRIVE, *overtake(2)), ((ModelKind.FINAL, Status.PLAN, ""),)), Refusal.DELAYED),
     (_answer(Status.PLAN, (Action.ACCELERATE,), ((ModelKind.FINAL, Status.NO_PLAN, ""),
                                                  (ModelKind.PREPARATIONS, Status.PLAN, ""))), Refusal.REFUSED),
     (_answer(Status.NO_PLAN_WITHIN_HORIZON, (), ((ModelKind.FINAL, Status.NO_PLAN_WITHIN_HORIZON, ""),)),

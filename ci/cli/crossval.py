@@ -1,0 +1,214 @@
+"""The crossval command: every registered property on scenarios from a source, as CI runs it."""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import click
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColumn, Task, TextColumn, TimeRemainingColumn
+from rich.table import Table
+from rich.text import Text
+
+from ci.cli.common import cell_option, err, horizon_option, out, print_json
+from ci.executors import ExecutorChoice, ExecutorKind, check_executor
+from spec.errors import ExitCode, OptionError
+
+SOURCES = ("library", "hypothesis", "exhaustive")
+DEFAULT_SPACE = "left=2@8..20,right=1@12..30,lanes=both"
+
+
+class RateColumn(ProgressColumn):
+    """Scenarios per second."""
+
+    def render(self, task: Task) -> Text:
+        return Text(f"{task.speed:.1f}/s" if task.speed else "-/s")
+
+
+@click.command()
+@click.option("--source", type=click.Choice(SOURCES), default="library", show_default=True)
+@click.option("--space", default=DEFAULT_SPACE, show_default=True,
+              help="With --source exhaustive: left=N@A..B,right=M@C..D[,lanes=left|right|both] (cells).")
+@click.option("--properties", "property_text", default="all", show_default=True,
+              help="Comma-separated property names, or all (see --list).")
+@click.option("--engines", "engine_text", default="interpreter,spin,z3", show_default=True)
+@click.option("--workers", type=click.IntRange(min=1), default=None, help="Default: every core.")
+@click.option("--executor", "executor_kind", type=click.Choice([k.value for k in ExecutorKind]),
+              default=ExecutorKind.PROCESSES.value, show_default=True)
+@click.option("--scheduler", default=None, help="With --executor dask: a running scheduler's address.")
+@click.option("--timeout", "timeout_s", type=float, default=10.0, show_default=True,
+              help="Seconds per engine run (past it: incomplete).")
+@click.option("--seed", type=click.IntRange(min=0), default=None,
+              help="With --source hypothesis (default: drawn, and printed).")
+@click.option("--max-reproducers", type=click.IntRange(min=0), default=3, show_default=True,
+              help="Failures shrunk per property.")
+@cell_option()
+@horizon_option()
+@click.option("--out", "out_dir", default="out/crossval", show_default=True)
+@click.option("--fresh", is_flag=True, help="Forget the verdicts already recorded in --out instead of resuming.")
+@click.option("--list", "list_only", is_flag=True, help="List the registered properties and exit.")
+@click.option("--json", "as_json", is_flag=True)
+def crossval(source: str, space: str, property_text: str, engine_text: str, workers: int | None, executor_kind: str,
+             scheduler: str | None, timeout_s: float, seed: int | None, max_reproducers: int, cell_m: float | None,
+             horizon: int | None, out_dir: str, fresh: bool, list_only: bool, as_json: bool) -> None:
+    """Check every property on scenarios from a source; exit 0 when all hold, 6 on any failure."""
+    from ci.crossval import Campaign, Summary, library_scenarios, parse_space, write_reports
+    from ci.properties import PROPERTIES, check_property_names
+    from sim.parts import check_number
+    from spec.grid import grid_for
+
+    if list_only:
+        for prop in PROPERTIES.values():
+            out.print(f"{prop.name.value}: {prop.doc} (runs: {', '.join(k.label for k in prop.runs)})")
+        sys.exit(ExitCode.OK)
+    check_number("--timeout", timeout_s, 86_400.0)
+    if timeout_s <= 0:
+        raise OptionError("--timeout", timeout_s, "must be positive")
+    grid = grid_for(cell_m)
+    properties = check_property_names("--properties", property_text)
+    engines = _engines(engine_text)
+    executor = ExecutorChoice(ExecutorKind(executor_kind), workers or os.cpu_count() or 1, scheduler)
+    check_executor(executor)
+    chosen = [p for p in properties if PROPERTIES[p].applies(engines)]
+    if not chosen:
+        raise OptionError("--engines", engine_text, "no selected property applies to these engines")
+    skipped = [p.value for p in properties if p not in chosen]
+    out_path = Path(out_dir)
+    _writable(out_path)
+    scenarios: list[Any] = []
+    the_space = None
+    if source == "library":
+        scenarios = library_scenarios(grid)
+        if horizon is not None:
+            from dataclasses import replace
+
+            scenarios = [replace(s, horizon=horizon) for s in scenarios]
+    elif source == "exhaustive":
+        the_space = parse_space(space, grid)
+    if source == "hypothesis" and seed is None:
+        seed = int.from_bytes(os.urandom(4), "little")
+    campaign = Campaign(source, tuple(chosen), engines, float(grid.cell_m), horizon, timeout_s,
+                        the_space.describe() if the_space else None, seed if source == "hypothesis" else None)
+    if fresh:
+        (out_path / "verdicts.jsonl").unlink(missing_ok=True)
+    err.print(f"crossval: source {source}; properties {', '.join(p.value for p in chosen)}"
+              + (f" (not applicable to these engines: {', '.join(skipped)})" if skipped else "")
+              + f"; engines {', '.join(engines)}; on {executor.describe()}; results in {out_dir}"
+              + (f"; seed {seed}" if source == "hypothesis" else ""))
+    summary = Summary()
+    started = time.perf_counter()
+    if source == "hypothesis":
+        from ci.hypo import run_hypothesis
+
+        results, reproducers = run_hypothesis(campaign, grid, out_path, executor, max_reproducers, err)
+        for result in results:
+            summary.add(result)
+    else:
+        if the_space is not None:
+            err.print(f"crossval: space {the_space.describe()}: {the_space.candidates()} candidates ...")
+            scenarios = list(the_space.scenarios(grid, horizon))
+            err.print(f"crossval: {len(scenarios)} valid scenarios in the space (every one is checked)")
+        _sweep(campaign, scenarios, out_path, executor, summary)
+        reproducers = _reproduce(summary, campaign, out_path, max_reproducers)
+    paths = write_reports(summary, campaign, reproducers, out_path)
+    wall_s = time.perf_counter() - started
+    data = summary.to_json(campaign, reproducers)
+    if as_json:
+        print_json(data)
+    else:
+        _print(data, wall_s)
+        out.print("written: " + ", ".join(str(p) for p in paths))
+    sys.exit(ExitCode.OK if summary.all_held else ExitCode.DISAGREE)
+
+
+def _engines(text: str) -> tuple[str, ...]:
+    from spec.engines import get_engine
+
+    names = tuple(n.strip() for n in text.split(",") if n.strip())
+    if not names:
+        raise OptionError("--engines", text, "name at least one engine")
+    if len(set(names)) < len(names):
+        raise OptionError("--engines", text, "an engine given twice")
+    for name in names:
+        get_engine(name)
+    if "spin" in names:
+        from promela.runner import check_tools
+
+        check_tools()  # exit 4 with the install command, before any work
+    return names
+
+
+def _writable(path: Path) -> None:
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe = path / ".write-test"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as error:
+        raise OptionError("--out", str(path), f"cannot write there ({error.strerror or error})") from None
+
+
+def _sweep(campaign: Any, scenarios: list[Any], out_path: Path, executor: ExecutorChoice, summary: Any) -> list[Any]:
+    from ci.crossval import run_sweep
+
+    columns = (TextColumn("crossval"), BarColumn(), MofNCompleteColumn(), RateColumn(),
+               TextColumn("{task.fields[failed]} failing"), TimeRemainingColumn())
+    with Progress(*columns, console=err, transient=True) as progress:
+        task = progress.add_task("crossval", total=len(scenarios), failed=0)
+
+        def on_result(result: dict[str, Any], resumed: bool) -> None:
+            summary.add(result)
+            failing = sum(1 for v in result["verdicts"].values() if v[0] != "held")
+            progress.update(task, advance=1 if resumed or executor.kind is ExecutorKind.DASK else 0,
+                            failed=progress.tasks[0].fields["failed"] + (1 if failing else 0))
+
+        def on_checked(_n: int) -> None:
+            progress.update(task, advance=1)
+
+        results = run_sweep(campaign, scenarios, out_path, executor, on_result, on_checked)
+    return results
+
+
+def _reproduce(summary: Any, campaign: Any, out_path: Path, max_reproducers: int) -> list[dict[str, Any]]:
+    from ci.properties import PropertyName
+    from ci.repro import reproduce
+    from spec.files import scenario_from_dict
+
+    written = []
+    for name, failures in summary.failures.items():
+        real = [r for r in failures if r["verdicts"][name][0] == "failed"][:max_reproducers]
+        for n, result in enumerate(real, start=1):
+            err.print(f"crossval: shrinking a {name} failure ({n} of {len(real)}) ...")
+            written.append(reproduce(PropertyName(name), scenario_from_dict(result["scenario"]), campaign.engines,
+                                     campaign.timeout_s, out_path, n, result["key"]))
+    return written
+
+
+def _print(data: dict[str, Any], wall_s: float) -> None:
+    table = Table(title=f"crossval: {data['scenarios']} scenarios in {wall_s:.1f} s")
+    for col in ("property", "checked", "held", "failed", "incomplete"):
+        table.add_column(col, justify="right")
+    for name, v in data["properties"].items():
+        table.add_row(name, str(v["checked"]), str(v["held"]), str(v["failed"]), str(v["incomplete"]))
+    out.print(table)
+    latency = Table(title="latency per run (engine/strategy)")
+    for col in ("run", "n", "median ms", "p99 ms"):
+        latency.add_column(col, justify="right")
+    for label, v in data["latency"].items():
+        latency.add_row(label, str(v["n"]), str(v["median_ms"]), str(v["p99_ms"]))
+    out.print(latency)
+    coverage = Table(title="rule coverage: scenarios that exercised each rule")
+    coverage.add_column("rule")
+    coverage.add_column("scenarios", justify="right")
+    for rule, n in data["rule_coverage"].items():
+        coverage.add_row(rule, str(n))
+    out.print(coverage)
+    for r in data["reproducers"]:
+        out.print(f"reproducer ({r['property']}, {r['vehicles']} vehicle(s), horizon {r['horizon']}): "
+                  f"{r['scenario_file']} — {r['detail']}")
+
+
+COMMANDS = (crossval,)

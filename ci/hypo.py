@@ -1,0 +1,144 @@
+"""The hypothesis source of ``overtake crossval``: hypothesis generates and shrinks the scenarios.
+
+One hypothesis test per property, each run as one job (so properties run in parallel and one
+property's failure never stops another's): every example it tries is checked and its verdict
+appended to ``OUT/verdicts.jsonl`` at once (one ``write`` per line on a file opened for
+appending, so parallel jobs never tear each other's lines). Failing examples are kept in
+``OUT/hypothesis/<property>`` (hypothesis's example database) and replayed first next time.
+The example hypothesis shrank a failure to is the reproducer's scenario. Profiles: ``dev``
+(fast) and ``ci`` (thorough), chosen by ``HYPOTHESIS_PROFILE``; the seed is printed.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+from hypothesis import HealthCheck, given, settings
+from hypothesis import seed as hypothesis_seed
+from hypothesis import strategies as st
+from hypothesis.database import DirectoryBasedExampleDatabase
+from rich.console import Console
+
+from ci.crossval import VERDICTS_FILE, Campaign, check_scenario, recorded
+from ci.executors import ExecutorChoice, run_jobs
+from ci.properties import PropertyName, Verdict
+from spec.constants import DEFAULT_HORIZON
+from spec.errors import ScenarioError
+from spec.files import scenario_from_dict
+from spec.grid import Grid, grid_for
+from spec.lanes import Lane
+from spec.scenario import Scenario, make_scenario
+
+#: The campaign's own profiles (the tests register theirs in tests/conftest.py), picked by ``PROFILE_VAR``.
+PROFILES = {
+    "dev": settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow]),
+    "ci": settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow]),
+}
+PROFILE_VAR = "HYPOTHESIS_PROFILE"
+
+
+def profile() -> str:
+    """The profile ``PROFILE_VAR`` names (default ``dev``); an unknown name is bad input."""
+    from spec.errors import OptionError
+
+    name = os.environ.get(PROFILE_VAR, "dev")
+    if name not in PROFILES:
+        raise OptionError(PROFILE_VAR, name, f"unknown hypothesis profile (known: {', '.join(PROFILES)})")
+    return name
+
+
+def scenarios(grid: Grid, horizon: int | None) -> st.SearchStrategy[Scenario]:
+    """Valid scenarios on ``grid``: up to 4 same-direction and 2 oncoming vehicles anywhere in the window, either
+    lane, any target count; drawn near the AV first (hypothesis shrinks towards small cells, so the window's
+    start is put at the AV's cell and cells count outwards from it)."""
+    cells = st.integers(0, grid.road_cells)
+
+    @st.composite
+    def build(draw: st.DrawFn) -> Scenario:
+        lane = draw(st.sampled_from([Lane.LEFT, Lane.RIGHT]))
+        left = draw(st.lists(cells, max_size=4, unique=True))
+        right = draw(st.lists(cells, max_size=2, unique=True))
+        ahead = sum(1 for c in left if c >= grid.av_cell)
+        targets = draw(st.integers(0, min(ahead, 3)))
+        h = horizon if horizon is not None else draw(st.integers(1, DEFAULT_HORIZON))
+        try:
+            return make_scenario(lane, left, right, targets, horizon=h, grid=grid)
+        except ScenarioError:
+            from hypothesis import reject
+
+            reject()
+            raise  # unreachable: reject() raises
+
+    return build()
+
+
+class PropertyFailed(AssertionError):
+    """A property failed on an example (hypothesis then shrinks it)."""
+
+
+def hypothesis_job(name: str, campaign_key: dict[str, Any], out_dir: str, profile_name: str, offset: int,
+                   report: Any = None) -> dict[str, Any]:
+    """One property's hypothesis test (a worker's job, seeded with the campaign's seed + ``offset`` so that the
+    properties see different examples): the examples' verdicts appended as they come; returns the shrunk failing
+    example, if any."""
+    campaign = Campaign(campaign_key["source"], tuple(PropertyName(p) for p in campaign_key["properties"]),
+                        tuple(campaign_key["engines"]), campaign_key["cell_m"], campaign_key["horizon"],
+                        campaign_key["timeout_s"], None, campaign_key["seed"])
+    grid = grid_for(campaign.cell_m)
+    out = Path(out_dir)
+    fd = os.open(out / VERDICTS_FILE, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+    last_failure: dict[str, Any] = {}
+    done = recorded(out / VERDICTS_FILE, campaign)
+    prop = PropertyName(name)
+
+    @hypothesis_seed((campaign.seed or 0) + offset)
+    @settings(PROFILES[profile_name],
+              database=DirectoryBasedExampleDatabase(str(out / "hypothesis" / name)))
+    @given(scenarios(grid, campaign.horizon))
+    def test(scenario: Scenario) -> None:
+        result = check_scenario(scenario, [prop], campaign.engines, campaign.timeout_s)
+        if name not in done.get(result["key"], {}).get("verdicts", {}):
+            os.write(fd, (json.dumps({"campaign": campaign.key(), "result": result}) + "\n").encode())
+            done[result["key"]] = result
+        if report is not None:
+            report(1)
+        verdict, detail = result["verdicts"][name]
+        if verdict == Verdict.FAILED.value:
+            last_failure.clear()
+            last_failure.update(result)
+            raise PropertyFailed(detail)
+
+    try:
+        test()
+    except PropertyFailed:
+        pass  # hypothesis ran the shrunk example last: it is in last_failure
+    finally:
+        os.close(fd)
+    return {"property": name, "failure": dict(last_failure) or None}
+
+
+def run_hypothesis(campaign: Campaign, grid: Grid, out: Path, executor: ExecutorChoice, max_reproducers: int,
+                   console: Console) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """Every property's hypothesis test; the recorded results of this campaign and the reproducers written."""
+    from ci.repro import reproduce
+
+    out.mkdir(parents=True, exist_ok=True)
+    (out / VERDICTS_FILE).touch()
+    name = profile()
+    console.print(f"crossval: hypothesis profile {name} ({PROFILE_VAR}), seed {campaign.seed}")
+    jobs = [(p.value, campaign.key(), str(out), name, n) for n, p in enumerate(campaign.properties)]
+    reproducers = []
+    shrunk: dict[str, dict[str, Any]] = {}
+    for _, job in run_jobs(hypothesis_job, jobs, executor):
+        if job["failure"] is not None:
+            shrunk[job["property"]] = job["failure"]
+    results = list(recorded(out / VERDICTS_FILE, campaign).values())
+    for prop_name, failure in shrunk.items():
+        if max_reproducers:
+            console.print(f"crossval: {prop_name} failed; hypothesis shrank it to {failure['key']}")
+            reproducers.append(reproduce(PropertyName(prop_name), scenario_from_dict(failure["scenario"]),
+                                         campaign.engines, campaign.timeout_s, out, 1, "hypothesis"))
+    return results, reproducers

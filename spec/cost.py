@@ -1,0 +1,23 @@
+"""The cost the ``optimal`` strategy minimises: its terms, most important first, and what one action adds to each.
+
+One declaration that the Z3 encoding (``oracle.bmc``) translates into an objective and the conformance checker
+(``ci.properties``) computes on its own, so an engine that orders or counts the terms differently is caught.
+"""
+
+from __future__ import annotations
+
+from spec.actions import ACTION_RULES, Action
+from spec.lanes import Lane
+from spec.state import State
+
+#: The terms, most important first: the order is lexicographic.
+COST_TERMS = ("lane_changes", "right_lane_steps", "brakes", "length")
+COST_DOC = ("lexicographic: lane changes, then actions that end in the right lane, then brakes, "
+            "then plan length; over every plan of at most `horizon` actions")
+
+
+def step_cost(action: Action, after: State) -> tuple[int, ...]:
+    """What one action, ending in ``after``, adds to each term, in ``COST_TERMS`` order."""
+    added = {"lane_changes": int(ACTION_RULES[action].changes_lane), "right_lane_steps": int(after.lane is Lane.RIGHT),
+             "brakes": int(action is Action.BRAKE), "length": 1}
+    return tuple(added[name] for name in COST_TERMS)
