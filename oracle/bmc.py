@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import z3
 
 from oracle.abstraction import merged, offsets_of
-from oracle.interpreter import problem_step, replay
+from oracle.interpreter import problem_step
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.answers import Limits, SearchResult, Status, Strategy
 from spec.cost import COST_DOC, COST_TERMS
@@ -155,9 +155,20 @@ class Encoding:
         return self.transition(a, action_var, self.new_step())
 
     def decode(self, model: z3.ModelRef, length: int) -> tuple[tuple[Action, ...], tuple[State, ...]]:
-        """The plan of ``length`` actions in ``model``, with the interpreter's states (a cross-check)."""
+        """The plan of ``length`` actions in ``model`` and the states the model itself assigns along it (the
+        pipeline and the trace-equality property compare them with the interpreter's)."""
         actions = tuple(ACTION_ORDER[model.eval(a, model_completion=True).as_long()] for a in self.actions[:length])
-        return actions, replay(self.problem, actions, "z3")
+        return actions, tuple(self._state(model, k) for k in range(length + 1))
+
+    def _state(self, model: z3.ModelRef, k: int) -> State:
+        s, scenario = self.steps[k], self.problem.scenario
+
+        def value(term: z3.ArithRef) -> int:
+            return int(model.eval(term, model_completion=True).as_long())
+
+        right = z3.is_true(model.eval(s.right, model_completion=True))
+        return State(Lane.RIGHT if right else Lane.LEFT, tuple(c + value(s.l) for c in scenario.left_lane),
+                     tuple(c - value(s.o) for c in scenario.right_lane), value(s.lc), k)
 
 
 def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:

@@ -1,0 +1,94 @@
+"""Single-rule faults the project's own checks must catch: each is one exact text replacement in one file.
+
+``python -m ci.mutation`` applies each to a scratch copy of the checkout and runs the detectors
+``.ci/run`` runs, cheapest first, until one catches it. A mutant is kept only if it changes
+behaviour somewhere: an equivalent one would be a test that cannot fail. One such was measured
+and left out: swapping the cost's first two terms (lane changes, right-lane steps) in the Z3
+objective changes no plan, since every plan of a model and start lane has the same number of
+lane changes except in preparations case B, where the plan without a lane change also has no
+right-lane step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True, slots=True)
+class Mutant:
+    """One fault: in ``path``, ``old`` (which occurs exactly once) becomes ``new``."""
+
+    name: str
+    path: str
+    old: str
+    new: str
+    what: str
+
+
+MUTANTS: tuple[Mutant, ...] = (
+    # -- Spin (the Promela printer) ---------------------------------------------------------------
+    Mutant("promela-danger-zone", "promela/render.py", "    return hi - av\n", "    return max(0, hi - av - 1)\n",
+           "the oncoming danger zone one cell narrower in Promela"),
+    Mutant("promela-no-check-after-tick", "promela/render.py",
+           "right[i] = right[i] - 1; i++ :: else -> break od; collide() }",
+           "right[i] = right[i] - 1; i++ :: else -> break od }",
+           "no collision check after an oncoming tick in Promela"),
+    Mutant("promela-goal-on-crashed-path", "promela/render.py",
+           "finish = (f'if :: !crashed -> printf", "finish = (f'if :: true -> printf",
+           "the goal checked on a path that has crashed, in Promela"),
+    Mutant("promela-lane-change-limit", "promela/render.py", 'guard.append("lc < MAX_LC")',
+           'guard.append("lc <= MAX_LC")', "one lane change more than the model allows, in Promela"),
+    Mutant("promela-horizon", "promela/render.py", 'guard = ["!crashed", "steps < horizon"]',
+           'guard = ["!crashed", "steps <= horizon"]', "one step beyond the horizon, in Promela"),
+    # -- Z3 -----------------------------------------------------------------------------------------
+    Mutant("z3-cost-order", "oracle/bmc.py", "    for name in COST_TERMS:\n        opt.minimize(terms[name])",
+           "    for name in (*COST_TERMS[:2], COST_TERMS[3], COST_TERMS[2]):\n        opt.minimize(terms[name])",
+           "brakes and plan length swapped in the Z3 objective"),
+    Mutant("z3-goal-lane", "oracle/bmc.py", "            parts.append(s.right == (goal.av_lane is Lane.RIGHT))",
+           "            parts.append(True)", "the goal's lane condition dropped in the Z3 encoding"),
+    Mutant("z3-oncoming-passed", "oracle/bmc.py", "c - s.o <= passed_line(grid))",
+           "c - s.o <= passed_line(grid) + 1)", "'oncoming passed' one cell late in the Z3 encoding"),
+    # -- the interpreter and its searches -------------------------------------------------------------
+    Mutant("interpreter-no-check-after-tick", "oracle/interpreter.py",
+           "        hit = collision_in(after, rules, grid, tick)\n", "        hit = None\n",
+           "no collision check after an oncoming tick in the interpreter's step"),
+    Mutant("offsets-oncoming-passed", "oracle/abstraction.py",
+           "o_at_least = max(scenario.right_lane) - passed_line(grid)",
+           "o_at_least = min(scenario.right_lane) - passed_line(grid)",
+           "'oncoming passed' waits for the nearest oncoming vehicle only, in the offset form"),
+    Mutant("bitplan-no-smear", "oracle/bitplan.py", "        for i in range(0, len(flat.smear), 2):",
+           "        for i in range(0, 0, 2):", "the bitset search's end-row smear dropped (finer grids)"),
+    # -- spec/ and the discretiser --------------------------------------------------------------------
+    Mutant("spec-behind-line", "spec/rules.py", "    return grid.av_cell - 1\n", "    return grid.av_cell\n",
+           "a target alongside the AV counts as behind it (every engine follows: the library's plans change)"),
+    Mutant("discretiser-oncoming-rounding", "spec/cells.py",
+           "    return grid.av_cell + math.trunc(dx_m / grid.cell)",
+           "    return grid.av_cell + round(dx_m / grid.cell)",
+           "an oncoming vehicle's cell rounded away from the AV"),
+    # -- the simulator --------------------------------------------------------------------------------
+    Mutant("sim-no-oncoming-contacts", "sim/simulator.py",
+           "        for car in self.traffic.cars():\n            if car.body in touching:",
+           "        for car in self.traffic.left:\n            if car.body in touching:",
+           "contacts with oncoming vehicles ignored by the simulator"),
+    Mutant("sim-no-left-contacts", "sim/simulator.py",
+           "        for car in self.traffic.cars():\n            if car.body in touching:",
+           "        for car in self.traffic.oncoming:\n            if car.body in touching:",
+           "contacts with same-direction vehicles ignored by the simulator"),
+    Mutant("traffic-oncoming-odds-reversed", "sim/traffic.py",
+           "    odds = np.array([float(f) for f in spec.oncoming_gap_odds])",
+           "    odds = np.array([float(f) for f in spec.oncoming_gap_odds][::-1])",
+           "the paper's odds for oncoming spawn gaps reversed"),
+    Mutant("traffic-four-in-a-row", "sim/traffic.py", "if g > 1 or run < spec.max_consecutive]",
+           "if g > 1 or run <= spec.max_consecutive]", "four left-lane vehicles spawned without an empty cell"),
+    Mutant("tolerance-doubled", "sim/tolerance.py", "ViolationKind.STEP if added > self.step_tolerance",
+           "ViolationKind.STEP if added > 2 * self.step_tolerance", "the step tolerance check twice as lax"),
+)
+
+
+def mutant(name: str) -> Mutant:
+    found = {m.name: m for m in MUTANTS}.get(name)
+    if found is None:
+        from spec.errors import OptionError
+
+        raise OptionError("--mutants", name, f"unknown mutant (known: {', '.join(m.name for m in MUTANTS)})")
+    return found
