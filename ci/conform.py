@@ -19,22 +19,23 @@ from pathlib import Path
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
+from ci.cli.options import MAX_SECONDS, check_number, out_dir
 from ci.gen import random_scenarios
 from ci.records import append, open_for_append, read_records
 from oracle.conform import disagreements
 from oracle.planner import plan
 from oracle.shrink import engines_disagree, shrink, to_toml
-from spec.answers import Limits
-from spec.constants import DEFAULT_HORIZON
-from spec.engines import check_strategy, get_engine, parse_strategy
-from spec.errors import ExitCode, SuiteError
+from spec.answers import Limits, Strategy
+from spec.constants import DEFAULT_HORIZON, MAX_HORIZON
+from spec.engines import Engine, check_strategy, get_engine, parse_strategy
+from spec.errors import ExitCode, OptionError, SuiteError
 from spec.files import scenario_to_dict
-from spec.grid import grid_for
+from spec.grid import Grid, grid_for
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--engines", default="interpreter", help="comma-separated; the first is the reference")
+    parser.add_argument("--engines", default="interpreter,spin", help="comma-separated; the first is the reference")
     parser.add_argument("--strategy", default="sensible")
     parser.add_argument("--count", type=int, default=500)
     parser.add_argument("--seed", type=int, default=7)
@@ -47,14 +48,42 @@ def main(argv: list[str] | None = None) -> int:
     try:
         strategy = parse_strategy(args.strategy)
         grid = grid_for(args.cell_m)
-        engines = [get_engine(name.strip()) for name in args.engines.split(",")]
+        engines = [get_engine(name.strip()) for name in args.engines.split(",") if name.strip()]
+        if len(engines) < 2:
+            raise OptionError("--engines", args.engines, "name at least two engines: a campaign compares them")
         for engine in engines:
             check_strategy(engine, strategy)
+            if engine.name == "spin":
+                from promela.runner import check_tools
+
+                check_tools()
+        check_int("--count", args.count, 0, 10_000_000)
+        check_int("--seed", args.seed, 0, 2**32 - 1)
+        check_int("--horizon", args.horizon, 0, MAX_HORIZON)
+        if args.timeout is not None:
+            check_number("--timeout", args.timeout, 0.0, MAX_SECONDS, positive=True)
+        out = out_dir("--out", args.out)
     except SuiteError as err:
-        console.print(f"conform: error: {err}")
+        console.print(f"conform: error: {err}", soft_wrap=True)
         return err.exit_code
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        return _campaign(args, console, strategy, grid, engines, out)
+    except KeyboardInterrupt:
+        console.print("conform: interrupted (what was decided is in results.jsonl; run again to resume)")
+        return ExitCode.INTERRUPTED
+    except SuiteError as err:
+        console.print(f"conform: error: {err}", soft_wrap=True)
+        return err.exit_code
+
+
+def check_int(option: str, value: int, low: int, high: int) -> int:
+    if not low <= value <= high:
+        raise OptionError(option, value, f"must be between {low} and {high}")
+    return value
+
+
+def _campaign(args: argparse.Namespace, console: Console, strategy: Strategy, grid: Grid, engines: list[Engine],
+              out: Path) -> int:
     results = out / "results.jsonl"
     done = _done(results, args)
     heading = (f"seed {args.seed}; {args.count} scenarios on {grid.describe()}; engines {args.engines}; "

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import stat
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -13,6 +14,7 @@ from spec.scenario import Scenario, make_scenario
 REQUIRED_KEYS = ("lane", "left_lane", "right_lane")
 OPTIONAL_KEYS = ("targets", "model", "horizon", "cell_m")
 SUFFIXES = (".json", ".toml")
+MAX_BYTES = 256 * 1024  # a scenario is a few hundred bytes: anything near this is not one
 
 
 def load_scenario(path: str | Path, cell_m: object = None) -> Scenario:
@@ -36,20 +38,46 @@ def _read(path: Path) -> dict[str, Any]:
     if suffix not in SUFFIXES:
         raise ScenarioError("file", path.name, "unknown format: use a .json or .toml file")
     try:
-        raw = path.read_bytes()
+        info = path.stat()  # before opening: opening a FIFO would wait for a writer
+        if not stat.S_ISREG(info.st_mode):
+            raise ScenarioError("file", path.name, "not a regular file (a device, a pipe or a directory)")
+        if info.st_size > MAX_BYTES:
+            raise ScenarioError("file", path.name, f"{info.st_size} bytes: larger than {MAX_BYTES} (not a scenario)")
+        with path.open("rb") as handle:
+            raw = handle.read(MAX_BYTES + 1)
     except OSError as err:
         raise ScenarioError("file", path.name, f"cannot read: {err.strerror or err}") from None
+    if len(raw) > MAX_BYTES:
+        raise ScenarioError("file", path.name, f"larger than {MAX_BYTES} bytes (not a scenario)")
     try:
         text = raw.decode("utf-8")
-        data = json.loads(text) if suffix == ".json" else tomllib.loads(text)
+        data = json.loads(text, object_pairs_hook=_unique) if suffix == ".json" else tomllib.loads(text)
     except UnicodeDecodeError:
         raise ScenarioError("file", path.name, "not UTF-8 text") from None
+    except DuplicateKey as err:
+        raise ScenarioError("file", path.name, f"the key {err.key!r} is given twice") from None
     except json.JSONDecodeError as err:
         raise ScenarioError("file", path.name, f"malformed JSON: {err.msg} (line {err.lineno})") from None
     except tomllib.TOMLDecodeError as err:
         raise ScenarioError("file", path.name, f"malformed TOML: {err}") from None
     if not isinstance(data, dict):
         raise ScenarioError("file", path.name, "the top level must be an object")
+    return data
+
+
+class DuplicateKey(ValueError):
+    def __init__(self, key: str) -> None:
+        super().__init__(key)
+        self.key = key
+
+
+def _unique(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object whose keys are all different (as TOML requires): JSON alone would keep the last value."""
+    data: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in data:
+            raise DuplicateKey(key)
+        data[key] = value
     return data
 
 

@@ -9,6 +9,8 @@ import click
 from rich.table import Table
 
 from ci.cli.common import err, out, print_json
+from ci.cli.options import KM, SEED
+from ci.cli.options import out_dir as out_dir_checked
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.progress import km_progress
 from spec.errors import ExitCode, OptionError
@@ -50,10 +52,10 @@ def _cells(text: str) -> tuple[float, ...]:
               help="Cell lengths in metres, comma-separated.")
 @click.option("--traffic", "traffic_text", default="paper,spread,following", show_default=True)
 @click.option("--sensing", "sensing_text", default="exact,noisy", show_default=True)
-@click.option("--km", type=float, default=25.0, show_default=True,
+@click.option("--km", type=KM, default=25.0, show_default=True,
               help="Kilometres per run (a collision does not end a run: it starts again where it stands).")
 @click.option("--runs", type=click.IntRange(min=1), default=4, show_default=True, help="Seeds per combination.")
-@click.option("--seed", type=click.IntRange(min=0), default=1, show_default=True, help="Run i uses seed + i.")
+@click.option("--seed", type=SEED, default=1, show_default=True, help="Run i uses seed + i.")
 @click.option("--engine", default="interpreter", show_default=True, help="The planner in the loop.")
 @click.option("--engines", "cost_engines", default="interpreter,spin,z3", show_default=True,
               help="Engines whose planning cost is measured on the scenarios the planner saw.")
@@ -88,6 +90,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, km: float, runs: int
 
     executor = ExecutorChoice(ExecutorKind(executor_kind), workers, scheduler)
     check_executor(executor)
+    out_dir_checked("--out", out_dir)
     engines = _names("--engines", cost_engines)
     for name in engines:
         get_engine(name)

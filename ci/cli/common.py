@@ -39,7 +39,9 @@ def horizon_option() -> Any:
 
 
 def cell_option() -> Any:
-    return click.option("--cell-m", "cell_m", type=float, default=None,
+    from ci.cli.options import CELL_M
+
+    return click.option("--cell-m", "cell_m", type=CELL_M, default=None,
                         help="Cell length in metres (21, 10.5, 7, 5.25; default: the file's, else 21).")
 
 

@@ -14,6 +14,8 @@ from rich.table import Table
 from rich.text import Text
 
 from ci.cli.common import cell_option, err, horizon_option, out, print_json
+from ci.cli.options import SECONDS, SEED
+from ci.cli.options import out_dir as checked_out_dir
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
 from spec.errors import ExitCode, OptionError
 
@@ -39,9 +41,9 @@ class RateColumn(ProgressColumn):
 @click.option("--executor", "executor_kind", type=click.Choice([k.value for k in ExecutorKind]),
               default=ExecutorKind.PROCESSES.value, show_default=True)
 @click.option("--scheduler", default=None, help="With --executor dask: a running scheduler's address.")
-@click.option("--timeout", "timeout_s", type=float, default=10.0, show_default=True,
+@click.option("--timeout", "timeout_s", type=SECONDS, default=10.0, show_default=True,
               help="Seconds per engine run (past it: incomplete).")
-@click.option("--seed", type=click.IntRange(min=0), default=None,
+@click.option("--seed", type=SEED, default=None,
               help="With --source hypothesis (default: drawn, and printed).")
 @click.option("--max-reproducers", type=click.IntRange(min=0), default=3, show_default=True,
               help="Failures shrunk per property.")
@@ -57,16 +59,12 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
     """Check every property on scenarios from a source; exit 0 when all hold, 6 on any failure."""
     from ci.crossval import Campaign, Summary, library_scenarios, parse_space, write_reports
     from ci.properties import PROPERTIES, check_property_names
-    from sim.parts import check_number
     from spec.grid import grid_for
 
     if list_only:
         for prop in PROPERTIES.values():
             out.print(f"{prop.name.value}: {prop.doc} (runs: {', '.join(k.label for k in prop.runs)})")
         sys.exit(ExitCode.OK)
-    check_number("--timeout", timeout_s, 86_400.0)
-    if timeout_s <= 0:
-        raise OptionError("--timeout", timeout_s, "must be positive")
     grid = grid_for(cell_m)
     properties = check_property_names("--properties", property_text)
     engines = _engines(engine_text)
@@ -76,8 +74,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
     if not chosen:
         raise OptionError("--engines", engine_text, "no selected property applies to these engines")
     skipped = [p.value for p in properties if p not in chosen]
-    out_path = Path(out_dir)
-    _writable(out_path)
+    out_path = checked_out_dir("--out", out_dir)
     scenarios: list[Any] = []
     the_space = None
     if source == "library":
@@ -139,16 +136,6 @@ def _engines(text: str) -> tuple[str, ...]:
 
         check_tools()  # exit 4 with the install command, before any work
     return names
-
-
-def _writable(path: Path) -> None:
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-        probe = path / ".write-test"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as error:
-        raise OptionError("--out", str(path), f"cannot write there ({error.strerror or error})") from None
 
 
 def _sweep(campaign: Any, scenarios: list[Any], out_path: Path, executor: ExecutorChoice, summary: Any) -> list[Any]:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 import click
 from rich.table import Table
@@ -19,6 +18,7 @@ from ci.cli.common import (
     print_states,
     strategy_option,
 )
+from ci.cli.options import SECONDS, out_file
 from oracle.conform import disagreements
 from oracle.planner import plan as run_plan
 from oracle.planner import validate_pipeline
@@ -43,7 +43,7 @@ from spec.scenario import Scenario, problem_for
               help="An engine name (see `overtake engines`), or all: every engine that answers the strategy.")
 @click.option("--max-states", type=click.IntRange(min=1), default=Limits().max_states, show_default=True,
               help="Stored states before the search gives up (answer: incomplete).")
-@click.option("--timeout", type=click.FloatRange(min=0), default=None, help="Seconds before giving up (incomplete).")
+@click.option("--timeout", type=SECONDS, default=None, help="Seconds before giving up (incomplete).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
 def plan(file: str, strategy: Strategy, model: str | None, horizon: int | None, cell_m: float | None, engine: str,
          max_states: int, timeout: float | None, as_json: bool) -> None:
@@ -125,17 +125,17 @@ def validate_cmd(file: str, actions_text: str, model: str | None, horizon: int |
               help="Default: the model `plan` would use first (the scenario's, or final for auto).")
 @horizon_option()
 @cell_option()
-@click.option("--out", type=click.Path(dir_okay=False, writable=True), default=None,
-              help="Write the model here instead of printing it.")
+@click.option("--out", default=None, help="Write the model here instead of printing it.")
 def promela(file: str, model: str | None, horizon: int | None, cell_m: float | None, out: str | None) -> None:
     """Write the Promela model of a scenario, runnable by hand: spin -a; gcc -DSAFETY -o pan pan.c; ./pan -E."""
     from promela.render import render_for  # Spin's renderer is only loaded when asked for
 
+    target = out_file("--out", out) if out else None
     scenario = load(file, cell_m)
     kind = ModelKind(model) if model else models_for(scenario.model)[0]
     text = render_for(problem_for(scenario, kind, horizon))
-    if out:
-        Path(out).write_text(text)
+    if target:
+        target.write_text(text)
         click.echo(f"wrote {out} ({kind.value} model)")
     else:
         click.echo(text, nl=False)
@@ -183,11 +183,11 @@ def explain(file: str, cell_m: float | None, as_json: bool) -> None:
               help="Two or more engines to compare (repeat the option).")
 @strategy_option()
 @cell_option()
-@click.option("--out", type=click.Path(dir_okay=False, writable=True), default=None,
-              help="Write the reproducer here (TOML) instead of printing it.")
+@click.option("--out", default=None, help="Write the reproducer here (TOML) instead of printing it.")
 def shrink(file: str, engine_names: tuple[str, ...], strategy: Strategy, cell_m: float | None,
            out: str | None) -> None:
     """Shrink a scenario on which engines disagree to a minimal reproducer."""
+    target = out_file("--out", out) if out else None
     scenario = load(file, cell_m)
     engines = [get_engine(n) for n in engine_names]
     if len(engines) < 2:
@@ -202,8 +202,8 @@ def shrink(file: str, engine_names: tuple[str, ...], strategy: Strategy, cell_m:
     answers = [run_plan(small, strategy, engine=e) for e in engines]
     why = "; ".join(disagreements(answers))
     text = to_toml(small, f"minimal reproducer from {file} ({checks} checks), strategy {strategy.value}:\n{why}")
-    if out:
-        Path(out).write_text(text)
+    if target:
+        target.write_text(text)
         click.echo(f"wrote {out}: {why}")
     else:
         click.echo(text, nl=False)

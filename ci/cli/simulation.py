@@ -8,22 +8,24 @@ from pathlib import Path
 import click
 
 from ci.cli.common import err, out, print_json, strategy_option
+from ci.cli.options import CELL_M, KM, SEED, TOLERANCE
+from ci.cli.options import out_dir as out_dir_checked
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.progress import km_progress
 from spec.answers import Strategy
-from spec.errors import ExitCode
+from spec.errors import ExitCode, OptionError
 from spec.grid import PAPER_GRID
 from spec.physical import LOOP
 
 
 @click.command()
-@click.option("--km", type=click.FloatRange(min=0.01), default=5.0, show_default=True,
+@click.option("--km", type=KM, default=5.0, show_default=True,
               help="Kilometres per run (with --until-failure: the cap).")
 @click.option("--until-failure", is_flag=True, help="Stop each run at its first failure (capped by --km).")
-@click.option("--seed", type=int, default=1, show_default=True, help="Run i uses seed + i.")
+@click.option("--seed", type=SEED, default=1, show_default=True, help="Run i uses seed + i.")
 @click.option("--engine", default="interpreter", show_default=True)
 @strategy_option(choices=(Strategy.SENSIBLE, Strategy.SHORTEST))
-@click.option("--cell-m", "cell_m", type=float, default=PAPER_GRID.cell, show_default=True,
+@click.option("--cell-m", "cell_m", type=CELL_M, default=PAPER_GRID.cell, show_default=True,
               help="The planner's cell length in metres (21, 10.5, 7, 5.25); the world stays the paper's.")
 @click.option("--runs", type=click.IntRange(min=1), default=1, show_default=True)
 @click.option("--workers", type=click.IntRange(min=1), default=1, show_default=True,
@@ -35,9 +37,9 @@ from spec.physical import LOOP
 @click.option("--out", "out_dir", default="out/sim", show_default=True,
               help="Runs (runs.jsonl, resumable), traces (JSON lines) and plots.")
 @click.option("--fresh", is_flag=True, help="Forget the runs already recorded in --out instead of resuming.")
-@click.option("--step-tolerance", type=click.FloatRange(min=0.0, min_open=True), default=LOOP.step_tolerance_cells,
+@click.option("--step-tolerance", type=TOLERANCE, default=LOOP.step_tolerance_cells,
               show_default=True, help="Cells one action may add to a vehicle's deviation from the prediction.")
-@click.option("--plan-tolerance", type=click.FloatRange(min=0.0, min_open=True), default=LOOP.plan_tolerance_cells,
+@click.option("--plan-tolerance", type=TOLERANCE, default=LOOP.plan_tolerance_cells,
               show_default=True, help="Cells a vehicle may deviate over a plan.")
 @click.option("--paper-replanning", is_flag=True,
               help="Re-plan only as the paper did (not when a deviation exceeds the tolerance).")
@@ -53,6 +55,9 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: S
 
     executor = ExecutorChoice(ExecutorKind(executor_kind), workers, scheduler)
     check_executor(executor)
+    out_dir_checked("--out", out_dir)
+    if seed + runs - 1 >= 2**32:
+        raise OptionError("--seed", seed, f"seed + runs - 1 must stay below 2**32 (runs {runs})")
     campaign = DriveConfig(km, until_failure, engine, strategy, not paper_replanning, step_tolerance, plan_tolerance,
                            cell_m)
     campaign.parts()  # the engine exists and answers the strategy: bad input before any run starts

@@ -1,0 +1,90 @@
+"""One set of option types for every command: each bad value is exit 2 with one line naming the option, the value
+and the reason, before any work starts.
+
+- ``Number(low, high, positive)``: a finite number in ``low .. high`` (NaN, infinity, 1e308 and text are refused);
+- ``SEED``: a whole number a generator takes (0 .. 2**32 - 1);
+- ``out_dir`` / ``out_file``: an output that can be written (a directory that is not a file, in a place this user
+  may write; a file whose folder exists and is writable, and which is not a directory).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import click
+
+from spec.errors import OptionError
+
+SEED = click.IntRange(0, 2**32 - 1)
+MAX_SECONDS = 7 * 24 * 3600.0  # a week: more is a typo, and timers overflow long before infinity
+MAX_KM = 100_000.0
+
+
+def _name(param: click.Parameter | None) -> str:
+    return param.opts[0] if param is not None and param.opts else "option"
+
+
+class Number(click.ParamType):
+    """A finite number in ``low .. high`` (``positive``: above ``low``, not at it)."""
+
+    name = "number"
+
+    def __init__(self, low: float = 0.0, high: float = math.inf, positive: bool = False) -> None:
+        self.low, self.high, self.positive = low, high, positive
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> float:
+        if isinstance(value, float | int) and not isinstance(value, bool):
+            number = float(value)
+        else:
+            try:
+                number = float(str(value).strip())
+            except ValueError:
+                raise OptionError(_name(param), value, "must be a number") from None
+        return check_number(_name(param), number, self.low, self.high, self.positive)
+
+
+def check_number(option: str, number: float, low: float = 0.0, high: float = math.inf, positive: bool = False) -> float:
+    if not math.isfinite(number):
+        raise OptionError(option, number, "must be a finite number")
+    if number < low or (positive and number == low) or number > high:
+        above = f"above {low:g}" if positive else f"at least {low:g}"
+        bound = above if math.isinf(high) else f"{above} and at most {high:g}"
+        raise OptionError(option, number, f"must be {bound}")
+    return number
+
+
+SECONDS = Number(0.0, MAX_SECONDS, positive=True)
+KM = Number(0.01, MAX_KM)
+TOLERANCE = Number(0.0, 100.0, positive=True)
+CELL_M = Number(0.0, 1000.0, positive=True)
+
+
+def out_dir(option: str, path: str | Path) -> Path:
+    """A directory outputs can be written to, made if missing; anything else is bad input."""
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        raise OptionError(option, str(path), "names a file, not a directory")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise OptionError(option, str(path), f"cannot be made ({error.strerror or error})") from None
+    if not os.access(folder, os.W_OK | os.X_OK) or str(folder.resolve()).startswith(("/proc", "/sys")):
+        raise OptionError(option, str(path), "cannot be written to")
+    return folder
+
+
+def out_file(option: str, path: str | Path) -> Path:
+    """A file that can be written: its folder exists and is writable, and it is not a directory."""
+    file = Path(path)
+    if file.is_dir():
+        raise OptionError(option, str(path), "names a directory, not a file")
+    folder = file.parent if str(file.parent) else Path(".")
+    if not folder.is_dir():
+        raise OptionError(option, str(path), f"its folder {folder} does not exist")
+    if not os.access(folder, os.W_OK) or (file.exists() and not os.access(file, os.W_OK)) \
+            or str(folder.resolve()).startswith(("/proc", "/sys")):
+        raise OptionError(option, str(path), "cannot be written to")
+    return file
