@@ -28,7 +28,7 @@ from oracle.shrink import engines_disagree, shrink, to_toml
 from spec.answers import Limits, Strategy
 from spec.constants import DEFAULT_HORIZON, MAX_HORIZON
 from spec.engines import Engine, check_strategy, get_engine, parse_strategy
-from spec.errors import ExitCode, OptionError, SuiteError
+from spec.errors import EngineError, ExitCode, OptionError, SuiteError
 from spec.files import scenario_to_dict
 from spec.grid import Grid, grid_for
 
@@ -99,11 +99,15 @@ def _campaign(args: argparse.Namespace, console: Console, strategy: Strategy, gr
         for index, scenario in enumerate(scenarios):
             if index in done:
                 continue
-            answers = [plan(scenario, strategy, engine=e, limits=limits) for e in engines]
-            problems = disagreements(answers)
+            try:
+                answers = [plan(scenario, strategy, engine=e, limits=limits) for e in engines]
+                problems = disagreements(answers)
+                statuses = [a.status.value for a in answers]
+            except EngineError as error:  # a finding, not the end of the campaign
+                problems, statuses = [f"engine error: {error}"], ["error"]
             record = {"index": index, "seed": args.seed, "strategy": args.strategy, "engines": args.engines,
                       "cell_m": args.cell_m,
-                      "scenario": scenario_to_dict(scenario), "statuses": [a.status.value for a in answers],
+                      "scenario": scenario_to_dict(scenario), "statuses": statuses,
                       "disagreements": problems}
             if problems:
                 bad += 1
@@ -114,8 +118,8 @@ def _campaign(args: argparse.Namespace, console: Console, strategy: Strategy, gr
             append(log, record)
             progress.update(task, advance=1, bad=bad)
     records = _done(results, args)
-    statuses = [r.get("statuses") for r in records.values()]
-    incomplete = sum(isinstance(st, list) and "incomplete" in st for st in statuses)
+    recorded_statuses = [r.get("statuses") for r in records.values()]
+    incomplete = sum(isinstance(st, list) and "incomplete" in st for st in recorded_statuses)
     console.print(f"conform: {args.count} scenarios, {bad} disagreement(s), {incomplete} with an incomplete answer "
                   f"(a limit was hit; compared with nothing); results in {results}")
     print(f"{args.count - bad} passed, {bad} failed")

@@ -28,6 +28,8 @@ def plan(
     states differ from the interpreter's, is an ``EngineError``)."""
     eng = engine if isinstance(engine, Engine) else get_engine(engine)
     answer = solve(scenario, strategy, model, horizon, eng, limits)
+    if answer.status in (Status.NO_PLAN, Status.NO_PLAN_WITHIN_HORIZON) and eng.name != REFERENCE:
+        _check_no_plan(answer, scenario, model, horizon)
     if answer.status is not Status.PLAN or answer.model is None:
         return answer
     return replace(answer, states=_checked_states(eng, problem_for(scenario, answer.model, horizon), answer))
@@ -68,6 +70,21 @@ def solve(
     status = _combined(stages)
     return Answer(status, kind, eng.name, strategy, (), (), explored, elapsed_ms, _summary(stages), tuple(stages),
                   result.extra)
+
+
+REFERENCE = "interpreter"
+
+
+def _check_no_plan(answer: Answer, scenario: Scenario, model: ModelChoice | None, horizon: int | None) -> None:
+    """Another engine's "no plan" against the interpreter's (its bitset search: milliseconds at the default
+    horizon): a plan it finds makes the "no plan" an engine error, never an answer (a verifier from the wrong cache
+    slot, or an encoding that lost a move, would otherwise pass as "no plan")."""
+    reference = solve(scenario, Strategy.SHORTEST, model, horizon, REFERENCE)
+    if reference.status is Status.PLAN:
+        actions = ",".join(a.value for a in reference.actions) or "(empty)"
+        kind = reference.model.value if reference.model else "-"
+        raise EngineError(f"engine {answer.engine} says {answer.status.value}, but the interpreter finds a plan "
+                          f"({kind} model): {actions}")
 
 
 def _checked_states(engine: Engine, problem: Problem, result: SearchResult | Answer) -> tuple[State, ...]:

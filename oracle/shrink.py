@@ -15,7 +15,7 @@ from oracle.conform import disagreements
 from oracle.planner import plan
 from spec.answers import Limits, Strategy
 from spec.engines import Engine
-from spec.errors import ScenarioError
+from spec.errors import EngineError, ScenarioError
 from spec.files import scenario_to_dict
 from spec.scenario import Scenario, make_scenario
 
@@ -77,9 +77,13 @@ def _valid(s: Scenario, left: tuple[int, ...] | None = None, right: tuple[int, .
 
 
 def engines_disagree(engines: list[Engine], strategy: Strategy, limits: Limits | None = None) -> Predicate:
-    """The predicate "these engines disagree on this scenario"."""
+    """The predicate "these engines disagree on this scenario" (an engine error, such as an invalid plan or a "no
+    plan" the interpreter contradicts, counts: it is the disagreement the pipeline caught)."""
     def fails(scenario: Scenario) -> bool:
-        answers = [plan(scenario, strategy, engine=e, limits=limits) for e in engines]
+        try:
+            answers = [plan(scenario, strategy, engine=e, limits=limits) for e in engines]
+        except EngineError:
+            return True
         return bool(disagreements(answers))
 
     return fails

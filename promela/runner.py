@@ -35,6 +35,9 @@ HASH_BITS = 16  # pan's default table (-w24) costs ~130 ms to clear; these model
 #: pan's depth bound is the horizon plus this: the start takes two transitions, each action one.
 DEPTH_MARGIN = 10
 COMPILE_TIMEOUT_S = 300.0
+#: pan's time limit when the caller sets none: a hung verifier answers "incomplete", never hangs a plan.
+DEFAULT_TIMEOUT_S = 60.0
+CHECKSUM_FILE = "pan.sha256"  # written after a successful build; a verifier that fails it is rebuilt
 INSTALL_HINT = {"spin": "apt-get install spin", "gcc": "apt-get install gcc"}
 
 
@@ -81,11 +84,14 @@ def verifier(shape: Shape, strategy: Strategy) -> Verifier:
     key_text = [source, f"cell_m={shape.grid.cell_m}", " ".join(flags), tool_versions()]
     key = hashlib.sha256("\n".join(key_text).encode()).hexdigest()[:24]
     target = cache_dir() / f"pan-{shape.name}-{strategy.value}-{key}"
-    if (target / "pan").exists():
+    if _healthy(target):
         return Verifier(target / "pan", True)
+    if target.exists():
+        discard(target)  # damaged (truncated, altered, not executable, no checksum): built again below
     target.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=target.parent, prefix=".build-") as build:
         _compile(Path(build), source, flags)
+        (Path(build) / CHECKSUM_FILE).write_text(_sha256(Path(build) / "pan"))
         try:
             os.rename(build, target)  # atomic: a concurrent build of the same key wins or loses whole
             os.mkdir(build)  # for TemporaryDirectory's clean-up
@@ -93,6 +99,36 @@ def verifier(shape: Shape, strategy: Strategy) -> Verifier:
             if not (target / "pan").exists():
                 raise
     return Verifier(target / "pan", False)
+
+
+_VERIFIED: dict[Path, tuple[int, int]] = {}  # pan -> (size, mtime) when its checksum last matched
+
+
+def _healthy(folder: Path) -> bool:
+    """Whether a cached verifier is whole: present, executable, and matching the checksum its build wrote."""
+    pan, checksum = folder / "pan", folder / CHECKSUM_FILE
+    try:
+        info = pan.stat()
+        if not os.access(pan, os.X_OK) or not checksum.is_file():
+            return False
+        if _VERIFIED.get(pan) == (info.st_size, info.st_mtime_ns):
+            return True
+        if checksum.read_text().strip() != _sha256(pan):
+            return False
+    except OSError:
+        return False
+    _VERIFIED[pan] = (info.st_size, info.st_mtime_ns)
+    return True
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def discard(folder: Path) -> None:
+    """Remove a cached verifier (it is built again on next use)."""
+    _VERIFIED.pop(folder / "pan", None)
+    shutil.rmtree(folder, ignore_errors=True)
 
 
 def _flags(strategy: Strategy) -> list[str]:
@@ -110,20 +146,40 @@ def _compile(folder: Path, source: str, flags: list[str]) -> None:
 
 
 def search(problem: Problem, strategy: Strategy, timeout_s: float | None = None) -> SearchResult:
-    """Compile-once planning: the cached verifier, the scenario injected through the environment."""
+    """Compile-once planning: the cached verifier, the scenario injected through the environment.
+
+    A cached verifier that will not start or answers nonsense is rebuilt once; if the rebuilt one
+    fails too, the engine error names the cache to clear. Without a time limit pan gets
+    ``DEFAULT_TIMEOUT_S``."""
     check_tools()
     started = time.perf_counter()
-    built = verifier(shape_of(problem), strategy)
+    limit = DEFAULT_TIMEOUT_S if timeout_s is None else timeout_s
+    for attempt in (1, 2):
+        built = verifier(shape_of(problem), strategy)
+        try:
+            return _search_with(built, problem, limit, started)
+        except (EngineError, OSError) as err:
+            reason = str(err) if isinstance(err, EngineError) else f"the verifier would not start ({err})"
+            if attempt == 1 and built.cached:
+                discard(built.path.parent)
+                continue
+            raise EngineError(f"{reason} [verifier {built.path.parent}; if it persists, clear the cache: "
+                              f"rm -rf {cache_dir()}]") from None
+    raise AssertionError("unreachable")
+
+
+def _search_with(built: Verifier, problem: Problem, timeout_s: float, started: float) -> SearchResult:
     env = {**os.environ, ENV_VAR: scenario_values(problem)}
     with tempfile.TemporaryDirectory(prefix="overtake-spin-") as work:
         folder = Path(work)
         outcome = _pan(folder, [str(built.path)], problem, env, timeout_s, started)
-        if outcome is not None:
+        if outcome.status is not Status.PLAN:
             return _with_extra(outcome, built.cached, "compile-once")
         replay = _run([str(built.path), "-r", f"-w{HASH_BITS}", f"-m{problem.horizon + DEPTH_MARGIN}",
                        f"{MODEL_FILE}.trail"],
                       cwd=folder, env=env, timeout=60)
-        return _with_extra(_plan_from(replay.stdout, problem), built.cached, "compile-once")
+        found = _plan_from(replay.stdout, problem, outcome.states_explored)
+        return _with_extra(found, built.cached, "compile-once")
 
 
 def search_compiling(problem: Problem, strategy: Strategy, timeout_s: float | None = None) -> SearchResult:
@@ -134,15 +190,15 @@ def search_compiling(problem: Problem, strategy: Strategy, timeout_s: float | No
         folder = Path(work)
         _compile(folder, render_for(problem), _flags(strategy))
         outcome = _pan(folder, ["./pan"], problem, dict(os.environ), timeout_s, started)
-        if outcome is not None:
+        if outcome.status is not Status.PLAN:
             return _with_extra(outcome, False, "compile-every-time")
         replay = _run(["spin", "-t", MODEL_FILE], cwd=folder, timeout=60)
-        return _with_extra(_plan_from(replay.stdout, problem), False, "compile-every-time")
+        return _with_extra(_plan_from(replay.stdout, problem, outcome.states_explored), False, "compile-every-time")
 
 
 def _pan(folder: Path, command: list[str], problem: Problem, env: dict[str, str], timeout_s: float | None,
-         started: float) -> SearchResult | None:
-    """Run pan; None when it found a plan (a trail to replay), else the answer it gives."""
+         started: float) -> SearchResult:
+    """Run pan: its answer, or (status PLAN, no actions yet, the states it stored) when it left a trail to replay."""
     remaining = None if timeout_s is None else max(0.01, timeout_s - (time.perf_counter() - started))
     args = [*command, "-E", "-n", f"-m{problem.horizon + DEPTH_MARGIN}", f"-w{HASH_BITS}"]
     try:
@@ -156,14 +212,14 @@ def _pan(folder: Path, command: list[str], problem: Problem, env: dict[str, str]
     if "-DMEMLIM" in text or "out of memory" in text:
         return SearchResult(Status.INCOMPLETE, (), explored, "pan: memory limit reached")
     if "assertion violated" in text and (folder / f"{MODEL_FILE}.trail").exists():
-        return None
+        return SearchResult(Status.PLAN, (), explored, "a trail to replay")
     if done.returncode == 0 and "errors: 0" in text:
         return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), explored,
                             f"no plan within {problem.horizon} actions (search completed)")
     raise EngineError(f"pan failed (exit {done.returncode}): {_last_line(done)}")
 
 
-def _plan_from(replay: str, problem: Problem) -> SearchResult:
+def _plan_from(replay: str, problem: Problem, explored: int) -> SearchResult:
     """Actions and states from the replay's INIT/STEP lines."""
     actions: list[Action] = []
     states: list[State] = []
@@ -177,7 +233,7 @@ def _plan_from(replay: str, problem: Problem) -> SearchResult:
         states.append(_state(words[1:]))
     if not states:
         raise EngineError("spin replay printed no states: the trail could not be replayed")
-    return SearchResult(Status.PLAN, tuple(actions), 0, "", tuple(states))
+    return SearchResult(Status.PLAN, tuple(actions), explored, "", tuple(states))
 
 
 def _state(words: list[str]) -> State:
@@ -205,7 +261,9 @@ def _run(args: list[str], cwd: Path | None = None, env: dict[str, str] | None = 
     try:
         return subprocess.run(args, cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
     except FileNotFoundError as err:
-        raise ToolMissing(f"{args[0]} could not be run: {err.strerror}") from None
+        if not os.path.isabs(args[0]):
+            raise ToolMissing(f"{args[0]} could not be run: {err.strerror}") from None
+        raise  # a verifier that vanished from the cache: the caller rebuilds it
 
 
 def _last_line(done: subprocess.CompletedProcess[str]) -> str:

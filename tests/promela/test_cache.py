@@ -1,0 +1,87 @@
+"""The verifier cache heals itself: a truncated, altered or non-executable cached pan is rebuilt, a verifier that
+answers nonsense is rebuilt once and then reported with the cache to clear, and a "no plan" that the interpreter
+contradicts is an engine error, never an answer."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+from oracle.planner import plan
+from promela import runner
+from spec.answers import SearchResult, Status, Strategy
+from spec.engines import Engine
+from spec.errors import EngineError
+from spec.library import builtin
+from spec.models import ModelKind
+from spec.scenario import Scenario, problem_for
+
+pytestmark = pytest.mark.requires_spin
+
+
+def _scenario() -> Scenario:
+    return builtin("one_target").load()  # type: ignore[union-attr]
+
+
+def _cached(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[Path, SearchResult]:
+    monkeypatch.setenv("OVERTAKE_CACHE", str(tmp_path))
+    first = runner.search(problem_for(_scenario(), ModelKind.FINAL), Strategy.SENSIBLE)
+    (pan,) = tmp_path.glob("pan-*/pan")
+    return pan, first
+
+
+@pytest.mark.parametrize("damage", ["truncated", "altered", "not executable", "no checksum", "removed"])
+def test_a_damaged_cached_verifier_is_rebuilt(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, damage: str) -> None:
+    pan, first = _cached(tmp_path, monkeypatch)
+    if damage == "truncated":
+        pan.write_bytes(pan.read_bytes()[:1000])
+    elif damage == "altered":
+        data = bytearray(pan.read_bytes())
+        data[len(data) // 2] ^= 0xFF
+        pan.write_bytes(bytes(data))
+    elif damage == "not executable":
+        pan.chmod(0o644)
+    elif damage == "no checksum":
+        (pan.parent / runner.CHECKSUM_FILE).unlink()
+    else:
+        pan.unlink()
+    again = runner.search(problem_for(_scenario(), ModelKind.FINAL), Strategy.SENSIBLE)
+    assert again.actions == first.actions and again.extra["verifier_cached"] is False
+    assert os.access(pan, os.X_OK) and (pan.parent / runner.CHECKSUM_FILE).read_text() == runner._sha256(pan)
+
+
+def test_a_verifier_that_answers_nonsense_is_rebuilt_once_then_reported_with_the_cache(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    _cached(tmp_path, monkeypatch)
+    calls = {"n": 0}
+
+    def nonsense(*args: object, **kw: object) -> SearchResult:
+        calls["n"] += 1
+        raise EngineError("pan failed (exit 0): nonsense")
+
+    monkeypatch.setattr(runner, "_pan", nonsense)
+    with pytest.raises(EngineError, match="rm -rf") as caught:
+        runner.search(problem_for(_scenario(), ModelKind.FINAL), Strategy.SENSIBLE)
+    assert calls["n"] == 2 and str(tmp_path) in str(caught.value)
+
+
+def test_a_hung_verifier_is_incomplete_within_the_default_limit(tmp_path: Path,
+                                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    pan, _ = _cached(tmp_path, monkeypatch)
+    monkeypatch.setattr(runner, "DEFAULT_TIMEOUT_S", 0.5)
+    pan.write_text("#!/bin/sh\nsleep 30\n")
+    (pan.parent / runner.CHECKSUM_FILE).write_text(runner._sha256(pan))  # a hang that passes its checksum
+    pan.chmod(0o755)
+    runner._VERIFIED.clear()
+    result = runner.search(problem_for(_scenario(), ModelKind.FINAL), Strategy.SENSIBLE)
+    assert result.status is Status.INCOMPLETE and "time limit" in result.detail
+
+
+def test_a_no_plan_the_interpreter_contradicts_is_an_engine_error() -> None:
+    liar = Engine("liar", (Strategy.SENSIBLE,), lambda problem, strategy, limits: SearchResult(
+        Status.NO_PLAN_WITHIN_HORIZON, (), 0, "search complete, no error"), "says no plan to everything")
+    with pytest.raises(EngineError, match="interpreter finds a plan"):
+        plan(_scenario(), Strategy.SENSIBLE, engine=liar)
+    assert plan(builtin("no_plan_within_horizon").load(), engine=liar).status is Status.NO_PLAN_WITHIN_HORIZON  # type: ignore[union-attr]
