@@ -33,7 +33,7 @@ matplotlib.use("Agg")  # files only, never a window
 import matplotlib.pyplot as plt
 
 from ci.executors import ExecutorChoice, run_jobs
-from ci.records import append, open_for_append
+from ci.records import append, campaign_lock, open_for_append
 from ci.simulate import campaign_key, recorded_runs
 from oracle.planner import plan
 from sim.opportunity import Refusal
@@ -88,7 +88,13 @@ def run_audit(audit: AuditPlan, out_dir: str, executor: ExecutorChoice, fresh: b
     """Drive every (combination, seed) not already recorded in ``out_dir``; ``on_done(job, done, resumed)`` after
     each; results in job order (combination by combination, seed by seed)."""
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    with campaign_lock(out):
+        return _run_audit(audit, out, executor, fresh, on_done, on_km)
+
+
+def _run_audit(audit: AuditPlan, out: Path, executor: ExecutorChoice, fresh: bool,
+               on_done: Callable[[int, Done, bool], None] | None,
+               on_km: Callable[[tuple[int, float]], None] | None) -> list[Done]:
     log = out / AUDIT_FILE
     if fresh:
         log.unlink(missing_ok=True)

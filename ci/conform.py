@@ -21,7 +21,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from ci.cli.options import MAX_SECONDS, check_number, out_dir
 from ci.gen import random_scenarios
-from ci.records import append, open_for_append, read_records
+from ci.records import append, campaign_lock, open_for_append, read_records
 from oracle.conform import disagreements
 from oracle.planner import plan
 from oracle.shrink import engines_disagree, shrink, to_toml
@@ -67,7 +67,8 @@ def main(argv: list[str] | None = None) -> int:
         console.print(f"conform: error: {err}", soft_wrap=True)
         return err.exit_code
     try:
-        return _campaign(args, console, strategy, grid, engines, out)
+        with campaign_lock(out):
+            return _campaign(args, console, strategy, grid, engines, out)
     except KeyboardInterrupt:
         console.print("conform: interrupted (what was decided is in results.jsonl; run again to resume)")
         return ExitCode.INTERRUPTED

@@ -27,7 +27,7 @@ import numpy as np
 
 from ci.executors import ExecutorChoice, run_jobs
 from ci.properties import PROPERTIES, PropertyName, Runs, Verdict
-from ci.records import append, open_for_append, read_records
+from ci.records import append, campaign_lock, open_for_append, read_records
 from oracle.coverage import ALL_RULES, rules_exercised
 from spec.answers import Limits, Status
 from spec.constants import DEFAULT_HORIZON
@@ -187,7 +187,13 @@ def run_sweep(campaign: Campaign, scenarios: Iterable[Scenario], out: Path, exec
               on_checked: Callable[[int], None] | None = None) -> list[dict[str, Any]]:
     """Check every scenario not already recorded, appending each verdict as it is decided; every result, in the
     scenarios' order. ``on_result(result, resumed)`` after each; ``on_checked(n)`` as a worker progresses."""
-    out.mkdir(parents=True, exist_ok=True)
+    with campaign_lock(out):
+        return _sweep(campaign, scenarios, out, executor, on_result, on_checked)
+
+
+def _sweep(campaign: Campaign, scenarios: Iterable[Scenario], out: Path, executor: ExecutorChoice,
+           on_result: Callable[[dict[str, Any], bool], None] | None,
+           on_checked: Callable[[int], None] | None) -> list[dict[str, Any]]:
     log = out / VERDICTS_FILE
     done = recorded(log, campaign)
     ordered = [scenario_key(s) for s in scenarios]

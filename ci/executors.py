@@ -9,20 +9,25 @@ worker needs this package installed) or None for a local cluster of ``workers`` 
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import ctypes.util
 import enum
 import functools
 import logging
-import multiprocessing
+import os
+import signal
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
+from multiprocessing.managers import SyncManager
 from typing import Any, TypeVar
 
 from spec.errors import OptionError, ToolMissing
 
 R = TypeVar("R")
 CONNECT_TIMEOUT_S = 10
+PR_SET_PDEATHSIG = 1  # prctl(2)
 
 
 class ExecutorKind(enum.Enum):
@@ -82,10 +87,14 @@ def run_jobs(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: Exec
         with contextlib.ExitStack() as stack:
             call = fn
             if progress:
-                queue = stack.enter_context(multiprocessing.Manager()).Queue()
+                manager = SyncManager()
+                manager.start(worker_setup)  # the progress queue's server process dies with the campaign too
+                stack.callback(manager.shutdown)
+                queue = manager.Queue()
                 stack.enter_context(_drained(queue, progress))
                 call = functools.partial(fn, report=queue.put)
-            pool = stack.enter_context(ProcessPoolExecutor(max_workers=min(choice.workers, len(jobs))))
+            pool = stack.enter_context(ProcessPoolExecutor(max_workers=min(choice.workers, len(jobs)),
+                                                           initializer=worker_setup))
             try:
                 futures = {pool.submit(call, *job): index for index, job in enumerate(jobs)}
                 for future in as_completed(futures):
@@ -93,6 +102,18 @@ def run_jobs(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: Exec
             except BaseException:  # an interrupt, a failed job, or a consumer that stopped: nothing queued starts
                 _stop(pool)
                 raise
+
+
+def worker_setup() -> None:
+    """In each local worker: leave Ctrl-C to the campaign (which stops the workers and says so in one line), and die
+    with the campaign, even when it is killed outright (Linux's parent-death signal), so no worker is orphaned."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the campaign's handler, inherited through fork: just end
+    with contextlib.suppress(OSError, AttributeError):
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+        libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+    if os.getppid() == 1:  # the campaign died before the signal was asked for
+        os._exit(1)
 
 
 def _stop(pool: ProcessPoolExecutor) -> None:

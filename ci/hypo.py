@@ -25,6 +25,7 @@ from rich.console import Console
 from ci.crossval import VERDICTS_FILE, Campaign, check_scenario, recorded
 from ci.executors import ExecutorChoice, run_jobs
 from ci.properties import PropertyName, Verdict
+from ci.records import campaign_lock
 from spec.constants import DEFAULT_HORIZON
 from spec.errors import ScenarioError
 from spec.files import scenario_from_dict
@@ -123,9 +124,15 @@ def hypothesis_job(name: str, campaign_key: dict[str, Any], out_dir: str, profil
 def run_hypothesis(campaign: Campaign, grid: Grid, out: Path, executor: ExecutorChoice, max_reproducers: int,
                    console: Console) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
     """Every property's hypothesis test; the recorded results of this campaign and the reproducers written."""
+
+    with campaign_lock(out):
+        return _run(campaign, out, executor, max_reproducers, console)
+
+
+def _run(campaign: Campaign, out: Path, executor: ExecutorChoice, max_reproducers: int,
+         console: Console) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
     from ci.repro import reproduce
 
-    out.mkdir(parents=True, exist_ok=True)
     (out / VERDICTS_FILE).touch()
     name = profile()
     console.print(f"crossval: hypothesis profile {name} ({PROFILE_VAR}), seed {campaign.seed}")

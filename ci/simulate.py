@@ -3,7 +3,7 @@
 Every finished run is appended to ``OUT/runs.jsonl`` with the campaign's parameters, so an
 interrupted campaign started again with the same parameters and folder runs only the
 seeds it has no line for (a half-written last line is run again). Each run leaves
-``trace-seedS.jsonl`` and ``spacetime-seedS.png`` in the same folder.
+``trace-seedS.jsonl`` and ``spacetime-seedS.png`` in the same folder, written before its line.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ci.executors import IN_PROCESS, ExecutorChoice, run_jobs
-from ci.records import append, open_for_append, read_records
+from ci.records import append, campaign_lock, open_for_append, read_records
 from sim.parts import DriveConfig
 from sim.report import plot_trace
 from sim.simulator import run_drive
@@ -30,7 +30,13 @@ def simulate(campaign: DriveConfig, seeds: list[int], out_dir: str, executor: Ex
     """Run every seed not already recorded in ``out_dir``; ``on_done(summary, resumed)`` after each, and
     ``on_km((seed, km))`` after each kilometre of a run (not on dask); results in seed order."""
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    with campaign_lock(out):
+        return _simulate(campaign, seeds, out, executor, on_done, fresh, on_km)
+
+
+def _simulate(campaign: DriveConfig, seeds: list[int], out: Path, executor: ExecutorChoice,
+              on_done: Callable[[RunSummary, bool], None] | None, fresh: bool,
+              on_km: Callable[[tuple[int, float]], None] | None) -> list[RunSummary]:
     log = out / RUNS_FILE
     if fresh:
         log.unlink(missing_ok=True)
@@ -42,11 +48,8 @@ def simulate(campaign: DriveConfig, seeds: list[int], out_dir: str, executor: Ex
     jobs = [(s, campaign, str(out)) for s in todo]
     with open_for_append(log) as lines:
         for _index, summary in run_jobs(drive_one, jobs, executor, on_km):
-            append(lines, {"campaign": campaign.to_json(), "run": summary.to_json()})
+            append(lines, {"campaign": campaign.to_json(), "run": summary.to_json()})  # after its files (drive_one)
             done[summary.seed] = summary
-            trace = out / f"trace-seed{summary.seed}.jsonl"
-            if trace.exists() and trace.stat().st_size:
-                plot_trace(trace, out / f"spacetime-seed{summary.seed}.png", campaign.grid)
             if on_done:
                 on_done(summary, False)
     return [done[s] for s in seeds]
@@ -54,8 +57,14 @@ def simulate(campaign: DriveConfig, seeds: list[int], out_dir: str, executor: Ex
 
 def drive_one(seed: int, campaign: DriveConfig, out_dir: str,
               report: Callable[[tuple[int, float]], None] | None = None) -> RunSummary:
-    """One run of the campaign (what a worker runs)."""
-    return run_drive(seed, campaign, out_dir, report)
+    """One run of the campaign (what a worker runs): the drive, its trace and its space-time plot, all on disk
+    before the run is returned (and recorded): a record means every file of its run is there."""
+    summary = run_drive(seed, campaign, out_dir, report)
+    out = Path(out_dir)
+    trace = out / f"trace-seed{seed}.jsonl"
+    if trace.exists() and trace.stat().st_size:
+        plot_trace(trace, out / f"spacetime-seed{seed}.png", campaign.grid)
+    return summary
 
 
 def campaign_key(config: DriveConfig | dict[str, Any]) -> str:

@@ -16,6 +16,7 @@ class ExitCode(enum.IntEnum):
     ENGINE_FAILED = 5  # an engine crashed or answered nonsense: never "no plan"
     DISAGREE = 6  # engines disagree
     INTERRUPTED = 130  # Ctrl-C: what a campaign finished is kept
+    TERMINATED = 143  # SIGTERM: likewise
 
 
 class SuiteError(Exception):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 from typing import Any
 
 import click
@@ -13,6 +14,7 @@ from ci.cli.options import KM, SEED
 from ci.cli.options import out_dir as out_dir_checked
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.progress import km_progress
+from ci.records import campaign_lock
 from spec.errors import ExitCode, OptionError
 from spec.grid import STANDARD_CELLS_M, grid_for
 from spec.physical import EVENTS, NOISE
@@ -91,6 +93,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, km: float, runs: int
     executor = ExecutorChoice(ExecutorKind(executor_kind), workers, scheduler)
     check_executor(executor)
     out_dir_checked("--out", out_dir)
+    click.get_current_context().with_resource(campaign_lock(Path(out_dir)))  # before any line: one campaign per folder
     engines = _names("--engines", cost_engines)
     for name in engines:
         get_engine(name)

@@ -17,6 +17,7 @@ from ci.cli.common import cell_option, err, horizon_option, out, print_json
 from ci.cli.options import SECONDS, SEED
 from ci.cli.options import out_dir as checked_out_dir
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
+from ci.records import campaign_lock
 from spec.errors import ExitCode, OptionError
 
 SOURCES = ("library", "hypothesis", "exhaustive")
@@ -75,6 +76,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
         raise OptionError("--engines", engine_text, "no selected property applies to these engines")
     skipped = [p.value for p in properties if p not in chosen]
     out_path = checked_out_dir("--out", out_dir)
+    click.get_current_context().with_resource(campaign_lock(Path(out_dir)))  # before any line: one campaign per folder
     scenarios: list[Any] = []
     the_space = None
     if source == "library":

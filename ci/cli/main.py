@@ -3,12 +3,13 @@
 Every error reaches the user as one line on stderr with its exit code, declared once in
 ``spec.errors.ExitCode``: 0 plan / valid, 1 no plan / invalid (simulate: a run failed),
 2 bad input, 3 search incomplete, 4 a tool is missing, 5 an engine failed, 6 engines
-disagree, 130 interrupted.
+disagree, 130 interrupted (Ctrl-C), 143 terminated (SIGTERM).
 """
 
 from __future__ import annotations
 
 import os
+import signal
 import sys
 
 import click
@@ -28,8 +29,23 @@ for command in (*planning.COMMANDS, *library.COMMANDS, *simulation.COMMANDS, *au
     cli.add_command(command)
 
 
+class Interrupted(BaseException):
+    """Ctrl-C or SIGTERM, raised here rather than as KeyboardInterrupt (which click would turn into its own
+    output): campaigns stop their workers and keep what they finished."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _interrupted(signum: int, _frame: object) -> None:
+    raise Interrupted(signum)
+
+
 def main() -> None:
     """Entry point: run the CLI, turning every suite error into one line and its exit code."""
+    signal.signal(signal.SIGTERM, _interrupted)
+    signal.signal(signal.SIGINT, _interrupted)
     try:
         cli.main(standalone_mode=False)
     except click.exceptions.Exit as done:
@@ -41,8 +57,14 @@ def main() -> None:
     except click.ClickException as error:
         click.echo(f"overtake: error: {error.format_message()}", err=True)
         sys.exit(error.exit_code)
+    except Interrupted as signalled:
+        if signalled.signum == signal.SIGTERM:
+            click.echo("overtake: terminated (SIGTERM); what was finished is kept: run again to resume", err=True)
+            sys.exit(ExitCode.TERMINATED)
+        click.echo("overtake: interrupted; what was finished is kept: run again to resume", err=True)
+        sys.exit(ExitCode.INTERRUPTED)
     except (click.exceptions.Abort, KeyboardInterrupt):
-        click.echo("overtake: interrupted", err=True)
+        click.echo("overtake: interrupted; what was finished is kept: run again to resume", err=True)
         sys.exit(ExitCode.INTERRUPTED)
     except SuiteError as error:
         click.echo(f"overtake: error: {error}", err=True)

@@ -12,6 +12,7 @@ from ci.cli.options import CELL_M, KM, SEED, TOLERANCE
 from ci.cli.options import out_dir as out_dir_checked
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.progress import km_progress
+from ci.records import campaign_lock
 from spec.answers import Strategy
 from spec.errors import ExitCode, OptionError
 from spec.grid import PAPER_GRID
@@ -56,6 +57,7 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: S
     executor = ExecutorChoice(ExecutorKind(executor_kind), workers, scheduler)
     check_executor(executor)
     out_dir_checked("--out", out_dir)
+    click.get_current_context().with_resource(campaign_lock(Path(out_dir)))  # before any line: one campaign per folder
     if seed + runs - 1 >= 2**32:
         raise OptionError("--seed", seed, f"seed + runs - 1 must stay below 2**32 (runs {runs})")
     campaign = DriveConfig(km, until_failure, engine, strategy, not paper_replanning, step_tolerance, plan_tolerance,
