@@ -45,12 +45,14 @@ class ExecutorChoice:
     workers: int = 1  # local processes (for dask without a scheduler: the local cluster's workers)
     scheduler: str | None = None  # dask only: a running scheduler's address
 
-    def describe(self) -> str:
+    def describe(self, jobs: int | None = None) -> str:
+        """Where the jobs run, as many workers as will actually start (no more than ``jobs``)."""
         if self.kind is ExecutorKind.DASK and self.scheduler:
             return f"dask scheduler {self.scheduler}"
+        used = self.workers if jobs is None else max(1, min(self.workers, jobs))
         if self.kind is ExecutorKind.DASK:
-            return f"local dask cluster, {self.workers} worker(s)"
-        return "this process" if self.workers <= 1 else f"{self.workers} processes"
+            return f"local dask cluster, {used} worker(s)"
+        return "this process" if used <= 1 else f"{used} processes"
 
 
 IN_PROCESS = ExecutorChoice()

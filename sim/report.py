@@ -14,6 +14,7 @@ from spec.grid import Grid
 
 LANES = (("left_lane", "tab:green", "left lane"), ("right_lane", "tab:red", "oncoming"))
 SHOWN_M = (-120.0, 400.0)
+ACTION_LETTER = {"accelerate": "A", "drive": "D", "brake": "B", "right_lane_change": "R", "left_lane_change": "L"}
 
 
 def plot_trace(trace: Path, png: Path, grid: Grid, window_s: float = 300.0) -> Path:
@@ -34,9 +35,17 @@ def plot_trace(trace: Path, png: Path, grid: Grid, window_s: float = 300.0) -> P
             ts, ds = zip(*predicted)
             ax.scatter(ts, ds, s=30, marker="x", c=colour, label=f"{label}: predicted cell centre")
     ax.axhline(0, color="k", lw=0.8)
-    ax.set_xlabel("simulated time (s)")
+    for r in shown:  # the AV's lane and action: a band along the bottom, one letter per action at its end
+        right = r["av"]["y_m"] < 0
+        ax.axvspan(r["t_s"] - 3.0, r["t_s"], ymin=0.0, ymax=0.03, color="tab:red" if right else "tab:green",
+                   alpha=0.6, lw=0)
+        ax.annotate(ACTION_LETTER.get(r["action"], "?"), (r["t_s"], 0.035), xycoords=("data", "axes fraction"),
+                    fontsize=6, ha="right")
+    ax.set_xlabel("simulated time (s); bottom band: the AV's lane (green its own, red the oncoming one) and its "
+                  "actions (A accelerate, D drive, B brake, R/L lane change)", fontsize=8)
     ax.set_ylabel("distance ahead of the AV (m)")
-    ax.set_title(f"{trace.stem}: the last {window_s:.0f} s, measured vs predicted after every action")
+    span_s = end_s - shown[0]["t_s"] if shown else 0.0
+    ax.set_title(f"{trace.stem}: the last {span_s:.0f} s of the drive, measured vs predicted after every action")
     ax.legend(loc="upper right", fontsize=8)
     fig.tight_layout()
     fig.savefig(png, dpi=110)

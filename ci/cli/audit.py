@@ -106,7 +106,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, km: float, runs: int
     configs[0].parts()  # the engine exists and answers: bad input before any run starts
     total = len(configs) * runs
     err.print(f"audit: {len(configs)} combination(s) x seeds {seed}..{seed + runs - 1} = {total} run(s) of {km:g} km; "
-              f"planner {engine}; on {executor.describe()}; results in {out_dir}")
+              f"planner {engine}; on {executor.describe(total)}; results in {out_dir}")
     names = {i: f"{c.cell_m:g} m, {c.traffic}, {c.sensor}, seed {s}"
              for i, (c, s) in enumerate((c, s) for c in configs for s in plan.seeds)}
     with km_progress(err, total, km, "already in audit.jsonl (resumed; --fresh runs it again)") as bar:

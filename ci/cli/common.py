@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -21,7 +22,16 @@ from spec.models import ModelChoice
 from spec.scenario import Scenario
 from spec.state import State
 
-out = Console(highlight=False, width=None if sys.stdout.isatty() else 120)
+
+def _pipe_width() -> int | None:
+    """A terminal tells its width; a pipe does not: $COLUMNS if set, else the classic 80 columns."""
+    if sys.stdout.isatty():
+        return None
+    columns = os.environ.get("COLUMNS", "")
+    return int(columns) if columns.isdigit() and int(columns) >= 40 else 80
+
+
+out = Console(highlight=False, width=_pipe_width())
 err = Console(stderr=True, highlight=False)
 
 MODEL = click.Choice([m.value for m in ModelChoice])

@@ -25,7 +25,7 @@ from oracle.planner import validate_pipeline
 from oracle.shrink import engines_disagree, to_toml
 from oracle.shrink import shrink as shrink_scenario
 from spec.actions import parse_action
-from spec.answers import Answer, Limits, Strategy, state_to_json
+from spec.answers import Answer, Limits, Status, Strategy, state_to_json
 from spec.engines import check_strategy, get_engine, load_engines
 from spec.errors import ActionError, ExitCode, OptionError
 from spec.files import scenario_to_dict
@@ -122,7 +122,7 @@ def validate_cmd(file: str, actions_text: str, model: str | None, horizon: int |
 @click.command()
 @click.argument("file")
 @click.option("--model", type=click.Choice([m.value for m in ModelKind]), default=None,
-              help="Default: the model `plan` would use first (the scenario's, or final for auto).")
+              help="Default: the model `plan` answers with (the pipeline's first model that has a plan).")
 @horizon_option()
 @cell_option()
 @click.option("--out", default=None, help="Write the model here instead of printing it.")
@@ -132,7 +132,11 @@ def promela(file: str, model: str | None, horizon: int | None, cell_m: float | N
 
     target = out_file("--out", out) if out else None
     scenario = load(file, cell_m)
-    kind = ModelKind(model) if model else models_for(scenario.model)[0]
+    if model:
+        kind = ModelKind(model)
+    else:  # the model `plan` would answer with: the first of the pipeline with a plan (the interpreter: milliseconds)
+        answer = run_plan(scenario, horizon=horizon)
+        kind = answer.model if answer.status is Status.PLAN and answer.model else models_for(scenario.model)[0]
     text = render_for(problem_for(scenario, kind, horizon))
     if target:
         target.write_text(text)

@@ -65,7 +65,7 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: S
     campaign.parts()  # the engine exists and answers the strategy: bad input before any run starts
     limit = f"{km:g} km" + (" or until failure" if until_failure else "")
     err.print(f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; engine {engine}, {strategy.value}, "
-              f"{campaign.grid.describe()}; on {executor.describe()}; results in {Path(out_dir) / RUNS_FILE}")
+              f"{campaign.grid.describe()}; on {executor.describe(runs)}; results in {Path(out_dir) / RUNS_FILE}")
     resumed = f"already in {RUNS_FILE} (resumed; --fresh runs it again)"
     with km_progress(err, runs, km, resumed) as bar:
         results = run_campaign(campaign, list(range(seed, seed + runs)), out_dir, executor, bar.done, fresh,
