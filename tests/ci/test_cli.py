@@ -113,7 +113,7 @@ def test_unreadable_file_is_bad_input(tmp_path: Path) -> None:
     folder = tmp_path / "scenario.json"
     folder.mkdir()  # exists, has the right suffix, but cannot be read as a file
     done = run("plan", str(folder))
-    assert done.returncode == 2 and "cannot read" in done.stderr and str(folder) in done.stderr
+    assert done.returncode == 2 and "not a regular file" in done.stderr and str(folder) in done.stderr
 
 
 def test_demo_runs_every_builtin_and_matches_expectations() -> None:

@@ -212,8 +212,8 @@ def test_crossval_with_hypothesis_prints_its_seed_and_records_verdicts(tmp_path:
     (("--engines", "interpreter", "--properties", "sensible_identity"), ["--engines", "applies"]),
     (("--source", "exhaustive", "--space", "left=9"), ["--space", "expected"]),
     (("--timeout", "nan"), ["--timeout", "finite"]),
-    (("--timeout", "0"), ["--timeout", "positive"]),
-    (("--out", "/proc/crossval"), ["--out", "cannot write"]),
+    (("--timeout", "0"), ["--timeout", "above 0"]),
+    (("--out", "/proc/crossval"), ["--out", "cannot"]),
     (("--cell-m", "10.5"), ["--source", "library", "21 m"]),
 ])
 def test_bad_crossval_input_is_one_line_exit_two(tmp_path: Path, args: tuple[str, ...], words: list[str]) -> None:
