@@ -383,7 +383,10 @@ def _plot_latency(costs: list[Cost], png: Path) -> None:
     ax.set_ylabel("median planning latency (ms), shortest")
     ax.set_yscale("log")
     ax.invert_xaxis()
-    ax.legend()
+    if ax.get_lines():
+        ax.legend()
+    else:
+        ax.text(0.5, 0.5, "no planning cost measured (--snapshots 0)", transform=ax.transAxes, ha="center")
     fig.tight_layout()
     fig.savefig(png, dpi=100)
     plt.close(fig)

@@ -7,6 +7,7 @@ limit, and a steering command sets the front hinges' target angle.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -59,12 +60,17 @@ class WheeledCar:
             for other in range(link + 1, n):
                 c.setCollisionFilterPair(self.body, self.body, link, other, 0)
         self.wheel_target_mps = 0.0
+        # the calls made on every control step, bound once (BulletClient looks each one up by name otherwise)
+        own = {"physicsClientId": c._client}
+        self._position = functools.partial(p.getBasePositionAndOrientation, self.body, **own)
+        self._velocity = functools.partial(p.getBaseVelocity, self.body, **own)
+        self._euler = functools.partial(p.getEulerFromQuaternion, **own)
+        self._motors = functools.partial(p.setJointMotorControlArray, self.body, **own)
 
     def pose(self) -> Pose:
-        c = self.scene.client
-        (x, y, _), orientation = c.getBasePositionAndOrientation(self.body)
-        yaw = c.getEulerFromQuaternion(orientation)[2]
-        (vx, vy, _), _ = c.getBaseVelocity(self.body)
+        (x, y, _), orientation = self._position()
+        yaw = self._euler(orientation)[2]
+        (vx, vy, _), _ = self._velocity()
         return Pose(x, y, yaw, vx * math.cos(yaw) + vy * math.sin(yaw))
 
     def command(self, speed_mps: float, steer_rad: float, dt_s: float) -> None:
@@ -73,12 +79,10 @@ class WheeledCar:
         delta = speed_mps - self.wheel_target_mps
         self.wheel_target_mps += max(-step_down, min(step_up, delta))
         omega = self.wheel_target_mps / self.spec.wheel_radius_m
-        c = self.scene.client
-        c.setJointMotorControlArray(self.body, self.wheel_joints, p.VELOCITY_CONTROL,
-                                    targetVelocities=[omega] * 4, forces=[self.spec.wheel_force_n] * 4)
+        self._motors(self.wheel_joints, p.VELOCITY_CONTROL, targetVelocities=[omega] * 4,
+                     forces=[self.spec.wheel_force_n] * 4)
         steer = max(-self.spec.max_steer_rad, min(self.spec.max_steer_rad, steer_rad))
-        c.setJointMotorControlArray(self.body, self.steer_joints, p.POSITION_CONTROL,
-                                    targetPositions=[steer] * 2, forces=[5000.0] * 2)
+        self._motors(self.steer_joints, p.POSITION_CONTROL, targetPositions=[steer] * 2, forces=[5000.0] * 2)
 
     def shift_x(self, dx_m: float) -> None:
         """Re-centre the world: move the whole car by ``dx_m`` keeping every velocity (bookkeeping, not control)."""
