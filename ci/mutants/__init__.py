@@ -6,7 +6,9 @@ behaviour somewhere: an equivalent one would be a test that cannot fail. One suc
 and left out: swapping the cost's first two terms (lane changes, right-lane steps) in the Z3
 objective changes no plan, since every plan of a model and start lane has the same number of
 lane changes except in preparations case B, where the plan without a lane change also has no
-right-lane step.
+right-lane step. Another was measured and replaced: counting a target alongside the AV as
+behind it (``spec.rules.behind_line`` one cell later) changes no plan, since the goal wants the
+AV in its own lane, where a vehicle alongside is a collision.
 """
 
 from __future__ import annotations
@@ -59,8 +61,9 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("bitplan-no-smear", "oracle/bitplan.py", "        for i in range(0, len(flat.smear), 2):",
            "        for i in range(0, 0, 2):", "the bitset search's end-row smear dropped (finer grids)"),
     # -- spec/ and the discretiser --------------------------------------------------------------------
-    Mutant("spec-behind-line", "spec/rules.py", "    return grid.av_cell - 1\n", "    return grid.av_cell\n",
-           "a target alongside the AV counts as behind it (every engine follows: the library's plans change)"),
+    Mutant("spec-danger-zone", "spec/models.py", "danger_m=Fraction(21), max_lane_changes=2),  # one paper cell",
+           "danger_m=Fraction(42), max_lane_changes=2),  # one paper cell",
+           "the final model's danger zone twice as long (every engine follows: the library's plans change)"),
     Mutant("discretiser-oncoming-rounding", "spec/cells.py",
            "    return grid.av_cell + math.trunc(dx_m / grid.cell)",
            "    return grid.av_cell + round(dx_m / grid.cell)",

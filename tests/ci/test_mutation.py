@@ -29,7 +29,7 @@ def test_each_mutant_changes_text_that_occurs_once_in_the_project(m: Mutant, tmp
 def test_there_are_mutants_in_every_engine_spec_the_discretiser_and_the_simulator() -> None:
     files = {m.path for m in MUTANTS}
     assert len(MUTANTS) >= 15 and len({m.name for m in MUTANTS}) == len(MUTANTS)
-    for needed in ("promela/render.py", "oracle/bmc.py", "oracle/interpreter.py", "spec/rules.py", "spec/cells.py",
+    for needed in ("promela/render.py", "oracle/bmc.py", "oracle/interpreter.py", "spec/models.py", "spec/cells.py",
                    "sim/simulator.py", "sim/traffic.py", "sim/tolerance.py"):
         assert needed in files
 
