@@ -1,7 +1,7 @@
 """A campaign's resumable record: one JSON object per line, appended as each unit of work finishes.
 
 An interruption can cut the last line short: reading skips it (that unit is done again), and
-re-opening for append first ends it, so the next record starts on a line of its own. One
+re-opening for append first removes it, so the file holds whole records only. One
 campaign works in a folder at a time (``campaign_lock``: a lock the kernel drops when its
 holder dies, so a killed campaign never leaves a stale lock).
 """
@@ -37,11 +37,14 @@ def read_records(path: Path) -> Iterator[dict[str, Any]]:
 
 
 def open_for_append(path: Path) -> IO[str]:
-    """``path`` opened to append records, after ending a line an interruption left half-written."""
-    log = path.open("a")
-    if path.stat().st_size and not path.read_bytes().endswith(b"\n"):
-        log.write("\n")
-    return log
+    """``path`` opened to append records, after removing a last line an interruption left half-written (its unit of
+    work was not recorded, and is done again)."""
+    if path.exists():
+        data = path.read_bytes()
+        if data and not data.endswith(b"\n"):
+            with path.open("r+b") as handle:
+                handle.truncate(data.rfind(b"\n") + 1)
+    return path.open("a")
 
 
 def append(log: IO[str], record: dict[str, Any]) -> None:

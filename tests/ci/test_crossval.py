@@ -141,6 +141,8 @@ def test_a_campaign_resumes_without_checking_again_and_skips_a_torn_line(tmp_pat
     again = run_sweep(campaign, scenarios, tmp_path, ExecutorChoice())
     assert checked == [1] and again[:3] == first
     assert len(recorded(tmp_path / VERDICTS_FILE, campaign)) == 4
+    lines = (tmp_path / VERDICTS_FILE).read_text().splitlines()
+    assert len(lines) == 4 and all(line.endswith("}") for line in lines)  # the torn line was removed
 
 
 def test_an_exhaustive_space_names_its_size_and_yields_every_valid_scenario() -> None:
