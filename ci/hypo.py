@@ -16,7 +16,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, Verbosity, given, settings
 from hypothesis import seed as hypothesis_seed
 from hypothesis import strategies as st
 from hypothesis.database import DirectoryBasedExampleDatabase
@@ -34,9 +34,13 @@ from spec.lanes import Lane
 from spec.scenario import Scenario, make_scenario
 
 #: The campaign's own profiles (the tests register theirs in tests/conftest.py), picked by ``PROFILE_VAR``.
+#: Quiet: hypothesis would print its falsifying examples from the workers into the command's output (and --json);
+#: the failures are in the verdicts and the reproducers instead.
 PROFILES = {
-    "dev": settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow]),
-    "ci": settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow]),
+    "dev": settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow],
+                    verbosity=Verbosity.quiet),
+    "ci": settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow],
+                   verbosity=Verbosity.quiet),
 }
 PROFILE_VAR = "HYPOTHESIS_PROFILE"
 
