@@ -249,9 +249,11 @@ def optimality(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
     for other in _plans(runs):
         if other is optimal or other.answer is None or other.answer.model is not optimal.answer.model:
             continue
-        if validate(problem, other.answer.actions).valid and plan_cost(problem, other.answer.actions) < cost:
-            problems.append(f"{other.key.label}'s plan costs {plan_cost(problem, other.answer.actions)}, "
-                            f"less than z3/optimal's {cost}")
+        if not validate(problem, other.answer.actions).valid:
+            continue  # validity reports it
+        other_cost = plan_cost(problem, other.answer.actions)
+        if other_cost < cost:
+            problems.append(f"{other.key.label}'s plan costs {other_cost}, less than z3/optimal's {cost}")
     return Outcome(Verdict.FAILED, "; ".join(problems)) if problems else HELD
 
 

@@ -21,10 +21,9 @@ from dataclasses import dataclass
 import z3
 
 from oracle.abstraction import merged, offsets_of
-from oracle.interpreter import problem_step
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.answers import Limits, SearchResult, Status, Strategy
-from spec.cost import COST_DOC, COST_TERMS
+from spec.cost import COST_DOC, COST_TERMS, total_cost
 from spec.engines import Engine, register
 from spec.lanes import Lane
 from spec.rules import behind_line, collision_span, left_path, nearest_span, passed_line
@@ -221,18 +220,6 @@ def cost_terms(enc: Encoding, length: z3.ArithRef) -> dict[str, z3.ArithRef]:
     }
 
 
-def plan_cost(problem: Problem, actions: tuple[Action, ...]) -> dict[str, int]:
-    """The same cost, computed from a plan by the interpreter: to compare any engine's plan."""
-    states = [problem.scenario.initial_state()]
-    for action in actions:
-        nxt = problem_step(problem, states[-1], action)
-        states.append(nxt if isinstance(nxt, State) else states[-1])
-    return {"lane_changes": states[-1].lane_changes,
-            "right_lane_steps": sum(1 for s in states[1:] if s.lane is Lane.RIGHT),
-            "brakes": sum(1 for a in actions if a is Action.BRAKE),
-            "length": len(actions)}
-
-
 def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
     """The plan of least cost (COST_DOC) among all plans of at most ``horizon`` actions."""
     enc = Encoding(problem)
@@ -252,7 +239,7 @@ def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
     model = opt.model()
     n = model.eval(length).as_long()
     actions, states = enc.decode(model, n)
-    cost = plan_cost(problem, actions)
+    cost = dict(zip(COST_TERMS, total_cost(zip(actions, states[1:])), strict=True))  # as the model's states say
     return SearchResult(Status.PLAN, actions, 0, f"optimal under {COST_DOC}", states,
                         {"cost": cost, "cost_order": list(COST_TERMS)})
 

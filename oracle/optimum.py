@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 from oracle.interpreter import enabled_actions, problem_collision, problem_goal, problem_step
 from spec.actions import Action
-from spec.cost import COST_TERMS, step_cost
+from spec.cost import COST_TERMS, step_cost, total_cost
 from spec.scenario import Problem
 from spec.state import State
 
@@ -31,21 +31,17 @@ class Optimum:
     cost: Cost | None
     actions: tuple[Action, ...]
 
-    def named(self) -> dict[str, int] | None:
-        return None if self.cost is None else dict(zip(COST_TERMS, self.cost, strict=True))
-
 
 def plan_cost(problem: Problem, actions: tuple[Action, ...]) -> Cost:
     """The cost of an action list, replayed by the interpreter (which must accept it: validate it first)."""
-    state = problem.scenario.initial_state()
-    total = (0,) * len(COST_TERMS)
+    state, ends = problem.scenario.initial_state(), []
     for action in actions:
         after = problem_step(problem, state, action)
         if not isinstance(after, State):
             raise ValueError(f"{action.value} collides: not a plan")
-        total = _add(total, step_cost(action, after))
+        ends.append(after)
         state = after
-    return total
+    return total_cost(zip(actions, ends))
 
 
 def lexicographic_optimum(problem: Problem, max_states: int = 2_000_000) -> Optimum:

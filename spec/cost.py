@@ -6,6 +6,8 @@ One declaration that the Z3 encoding (``oracle.bmc``) translates into an objecti
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 from spec.actions import ACTION_RULES, Action
 from spec.lanes import Lane
 from spec.state import State
@@ -21,3 +23,12 @@ def step_cost(action: Action, after: State) -> tuple[int, ...]:
     added = {"lane_changes": int(ACTION_RULES[action].changes_lane), "right_lane_steps": int(after.lane is Lane.RIGHT),
              "brakes": int(action is Action.BRAKE), "length": 1}
     return tuple(added[name] for name in COST_TERMS)
+
+
+def total_cost(steps: Iterable[tuple[Action, State]]) -> tuple[int, ...]:
+    """A plan's cost: each action with the state it ends in, summed term by term (``COST_TERMS`` order)."""
+    total = [0] * len(COST_TERMS)
+    for action, after in steps:
+        for term, added in enumerate(step_cost(action, after)):
+            total[term] += added
+    return tuple(total)
