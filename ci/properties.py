@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from oracle.interpreter import validate
 from oracle.optimum import lexicographic_optimum, plan_cost
 from oracle.planner import solve
+from spec.actions import plan_text
 from spec.answers import Answer, Limits, Status, Strategy
 from spec.errors import EngineError
 from spec.models import models_for
@@ -165,7 +166,7 @@ def _plans(runs: Sequence[Run]) -> list[Run]:
 
 def _actions(run: Run) -> str:
     assert run.answer is not None
-    return ",".join(a.value for a in run.answer.actions) or "(empty)"
+    return plan_text(run.answer.actions)
 
 
 # -- the checks ---------------------------------------------------------------------------------------
@@ -245,7 +246,7 @@ def optimality(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
     problems = []
     if best.cost != cost:
         problems.append(f"z3/optimal costs {cost}, the least cost is {best.cost} "
-                        f"({','.join(a.value for a in best.actions) or '(empty)'})")
+                        f"({plan_text(best.actions)})")
     for other in _plans(runs):
         if other is optimal or other.answer is None or other.answer.model is not optimal.answer.model:
             continue
@@ -267,7 +268,7 @@ def no_plan_proof(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
         if found.cost is not None:
             return Outcome(Verdict.FAILED, f"{', '.join(r.key.label for r in claims)} claim no plan of any length; "
                                            f"the {kind.value} model has one of {len(found.actions)} action(s): "
-                                           f"{','.join(a.value for a in found.actions) or '(empty)'}")
+                                           f"{plan_text(found.actions)}")
     return HELD
 
 

@@ -13,6 +13,7 @@ from typing import Any
 from ci.properties import PROPERTIES, PropertyName, Run, Runs, Verdict, first_difference
 from oracle.interpreter import validate
 from oracle.shrink import shrink, to_toml
+from spec.actions import plan_text
 from spec.answers import Limits, Status
 from spec.scenario import Scenario, problem_for
 from spec.state import State
@@ -98,7 +99,7 @@ def side_by_side(scenario: Scenario, runs: Sequence[Run]) -> str:
         replay = validate(problem_for(scenario, answer.model), answer.actions)
         differ = first_difference(replay.states, answer.states) if answer.states else 0
         lines.append(f"\n{run.key.label} ({answer.model.value} model): "
-                     f"{','.join(a.value for a in answer.actions) or '(empty)'}"
+                     f"{plan_text(answer.actions)}"
                      + ("" if replay.valid else f"  [invalid: {replay.reason}]"))
         lines.append(f"  {'step':>4}  {'action':<18} {'engine state':<34} interpreter state")
         last = len(answer.actions) if differ is None else differ

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from spec.actions import plan_text
 from spec.answers import Answer, Status, Strategy
 
 #: The plan-free answers; they agree with each other on "no plan within the horizon".
@@ -42,4 +43,4 @@ def _name(answer: Answer) -> str:
 
 
 def _plan(answer: Answer) -> str:
-    return ",".join(a.value for a in answer.actions) or "(empty)"
+    return plan_text(answer.actions)

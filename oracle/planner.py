@@ -7,7 +7,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 from oracle.interpreter import Validation, validate
-from spec.actions import Action
+from spec.actions import Action, plan_text
 from spec.answers import Answer, Limits, SearchResult, Status, Strategy
 from spec.engines import Engine, check_strategy, get_engine, parse_strategy
 from spec.errors import EngineError
@@ -81,10 +81,9 @@ def _check_no_plan(answer: Answer, scenario: Scenario, model: ModelChoice | None
     slot, or an encoding that lost a move, would otherwise pass as "no plan")."""
     reference = solve(scenario, Strategy.SHORTEST, model, horizon, REFERENCE)
     if reference.status is Status.PLAN:
-        actions = ",".join(a.value for a in reference.actions) or "(empty)"
         kind = reference.model.value if reference.model else "-"
         raise EngineError(f"engine {answer.engine} says {answer.status.value}, but the interpreter finds a plan "
-                          f"({kind} model): {actions}")
+                          f"({kind} model): {plan_text(reference.actions)}")
 
 
 def _checked_states(engine: Engine, problem: Problem, result: SearchResult | Answer) -> tuple[State, ...]:

@@ -9,6 +9,7 @@ two can never disagree.
 from __future__ import annotations
 
 import enum
+from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 
@@ -60,6 +61,11 @@ ACTION_RULES: dict[Action, ActionRule] = {
     Action.DRIVE: ActionRule(Action.DRIVE, Fraction(1), Fraction(3), None, None),
     Action.BRAKE: ActionRule(Action.BRAKE, Fraction(1, 2), Fraction(6), None, None),
 }
+
+
+def plan_text(actions: Sequence[Action]) -> str:
+    """An action list as messages and reports show it: comma-separated values, or "(empty)"."""
+    return ",".join(a.value for a in actions) or "(empty)"
 
 
 def parse_action(name: str) -> Action:
