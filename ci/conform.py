@@ -19,7 +19,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-from ci.cli.options import MAX_SECONDS, check_number, out_dir
+from ci.cli.options import MAX_SECONDS, out_dir
 from ci.gen import random_scenarios
 from ci.records import append, campaign_lock, open_for_append, read_records
 from oracle.conform import disagreements
@@ -28,7 +28,7 @@ from oracle.shrink import engines_disagree, shrink, to_toml
 from spec.answers import Limits, Strategy
 from spec.constants import DEFAULT_HORIZON, MAX_HORIZON
 from spec.engines import Engine, check_strategy, get_engine, parse_strategy
-from spec.errors import EngineError, ExitCode, OptionError, SuiteError
+from spec.errors import EngineError, ExitCode, OptionError, SuiteError, check_number
 from spec.files import scenario_to_dict
 from spec.grid import Grid, grid_for
 
@@ -61,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
         check_int("--seed", args.seed, 0, 2**32 - 1)
         check_int("--horizon", args.horizon, 0, MAX_HORIZON)
         if args.timeout is not None:
-            check_number("--timeout", args.timeout, 0.0, MAX_SECONDS, positive=True)
+            check_number("--timeout", args.timeout, MAX_SECONDS, positive=True)
         out = out_dir("--out", args.out)
     except SuiteError as err:
         console.print(f"conform: error: {err}", soft_wrap=True)

@@ -26,7 +26,7 @@ from sim.traffic import FollowingTraffic, PaperTraffic, SpreadTraffic, TrafficMo
 from sim.vehicle import WheeledCar
 from spec.answers import Answer, Strategy
 from spec.engines import Engine, check_strategy, get_engine, parse_strategy
-from spec.errors import OptionError
+from spec.errors import OptionError, check_number
 from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
 from spec.physical import EVENTS, LOOP, NOISE, EventSpec, NoiseSpec
@@ -160,15 +160,3 @@ class DriveConfig:
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> DriveConfig:
         return cls(**data)
-
-
-def check_number(option: str, value: object, high: float = math.inf, low: float = 0.0) -> float:
-    """A finite number in ``low .. high``; anything else (NaN, infinity, a negative rate) is bad input."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise OptionError(option, value, "must be a number")
-    if not math.isfinite(value):
-        raise OptionError(option, value, "must be a finite number")
-    if not low <= value <= high:
-        bound = f"between {low:g} and {high:g}" if math.isfinite(high) else f"at least {low:g}"
-        raise OptionError(option, value, f"must be {bound}")
-    return float(value)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import enum
+import math
 
 
 class ExitCode(enum.IntEnum):
@@ -70,3 +71,20 @@ class EnginesDisagree(SuiteError):
     """Engines asked the same question gave different answers; the message says how."""
 
     exit_code = ExitCode.DISAGREE
+
+
+def check_number(option: str, value: object, high: float = math.inf, low: float = 0.0,
+                 positive: bool = False) -> float:
+    """A finite number in ``low .. high`` (``positive``: above ``low``, not at it); anything else (NaN, infinity, a
+    negative rate, text) is bad input. The one check behind every numeric option."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise OptionError(option, value, "must be a number")
+    if not math.isfinite(value):
+        raise OptionError(option, value, "must be a finite number")
+    if not low <= value <= high or (positive and value == low):
+        if positive:
+            bound = f"above {low:g}" + ("" if math.isinf(high) else f" and at most {high:g}")
+        else:
+            bound = f"between {low:g} and {high:g}" if math.isfinite(high) else f"at least {low:g}"
+        raise OptionError(option, value, f"must be {bound}")
+    return float(value)

@@ -16,7 +16,7 @@ from typing import Any
 
 import click
 
-from spec.errors import OptionError
+from spec.errors import OptionError, check_number
 
 SEED = click.IntRange(0, 2**32 - 1)
 MAX_SECONDS = 7 * 24 * 3600.0  # a week: more is a typo, and timers overflow long before infinity
@@ -43,17 +43,7 @@ class Number(click.ParamType):
                 number = float(str(value).strip())
             except ValueError:
                 raise OptionError(_name(param), value, "must be a number") from None
-        return check_number(_name(param), number, self.low, self.high, self.positive)
-
-
-def check_number(option: str, number: float, low: float = 0.0, high: float = math.inf, positive: bool = False) -> float:
-    if not math.isfinite(number):
-        raise OptionError(option, number, "must be a finite number")
-    if number < low or (positive and number == low) or number > high:
-        above = f"above {low:g}" if positive else f"at least {low:g}"
-        bound = above if math.isinf(high) else f"{above} and at most {high:g}"
-        raise OptionError(option, number, f"must be {bound}")
-    return number
+        return check_number(_name(param), number, self.high, self.low, positive=self.positive)
 
 
 SECONDS = Number(0.0, MAX_SECONDS, positive=True)
