@@ -290,21 +290,3 @@ for _prop in (
              "deeper than the horizon finds none", PLAIN_RUNS, 1, no_plan_proof),
 ):
     register(_prop)
-
-
-def check_property_names(option: str, text: str) -> tuple[PropertyName, ...]:
-    """A comma-separated list of registered property names ("all": every one)."""
-    from spec.errors import OptionError
-
-    words = [w.strip() for w in text.split(",") if w.strip()]
-    if words == ["all"]:
-        return tuple(PROPERTIES)
-    known = {p.value: p for p in PROPERTIES}
-    if not words:
-        raise OptionError(option, text, "name at least one property")
-    for word in words:
-        if word not in known:
-            raise OptionError(option, word, f"unknown property (known: {', '.join(known)}, or all)")
-    if len(set(words)) < len(words):
-        raise OptionError(option, text, "a property given twice")
-    return tuple(known[w] for w in words)

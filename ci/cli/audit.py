@@ -10,7 +10,7 @@ import click
 from rich.table import Table
 
 from ci.cli.common import err, out, print_json
-from ci.cli.options import KM, SEED
+from ci.cli.options import KM, SEED, names
 from ci.cli.options import out_dir as out_dir_checked
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.progress import km_progress
@@ -20,24 +20,16 @@ from spec.grid import STANDARD_CELLS_M, grid_for
 from spec.physical import EVENTS, NOISE
 
 
-def _names(option: str, text: str, known: dict[str, Any] | None = None) -> tuple[str, ...]:
-    """A comma-separated list of distinct names, each registered in ``known`` when given."""
+def _models(option: str, text: str, known: dict[str, Any]) -> tuple[str, ...]:
+    """Distinct registered model names."""
     from sim.parts import check_name
 
-    names = tuple(n.strip() for n in text.split(",") if n.strip())
-    if not names:
-        raise OptionError(option, text, "name at least one")
-    if len(set(names)) < len(names):
-        raise OptionError(option, text, "a name given twice")
-    for name in names:
-        if known is not None:
-            check_name(option, name, known)
-    return names
+    return names(option, text, lambda name: check_name(option, name, known))
 
 
 def _cells(text: str) -> tuple[float, ...]:
     cells = []
-    for word in _names("--cells", text):
+    for word in names("--cells", text):
         try:
             value = float(word)
         except ValueError:
@@ -94,24 +86,22 @@ def audit(cells: str, traffic_text: str, sensing_text: str, km: float, runs: int
     check_executor(executor)
     out_dir_checked("--out", out_dir)
     click.get_current_context().with_resource(campaign_lock(Path(out_dir)))  # before any line: one campaign per folder
-    engines = _names("--engines", cost_engines)
-    for name in engines:
-        get_engine(name)
+    engines = names("--engines", cost_engines, get_engine)
     base = DriveConfig(km, engine=engine, stop_rate_per_h=stop_rate_per_h, min_spawn_gap_m=min_spawn_gap_m,
                        range_sd_m=range_sd_m, miss_rate=miss_rate, snapshots=snapshots, restart_after_collision=True,
                        opportunity_checks=opportunity_checks)
-    plan = AuditPlan(_cells(cells), _names("--traffic", traffic_text, dict(TRAFFIC_MODELS)),
-                     _names("--sensing", sensing_text, dict(SENSOR_MODELS)), tuple(range(seed, seed + runs)), base)
+    plan = AuditPlan(_cells(cells), _models("--traffic", traffic_text, dict(TRAFFIC_MODELS)),
+                     _models("--sensing", sensing_text, dict(SENSOR_MODELS)), tuple(range(seed, seed + runs)), base)
     configs = plan.configs()
     configs[0].parts()  # the engine exists and answers: bad input before any run starts
     total = len(configs) * runs
     err.print(f"audit: {len(configs)} combination(s) x seeds {seed}..{seed + runs - 1} = {total} run(s) of {km:g} km; "
               f"planner {engine}; on {executor.describe(total)}; results in {out_dir}")
-    names = {i: f"{c.cell_m:g} m, {c.traffic}, {c.sensor}, seed {s}"
+    labels = {i: f"{c.cell_m:g} m, {c.traffic}, {c.sensor}, seed {s}"
              for i, (c, s) in enumerate((c, s) for c in configs for s in plan.seeds)}
     with km_progress(err, total, km, "already in audit.jsonl (resumed; --fresh runs it again)") as bar:
         results = run_audit(plan, out_dir, executor, fresh,
-                            lambda i, done, resumed: bar.done(done.summary, resumed, i, names[i]), bar.moved)
+                            lambda i, done, resumed: bar.done(done.summary, resumed, i, labels[i]), bar.moved)
     err.print("audit: planning cost on the scenarios the planner saw ...")
     audit_rows, costs = rows(results), planning_cost(results, engines)
     paths = write_reports(audit_rows, costs, plan, out_dir)

@@ -6,7 +6,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColumn, Task, TextColumn, TimeRemainingColumn
@@ -14,11 +14,14 @@ from rich.table import Table
 from rich.text import Text
 
 from ci.cli.common import cell_option, err, horizon_option, out, print_json
-from ci.cli.options import SECONDS, SEED
+from ci.cli.options import SECONDS, SEED, names
 from ci.cli.options import out_dir as checked_out_dir
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.records import campaign_lock
 from spec.errors import ExitCode, OptionError
+
+if TYPE_CHECKING:
+    from ci.properties import PropertyName
 
 SOURCES = ("library", "hypothesis", "exhaustive")
 DEFAULT_SPACE = "left=2@8..20,right=1@12..30,lanes=both"
@@ -59,7 +62,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
              horizon: int | None, out_dir: str, fresh: bool, list_only: bool, as_json: bool) -> None:
     """Check every property on scenarios from a source; exit 0 when all hold, 6 on any failure."""
     from ci.crossval import Campaign, Summary, library_scenarios, parse_space, write_reports
-    from ci.properties import PROPERTIES, check_property_names
+    from ci.properties import PROPERTIES
     from spec.grid import grid_for
 
     if list_only:
@@ -67,7 +70,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
             out.print(f"{prop.name.value}: {prop.doc} (runs: {', '.join(k.label for k in prop.runs)})")
         sys.exit(ExitCode.OK)
     grid = grid_for(cell_m)
-    properties = check_property_names("--properties", property_text)
+    properties = _properties(property_text)
     engines = _engines(engine_text)
     executor = ExecutorChoice(ExecutorKind(executor_kind), workers or os.cpu_count() or 1, scheduler)
     check_executor(executor)
@@ -123,21 +126,30 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
     sys.exit(ExitCode.OK if summary.all_held else ExitCode.DISAGREE)
 
 
+def _properties(text: str) -> tuple[PropertyName, ...]:
+    """Registered property names, or "all"."""
+    from ci.properties import PROPERTIES, PropertyName
+
+    if text.strip() == "all":
+        return tuple(PROPERTIES)
+    known = ", ".join(p.value for p in PROPERTIES)
+
+    def check(name: str) -> None:
+        if name not in {p.value for p in PROPERTIES}:
+            raise OptionError("--properties", name, f"unknown property (known: {known}, or all)")
+
+    return tuple(PropertyName(name) for name in names("--properties", text, check))
+
+
 def _engines(text: str) -> tuple[str, ...]:
     from spec.engines import get_engine
 
-    names = tuple(n.strip() for n in text.split(",") if n.strip())
-    if not names:
-        raise OptionError("--engines", text, "name at least one engine")
-    if len(set(names)) < len(names):
-        raise OptionError("--engines", text, "an engine given twice")
-    for name in names:
-        get_engine(name)
-    if "spin" in names:
+    found = names("--engines", text, get_engine)
+    if "spin" in found:
         from promela.runner import check_tools
 
         check_tools()  # exit 4 with the install command, before any work
-    return names
+    return found
 
 
 def _sweep(campaign: Any, scenarios: list[Any], out_path: Path, executor: ExecutorChoice, summary: Any) -> list[Any]:

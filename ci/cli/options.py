@@ -3,6 +3,7 @@ and the reason, before any work starts.
 
 - ``Number(low, high, positive)``: a finite number in ``low .. high`` (NaN, infinity, 1e308 and text are refused);
 - ``SEED``: a whole number a generator takes (0 .. 2**32 - 1);
+- ``names``: a comma-separated list of distinct names, each one checked;
 - ``out_dir`` / ``out_file``: an output that can be written (a directory that is not a file, in a place this user
   may write; a file whose folder exists and is writable, and which is not a directory).
 """
@@ -11,6 +12,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -44,6 +46,19 @@ class Number(click.ParamType):
             except ValueError:
                 raise OptionError(_name(param), value, "must be a number") from None
         return check_number(_name(param), number, self.high, self.low, positive=self.positive)
+
+
+def names(option: str, text: str, check: Callable[[str], object] | None = None) -> tuple[str, ...]:
+    """A comma-separated list of distinct names, each passed to ``check`` (which raises on one it does not know)."""
+    found = tuple(n.strip() for n in text.split(",") if n.strip())
+    if not found:
+        raise OptionError(option, text, "name at least one")
+    if len(set(found)) < len(found):
+        raise OptionError(option, text, "a name given twice")
+    for name in found:
+        if check is not None:
+            check(name)
+    return found
 
 
 SECONDS = Number(0.0, MAX_SECONDS, positive=True)
