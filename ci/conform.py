@@ -53,10 +53,7 @@ def main(argv: list[str] | None = None) -> int:
             raise OptionError("--engines", args.engines, "name at least two engines: a campaign compares them")
         for engine in engines:
             check_strategy(engine, strategy)
-            if engine.name == "spin":
-                from promela.runner import check_tools
-
-                check_tools()
+            engine.ready()
         check_int("--count", args.count, 0, 10_000_000)
         check_int("--seed", args.seed, 0, 2**32 - 1)
         check_int("--horizon", args.horizon, 0, MAX_HORIZON)

@@ -14,4 +14,5 @@ def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult
 
 
 SPIN = register(Engine("spin", (Strategy.SENSIBLE, Strategy.SHORTEST), _solve,
-                       "Spin model checker, verifier compiled once per model and cached"))
+                       "Spin model checker, verifier compiled once per model and cached",
+                       check_tools=runner.check_tools))

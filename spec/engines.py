@@ -31,6 +31,13 @@ class Engine:
     description: str
     #: Given a problem with no plan within the horizon, proves (NO_PLAN) or not that none exists at all.
     prove_beyond: Callable[[Problem], SearchResult] | None = None
+    #: Raises ToolMissing (with what to install) when an outside tool the engine runs is missing.
+    check_tools: Callable[[], None] | None = None
+
+    def ready(self) -> None:
+        """Check, before any work, that the engine can run here (exit 4 with the install command if not)."""
+        if self.check_tools is not None:
+            self.check_tools()
 
 
 ENGINES: dict[str, Engine] = {}

@@ -145,10 +145,8 @@ def _engines(text: str) -> tuple[str, ...]:
     from spec.engines import get_engine
 
     found = names("--engines", text, get_engine)
-    if "spin" in found:
-        from promela.runner import check_tools
-
-        check_tools()  # exit 4 with the install command, before any work
+    for name in found:
+        get_engine(name).ready()  # exit 4 with the install command, before any work
     return found
 
 
