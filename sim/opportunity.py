@@ -38,7 +38,7 @@ from sim.executor import Executor, plan_profiles
 from sim.safety import SafetyMonitor
 from sim.scene import Scene
 from sim.traffic import TrafficModel
-from sim.vehicle import KinematicCar, WheeledCar
+from sim.vehicle import KinematicCar, WheeledCar, first_contact
 from spec.actions import Action
 from spec.grid import Grid
 from spec.lanes import Lane
@@ -174,11 +174,9 @@ class Replay:
             nonlocal first
             pose = self.car.pose()
             self.traffic.advance(dt_s, pose)
-            touching = self.scene.touching(self.car.body)
-            for car in self.traffic.cars():
-                if car.body in touching:
-                    failed.append(Outcome.CONTACT)
-                    return False
+            if first_contact(self.scene, self.car.body, self.traffic.cars()) is not None:
+                failed.append(Outcome.CONTACT)
+                return False
             before = monitor.report.near_misses
             monitor.observe(pose, Executor.lane_of(pose.y_m), self.traffic.left, self.traffic.oncoming,
                             0.0, 0.0, "", lambda body: None)

@@ -31,6 +31,7 @@ from sim.safety import SafetyMonitor
 from sim.sensors import Reading, in_range
 from sim.summary import Failure, RunSummary
 from sim.tolerance import ToleranceReport, Violation
+from sim.vehicle import first_contact
 from spec.actions import Action
 from spec.answers import Answer, Status
 from spec.errors import ScenarioError
@@ -98,16 +99,15 @@ class Simulator:
         x = pose.x_m
         self.safety.observe(pose, Executor.lane_of(pose.y_m), self.traffic.left, self.traffic.oncoming,
                             self.summary.km, self.summary.sim_time_s, self.doing, self._implied.get)
-        touching = self.scene.touching(self.car.body)
-        for car in self.traffic.cars():
-            if car.body in touching:
-                in_left = car in self.traffic.left
-                self.safety.contact(car, Lane.LEFT if in_left else Lane.RIGHT, pose, self.summary.km,
-                                    self.summary.sim_time_s, self.doing, self._implied.get(car.body))
-                lane = "left-lane" if in_left else "oncoming"
-                self._fail(FailureKind.COLLISION, f"collision with a{'n' if lane == 'oncoming' else ''} {lane} vehicle",
-                           f"{car.x_m - x:+.1f} m ahead, during {self.doing}")
-                return False
+        car = first_contact(self.scene, self.car.body, self.traffic.cars())
+        if car is not None:
+            in_left = car in self.traffic.left
+            self.safety.contact(car, Lane.LEFT if in_left else Lane.RIGHT, pose, self.summary.km,
+                                self.summary.sim_time_s, self.doing, self._implied.get(car.body))
+            lane = "left-lane" if in_left else "oncoming"
+            self._fail(FailureKind.COLLISION, f"collision with a{'n' if lane == 'oncoming' else ''} {lane} vehicle",
+                       f"{car.x_m - x:+.1f} m ahead, during {self.doing}")
+            return False
         for car in self.traffic.left:
             ahead = car.x_m > x
             if self._side.get(car.body) and not ahead:

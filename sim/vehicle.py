@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 from sim.scene import Scene, p
@@ -110,3 +111,9 @@ class KinematicCar:
 
     def advance(self, dt_s: float) -> None:
         self.place(self.x_m + self.velocity_mps * dt_s)
+
+
+def first_contact(scene: Scene, body: int, cars: Iterable[KinematicCar]) -> KinematicCar | None:
+    """The first of ``cars`` (in their order) touching ``body`` after the last physics step, or None."""
+    touching = scene.touching(body)
+    return next((car for car in cars if car.body in touching), None)
