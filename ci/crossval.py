@@ -258,9 +258,8 @@ class Summary:
                 "reproducers": reproducers}
 
 
-def write_reports(summary: Summary, campaign: Campaign, reproducers: list[dict[str, Any]], out: Path) -> list[Path]:
-    """``summary.json``, ``summary.md`` and ``junit.xml`` in ``out``."""
-    data = summary.to_json(campaign, reproducers)
+def write_reports(data: dict[str, Any], summary: Summary, campaign: Campaign, out: Path) -> list[Path]:
+    """``summary.json`` and ``summary.md`` (from ``data``, the summary's JSON form) and ``junit.xml`` in ``out``."""
     paths = [out / "summary.json", out / "summary.md", out / "junit.xml"]
     paths[0].write_text(json.dumps(data, indent=1))
     paths[1].write_text(markdown(data))

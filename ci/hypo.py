@@ -84,14 +84,11 @@ class PropertyFailed(AssertionError):
     """A property failed on an example (hypothesis then shrinks it)."""
 
 
-def hypothesis_job(name: str, campaign_key: dict[str, Any], out_dir: str, profile_name: str, offset: int,
+def hypothesis_job(name: str, campaign: Campaign, out_dir: str, profile_name: str, offset: int,
                    report: Any = None) -> dict[str, Any]:
     """One property's hypothesis test (a worker's job, seeded with the campaign's seed + ``offset`` so that the
     properties see different examples): the examples' verdicts appended as they come; returns the shrunk failing
     example, if any."""
-    campaign = Campaign(campaign_key["source"], tuple(PropertyName(p) for p in campaign_key["properties"]),
-                        tuple(campaign_key["engines"]), campaign_key["cell_m"], campaign_key["horizon"],
-                        campaign_key["timeout_s"], None, campaign_key["seed"])
     grid = grid_for(campaign.cell_m)
     out = Path(out_dir)
     fd = os.open(out / VERDICTS_FILE, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
@@ -125,10 +122,9 @@ def hypothesis_job(name: str, campaign_key: dict[str, Any], out_dir: str, profil
     return {"property": name, "failure": dict(last_failure) or None}
 
 
-def run_hypothesis(campaign: Campaign, grid: Grid, out: Path, executor: ExecutorChoice, max_reproducers: int,
+def run_hypothesis(campaign: Campaign, out: Path, executor: ExecutorChoice, max_reproducers: int,
                    console: Console) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
     """Every property's hypothesis test; the recorded results of this campaign and the reproducers written."""
-
     with campaign_lock(out):
         return _run(campaign, out, executor, max_reproducers, console)
 
@@ -140,7 +136,7 @@ def _run(campaign: Campaign, out: Path, executor: ExecutorChoice, max_reproducer
     (out / VERDICTS_FILE).touch()
     name = profile()
     console.print(f"crossval: hypothesis profile {name} ({PROFILE_VAR}), seed {campaign.seed}")
-    jobs = [(p.value, campaign.key(), str(out), name, n) for n, p in enumerate(campaign.properties)]
+    jobs = [(p.value, campaign, str(out), name, n) for n, p in enumerate(campaign.properties)]
     reproducers = []
     shrunk: dict[str, dict[str, Any]] = {}
     for _, job in run_jobs(hypothesis_job, jobs, executor):

@@ -61,7 +61,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
              scheduler: str | None, timeout_s: float, seed: int | None, max_reproducers: int, cell_m: float | None,
              horizon: int | None, out_dir: str, fresh: bool, list_only: bool, as_json: bool) -> None:
     """Check every property on scenarios from a source; exit 0 when all hold, 6 on any failure."""
-    from ci.crossval import Campaign, Summary, library_scenarios, parse_space, write_reports
+    from ci.crossval import VERDICTS_FILE, Campaign, Summary, library_scenarios, parse_space, write_reports
     from ci.properties import PROPERTIES
     from spec.grid import grid_for
 
@@ -95,7 +95,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
     campaign = Campaign(source, tuple(chosen), engines, float(grid.cell_m), horizon, timeout_s,
                         the_space.describe() if the_space else None, seed if source == "hypothesis" else None)
     if fresh:
-        (out_path / "verdicts.jsonl").unlink(missing_ok=True)
+        (out_path / VERDICTS_FILE).unlink(missing_ok=True)
     err.print(f"crossval: source {source}; properties {', '.join(p.value for p in chosen)}"
               + (f" (not applicable to these engines: {', '.join(skipped)})" if skipped else "")
               + f"; engines {', '.join(engines)}; on {executor.describe()}; results in {out_dir}"
@@ -105,7 +105,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
     if source == "hypothesis":
         from ci.hypo import run_hypothesis
 
-        results, reproducers = run_hypothesis(campaign, grid, out_path, executor, max_reproducers, err)
+        results, reproducers = run_hypothesis(campaign, out_path, executor, max_reproducers, err)
         for result in results:
             summary.add(result)
     else:
@@ -115,9 +115,9 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
             err.print(f"crossval: {len(scenarios)} valid scenarios in the space (every one is checked)")
         _sweep(campaign, scenarios, out_path, executor, summary)
         reproducers = _reproduce(summary, campaign, out_path, max_reproducers)
-    paths = write_reports(summary, campaign, reproducers, out_path)
-    wall_s = time.perf_counter() - started
     data = summary.to_json(campaign, reproducers)
+    paths = write_reports(data, summary, campaign, out_path)
+    wall_s = time.perf_counter() - started
     if as_json:
         print_json(data)
     else:
