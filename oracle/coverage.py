@@ -23,7 +23,7 @@ from oracle.interpreter import problem_collision, problem_goal, problem_step
 from spec.actions import Action
 from spec.lanes import Lane
 from spec.models import PIPELINE, GoalRule, models_for
-from spec.rules import disabled_reason, goal_holds
+from spec.rules import Guard, disabled_guard, goal_holds
 from spec.scenario import Problem, Scenario, problem_for
 from spec.state import Collision, State
 
@@ -56,9 +56,9 @@ def _explore(problem: Problem, found: set[str]) -> None:
         if problem_goal(problem, state) or state.steps >= problem.horizon:
             continue
         for action in Action:
-            reason = disabled_reason(state, action, problem.rules)
-            if reason is not None:
-                found.add("guard: lane-change limit" if "at most" in reason else "guard: lane")
+            guard = disabled_guard(state, action, problem.rules)
+            if guard is not None:
+                found.add(f"guard: {guard.value}")
                 continue
             after = problem_step(problem, state, action)
             if isinstance(after, Collision):
@@ -89,7 +89,7 @@ def _goal_fields(problem: Problem, state: State, found: set[str]) -> None:
 
 #: Every rule a campaign can exercise, in report order.
 ALL_RULES = (
-    "guard: lane", "guard: lane-change limit",
+    *(f"guard: {guard.value}" for guard in Guard),
     "collision: left lane", "collision: oncoming, at the effect", "collision: oncoming, on a tick",
     *(f"goal: {name}" for name in GOAL_FIELDS), "goal: reached",
     *(f"model: {kind.value}" for kind in PIPELINE),

@@ -8,6 +8,7 @@ interval of cells ``(lo, hi)``.
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Sequence
 from functools import cache
 
@@ -20,12 +21,29 @@ from spec.state import Collision, State
 Span = tuple[int, int]
 
 
-def disabled_reason(state: State, action: Action, rules: ModelRules) -> str | None:
-    """Why ``action`` is not enabled in ``state`` (its lane guard, the lane-change limit), or None when it is."""
+class Guard(enum.Enum):
+    """The guards that can disable an action."""
+
+    LANE = "lane"  # the action needs the AV in a given lane
+    LANE_CHANGE_LIMIT = "lane-change limit"  # the model allows no more lane changes
+
+
+def disabled_guard(state: State, action: Action, rules: ModelRules) -> Guard | None:
+    """The guard that disables ``action`` in ``state``, or None when it is enabled."""
     rule = ACTION_RULES[action]
     if rule.from_lane is not None and state.lane is not rule.from_lane:
-        return f"{action.value} needs the AV in the {rule.from_lane.value} lane"
+        return Guard.LANE
     if rule.changes_lane and state.lane_changes >= rules.max_lane_changes:
+        return Guard.LANE_CHANGE_LIMIT
+    return None
+
+
+def disabled_reason(state: State, action: Action, rules: ModelRules) -> str | None:
+    """Why ``action`` is not enabled in ``state`` (its lane guard, the lane-change limit), or None when it is."""
+    guard, lane = disabled_guard(state, action, rules), ACTION_RULES[action].from_lane
+    if guard is Guard.LANE and lane is not None:
+        return f"{action.value} needs the AV in the {lane.value} lane"
+    if guard is Guard.LANE_CHANGE_LIMIT:
         return f"{action.value}: the {rules.kind.value} model allows at most {rules.max_lane_changes} lane changes"
     return None
 
