@@ -44,6 +44,7 @@ from sim.tolerance import HISTOGRAM_BIN, HISTOGRAM_BINS, histogram_quantile
 from spec.answers import Limits, Status, Strategy
 from spec.files import scenario_from_dict
 from spec.grid import STANDARD_CELLS_M
+from spec.physical import LOOP
 
 AUDIT_FILE = "audit.jsonl"
 MISSED_EXAMPLES = 3  # missed opportunities reported per combination with their scenario
@@ -334,7 +335,8 @@ def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any])
                 lines.append(f"  - at {o['km']} km ({o['refusal']}: {o['answer']}), target {o['target_gap_m']} m "
                              f"ahead: change, accelerate x{o['accelerates']}, change back succeeded; "
                              f"the planner's scenario is in audit.json")
-    lines += ["", "## Deviation each action added (cells of 21 m: p50 / p95 as histogram bin edges of 0.02 / max)", "",
+    lines += ["", f"## Deviation each action added (cells of {LOOP.tolerance_unit_m:g} m: p50 / p95 as histogram bin "
+              f"edges of {HISTOGRAM_BIN:g} / max)", "",
               "| cell m | traffic | sensing | " + " | ".join(ACTIONS) + " |", "|---|---|---|" + "---|" * len(ACTIONS)]
     for r in audit_rows:
         cells = [" / ".join(_edge(r.deviation[a][k]) for k in ("p50", "p95", "max")) if a in r.deviation else "-"

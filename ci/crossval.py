@@ -33,7 +33,7 @@ from spec.answers import Limits, Status
 from spec.constants import DEFAULT_HORIZON
 from spec.errors import OptionError, ScenarioError
 from spec.files import scenario_from_dict, scenario_to_dict
-from spec.grid import Grid, grid_for
+from spec.grid import PAPER_GRID, Grid
 from spec.lanes import Lane
 from spec.library import BUILTINS
 from spec.scenario import Scenario, make_scenario
@@ -104,8 +104,10 @@ def parse_space(text: str, grid: Grid) -> Space:
 
 def library_scenarios(grid: Grid) -> list[Scenario]:
     """The built-in scenarios (on the paper's grid; another grid has no library)."""
-    if grid != grid_for(None):
-        raise OptionError("--source", "library", "the built-in scenarios are on the paper's 21 m grid: use --cell-m 21")
+    if grid != PAPER_GRID:
+        paper = f"{float(PAPER_GRID.cell_m):g}"
+        raise OptionError("--source", "library", f"the built-in scenarios are on the paper's {paper} m grid: use "
+                                                 f"--cell-m {paper}")
     return [b.load() for b in BUILTINS]
 
 
@@ -152,7 +154,7 @@ class Campaign:
     source: str
     properties: tuple[PropertyName, ...]
     engines: tuple[str, ...]
-    cell_m: float = 21.0
+    cell_m: float = float(PAPER_GRID.cell_m)
     horizon: int | None = None
     timeout_s: float | None = 10.0
     space: str | None = None

@@ -10,6 +10,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
+from spec.actions import ACTION_RULES, Action
 from spec.grid import Grid
 
 LANES = (("left_lane", "tab:green", "left lane"), ("right_lane", "tab:red", "oncoming"))
@@ -37,7 +38,8 @@ def plot_trace(trace: Path, png: Path, grid: Grid, window_s: float = 300.0) -> P
     ax.axhline(0, color="k", lw=0.8)
     for r in shown:  # the AV's lane and action: a band along the bottom, one letter per action at its end
         right = r["av"]["y_m"] < 0
-        ax.axvspan(r["t_s"] - 3.0, r["t_s"], ymin=0.0, ymax=0.03, color="tab:red" if right else "tab:green",
+        duration_s = float(ACTION_RULES[Action(r["action"])].duration_s)
+        ax.axvspan(r["t_s"] - duration_s, r["t_s"], ymin=0.0, ymax=0.03, color="tab:red" if right else "tab:green",
                    alpha=0.6, lw=0)
         ax.annotate(ACTION_LETTER.get(r["action"], "?"), (r["t_s"], 0.035), xycoords=("data", "axes fraction"),
                     fontsize=6, ha="right")
