@@ -7,15 +7,20 @@ together and so do all oncoming ones, so these four values are the whole state; 
 vehicle's collision and goal conditions are written on its own cell. Every intermediate
 oncoming tick gets its own collision check, as in the interpreter.
 
+One decision step is built once, as a template over placeholder states, and every step of the
+unrolling is that template with the step's own variables substituted in (one call into Z3, not
+thousands of Python-built terms).
+
 ``shortest`` adds one step at a time to one solver and asks, under push/pop, whether the
 goal holds at step k (having not held before): the first satisfiable k is the shortest
 length; all bounds unsatisfiable up to the horizon is a proof of "no plan within the
-horizon". ``optimal`` unrolls to the horizon with a symbolic length and minimises a
-lexicographic cost with ``z3.Optimize``. A solver time-out is "incomplete", never "no plan".
+horizon". ``optimal`` unrolls to the horizon with a symbolic length and minimises the
+lexicographic cost term by term on one incremental solver. A solver time-out is "incomplete", never "no plan".
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import z3
@@ -59,6 +64,9 @@ class Encoding:
         start = self.new_step()
         self.initial = z3.And(start.right == (scenario.lane is Lane.RIGHT), start.lc == 0, start.l == 0, start.o == 0,
                               self.safe(start.right, start.l, 0, start.o, 0))
+        here, after, action = _placeholder("a"), _placeholder("b"), z3.Int("action")
+        self._step_template = (here, action, after, self.transition(here, action, after))
+        self._goal_template = (here, self.goal(here))
 
     def _here(self, lane: Lane, index: int) -> z3.BoolRef | bool:
         return self.present.get((lane, index), True)
@@ -147,11 +155,18 @@ class Encoding:
         return result
 
     def extend(self) -> z3.BoolRef:
-        """Add one decision step; return its transition constraint."""
+        """Add one decision step; return its transition constraint (the step template on this step's variables)."""
         a = self.steps[-1]
         action_var = z3.Int(f"a_{len(self.actions) + 1}")
         self.actions.append(action_var)
-        return self.transition(a, action_var, self.new_step())
+        here, action, after, template = self._step_template
+        b = self.new_step()
+        return z3.substitute(template, (action, action_var), *_pairs(here, a), *_pairs(after, b))
+
+    def goal_at(self, k: int) -> z3.BoolRef:
+        """The goal on the state after k actions (the goal template on its variables)."""
+        here, template = self._goal_template
+        return z3.substitute(template, *_pairs(here, self.steps[k]))
 
     def decode(self, model: z3.ModelRef, length: int) -> tuple[tuple[Action, ...], tuple[State, ...]]:
         """The plan of ``length`` actions in ``model`` and the states the model itself assigns along it (the
@@ -170,6 +185,15 @@ class Encoding:
                      tuple(c - value(s.o) for c in scenario.right_lane), value(s.lc), k)
 
 
+def _placeholder(name: str) -> Step:
+    """The variables of a template state."""
+    return Step(z3.Bool(f"{name}_right"), z3.Int(f"{name}_lc"), z3.Int(f"{name}_l"), z3.Int(f"{name}_o"))
+
+
+def _pairs(template: Step, step: Step) -> list[tuple[z3.ExprRef, z3.ExprRef]]:
+    return [(template.right, step.right), (template.lc, step.lc), (template.l, step.l), (template.o, step.o)]
+
+
 def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
     """The smallest k whose bound is satisfiable, incrementally, or a proof that none is up to the horizon."""
     enc = Encoding(problem)
@@ -178,7 +202,7 @@ def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
     solver.add(enc.initial)
     for k in range(problem.horizon + 1):
         reached = z3.Bool(f"goal_{k}")  # checked as an assumption, so learned lemmas carry over
-        solver.add(reached == enc.goal(enc.steps[k]))
+        solver.add(reached == enc.goal_at(k))
         verdict = solver.check(reached)
         if verdict == z3.sat:
             actions, states = enc.decode(solver.model(), k)
@@ -197,9 +221,9 @@ def bounded(enc: Encoding) -> tuple[z3.ArithRef, list[z3.BoolRef]]:
     length = z3.Int("length")
     constraints = [enc.initial, length >= 0, length <= horizon]
     for k in range(horizon + 1):
-        here = enc.steps[k]
-        constraints.append(z3.Implies(length == k, enc.goal(here)))
-        constraints.append(z3.Implies(k < length, z3.Not(enc.goal(here))))
+        here, goal = enc.steps[k], enc.goal_at(k)
+        constraints.append(z3.Implies(length == k, goal))
+        constraints.append(z3.Implies(k < length, z3.Not(goal)))
         if k < horizon:
             move = enc.extend()
             nxt = enc.steps[-1]
@@ -221,27 +245,57 @@ def cost_terms(enc: Encoding, length: z3.ArithRef) -> dict[str, z3.ArithRef]:
 
 
 def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
-    """The plan of least cost (COST_DOC) among all plans of at most ``horizon`` actions."""
+    """The plan of least cost (COST_DOC) among all plans of at most ``horizon`` actions.
+
+    Lexicographic by successive tightening on one incremental solver: any plan first; then, term by
+    term in COST_TERMS order, ask for a plan whose term is below the best value seen (as an
+    assumption, so an unsatisfiable bound leaves no trace) until none is, and fix the term there.
+    The last model is a least-cost plan. (``z3.Optimize`` answers the same, about twice as slowly.)"""
+    started = time.perf_counter()
     enc = Encoding(problem)
     length, constraints = bounded(enc)
-    opt = z3.Optimize()
-    _set_timeout(opt, limits)
-    opt.add(*constraints)
-    terms = cost_terms(enc, length)
-    for name in COST_TERMS:
-        opt.minimize(terms[name])
-    verdict = opt.check()
-    if verdict == z3.unknown:
-        return SearchResult(Status.INCOMPLETE, (), 0, f"z3: {opt.reason_unknown()}")
+    solver = z3.SolverFor("QF_LIA")
+    solver.add(*constraints)
+    verdict = _check(solver, limits, started)
     if verdict == z3.unsat:
-        return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 0,
+        return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 1,
                             f"proved: no plan of at most {problem.horizon} actions")
-    model = opt.model()
+    checks, terms = 1, cost_terms(enc, length)
+    if verdict == z3.unknown:
+        return _gave_up(solver, checks)
+    model = solver.model()
+    for name in COST_TERMS:
+        best = model.eval(terms[name], model_completion=True).as_long()
+        while best > 0:
+            below = z3.Bool(f"{name}_below_{best}")
+            solver.add(z3.Implies(below, terms[name] < best))
+            verdict, checks = _check(solver, limits, started, below), checks + 1
+            if verdict == z3.unknown:
+                return _gave_up(solver, checks)
+            if verdict == z3.unsat:
+                break
+            model = solver.model()
+            best = model.eval(terms[name], model_completion=True).as_long()
+        solver.add(terms[name] == best)
     n = model.eval(length).as_long()
     actions, states = enc.decode(model, n)
     cost = dict(zip(COST_TERMS, total_cost(zip(actions, states[1:])), strict=True))  # as the model's states say
-    return SearchResult(Status.PLAN, actions, 0, f"optimal under {COST_DOC}", states,
+    return SearchResult(Status.PLAN, actions, checks, f"optimal under {COST_DOC}", states,
                         {"cost": cost, "cost_order": list(COST_TERMS)})
+
+
+def _gave_up(solver: z3.Solver, checks: int) -> SearchResult:
+    return SearchResult(Status.INCOMPLETE, (), checks, f"z3: {solver.reason_unknown()} after {checks} checks")
+
+
+def _check(solver: z3.Solver, limits: Limits | None, started: float, *assumptions: z3.BoolRef) -> z3.CheckSatResult:
+    """One check within what is left of the time limit."""
+    if limits is not None and limits.timeout_s is not None:
+        left_s = limits.timeout_s - (time.perf_counter() - started)
+        if left_s <= 0:
+            return z3.unknown
+        solver.set("timeout", max(1, int(left_s * 1000)))
+    return solver.check(*assumptions)
 
 
 def _set_timeout(solver: z3.Solver | z3.Optimize, limits: Limits | None) -> None:
@@ -253,7 +307,7 @@ SOLVERS = {Strategy.SHORTEST: shortest, Strategy.OPTIMAL: optimal}
 
 
 def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult:
-    """shortest: incremental bounds; optimal: z3.Optimize. sensible is left to the search engines."""
+    """shortest: incremental bounds; optimal: lexicographic tightening. sensible is left to the search engines."""
     return SOLVERS[strategy](problem, limits)
 
 

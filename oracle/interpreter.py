@@ -8,43 +8,43 @@ functions of ``spec.rules``; the effects come from the problem's grid.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from spec.actions import ACTION_RULES, Action
 from spec.errors import EngineError
 from spec.grid import Grid
 from spec.models import ModelRules
-from spec.rules import collision_in, disabled_reason, goal_holds, left_path
+from spec.rules import collision_in, disabled_guard, disabled_reason, goal_holds, left_path
 from spec.scenario import Problem
 from spec.state import Collision, State
 
 
 def enabled_actions(state: State, rules: ModelRules) -> list[Action]:
     """The enabled actions, in the search order."""
-    return [a for a in Action if disabled_reason(state, a, rules) is None]
+    return [a for a in Action if disabled_guard(state, a, rules) is None]
 
 
 def step(state: State, action: Action, rules: ModelRules, grid: Grid) -> State | Collision:
     """One decision step: the effect (the left lane moved one cell at a time, each followed by a collision check:
     ``spec.rules.left_path``), then the oncoming ticks, each followed by a check."""
-    reason = disabled_reason(state, action, rules)
-    if reason is not None:
-        raise ValueError(reason)
+    if disabled_guard(state, action, rules) is not None:
+        raise ValueError(disabled_reason(state, action, rules))
     rule = ACTION_RULES[action]
-    base = replace(state, lane=rule.to_lane or state.lane, lane_changes=state.lane_changes + int(rule.changes_lane),
-                   steps=state.steps + 1)
-    after, hit = base, None
+    lane, lane_changes = rule.to_lane or state.lane, state.lane_changes + int(rule.changes_lane)
+    steps, right = state.steps + 1, state.right_lane
+    after = State(lane, state.left_lane, right, lane_changes, steps)
     for moved in left_path(grid.left_shift(action)):
-        after = replace(base, left_lane=tuple(cell + moved for cell in state.left_lane))
+        after = State(lane, tuple(cell + moved for cell in state.left_lane), right, lane_changes, steps)
         hit = collision_in(after, rules, grid, 0)
         if hit is not None:
             return hit
     for tick in range(1, grid.ticks(action) + 1):
+        right = tuple(cell - 1 for cell in right)
+        after = State(lane, after.left_lane, right, lane_changes, steps)
+        hit = collision_in(after, rules, grid, tick)
         if hit is not None:
             return hit
-        after = replace(after, right_lane=tuple(cell - 1 for cell in after.right_lane))
-        hit = collision_in(after, rules, grid, tick)
-    return hit if hit is not None else after
+    return after
 
 
 def problem_step(problem: Problem, state: State, action: Action) -> State | Collision:

@@ -1,7 +1,12 @@
 """Run Spin: render, compile (once, cached), search with pan, replay the trail into actions and states.
 
-Every run works in its own temporary directory, so concurrent runs never share a
-``pan.c`` or a trail, and no trail from an earlier run can be replayed by mistake.
+A cached verifier is pan compiled together with ``serve.c``: run plainly it is pan; run
+with ``--serve`` it stays up and answers many searches, each in a forked copy of itself,
+so a campaign pays for starting a process once per verifier, not twice per scenario
+(``search(..., serve=False)`` starts pan for every run, for comparison). Each server, and
+each run of the compile-every-time pipeline, works in its own temporary directory, so
+concurrent runs never share a ``pan.c`` or a trail; a server removes the last trail before
+every search, so no trail from an earlier run can be replayed by mistake.
 pan's own words decide the answer: an assertion violation with a trail is a plan;
 "errors: 0" with a complete search is "no plan within the horizon"; a depth or memory
 limit or a time-out is "incomplete"; anything else is an engine error.
@@ -9,12 +14,16 @@ limit or a time-out is "incomplete"; anything else is an engine error.
 
 from __future__ import annotations
 
+import atexit
 import hashlib
 import os
+import select
 import shutil
 import subprocess
 import tempfile
+import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -38,6 +47,9 @@ COMPILE_TIMEOUT_S = 300.0
 #: pan's time limit when the caller sets none: a hung verifier answers "incomplete", never hangs a plan.
 DEFAULT_TIMEOUT_S = 60.0
 CHECKSUM_FILE = "pan.sha256"  # written after a successful build; a verifier that fails it is rebuilt
+SERVER_SOURCE = Path(__file__).with_name("serve.c")  # pan's main renamed, and the --serve loop
+SERVER_GRACE_S = 30.0  # a server that has not answered this long after a run's own time limit is hung
+SERVER_START_S = 10.0  # a server that has not said "ready" by then will not start: the verifier is rebuilt
 INSTALL_HINT = {"spin": "apt-get install spin", "gcc": "apt-get install gcc"}
 
 
@@ -81,7 +93,7 @@ def verifier(shape: Shape, strategy: Strategy) -> Verifier:
     model, goal and grid), the grid itself, the compiler flags and the tool versions."""
     source = render(shape)
     flags = _flags(strategy)
-    key_text = [source, f"cell_m={shape.grid.cell_m}", " ".join(flags), tool_versions()]
+    key_text = [source, f"cell_m={shape.grid.cell_m}", " ".join(flags), tool_versions(), _server_source()]
     key = hashlib.sha256("\n".join(key_text).encode()).hexdigest()[:24]
     target = cache_dir() / f"pan-{shape.name}-{strategy.value}-{key}"
     if _healthy(target):
@@ -90,7 +102,7 @@ def verifier(shape: Shape, strategy: Strategy) -> Verifier:
         discard(target)  # damaged (truncated, altered, not executable, no checksum): built again below
     target.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=target.parent, prefix=".build-") as build:
-        _compile(Path(build), source, flags)
+        _compile(Path(build), source, flags, serve=True)
         (Path(build) / CHECKSUM_FILE).write_text(_sha256(Path(build) / "pan"))
         try:
             os.rename(build, target)  # atomic: a concurrent build of the same key wins or loses whole
@@ -126,27 +138,41 @@ def _sha256(path: Path) -> str:
 
 
 def discard(folder: Path) -> None:
-    """Remove a cached verifier (it is built again on next use)."""
+    """Remove a cached verifier (it is built again on next use), and stop its servers."""
     _VERIFIED.pop(folder / "pan", None)
+    for key in [k for k in _SERVERS if k[0] == folder / "pan"]:
+        _SERVERS.pop(key).close()
     shutil.rmtree(folder, ignore_errors=True)
+
+
+@cache
+def _server_source() -> str:
+    return SERVER_SOURCE.read_text()
 
 
 def _flags(strategy: Strategy) -> list[str]:
     return [*CFLAGS, "-DBFS"] if strategy is Strategy.SHORTEST else list(CFLAGS)
 
 
-def _compile(folder: Path, source: str, flags: list[str]) -> None:
+def _compile(folder: Path, source: str, flags: list[str], serve: bool = False) -> None:
+    """spin -a, then gcc: pan.c alone (the paper's pipeline) or with the server (``serve``: the cached verifiers)."""
     (folder / MODEL_FILE).write_text(source)
     spin = _run(["spin", "-a", MODEL_FILE], cwd=folder, timeout=COMPILE_TIMEOUT_S)
     if spin.returncode != 0 or not (folder / "pan.c").exists():
         raise EngineError(f"spin -a failed on the rendered model: {_last_line(spin)}")
-    gcc = _run(["gcc", *flags, "-o", "pan", "pan.c"], cwd=folder, timeout=COMPILE_TIMEOUT_S)
+    main = "pan.c"
+    if serve:
+        main = SERVER_SOURCE.name
+        (folder / main).write_text(_server_source())
+    gcc = _run(["gcc", *flags, "-o", "pan", main], cwd=folder, timeout=COMPILE_TIMEOUT_S)
     if gcc.returncode != 0:
         raise EngineError(f"gcc failed on pan.c: {_last_line(gcc)}")
 
 
-def search(problem: Problem, strategy: Strategy, timeout_s: float | None = None) -> SearchResult:
-    """Compile-once planning: the cached verifier, the scenario injected through the environment.
+def search(problem: Problem, strategy: Strategy, timeout_s: float | None = None,
+           serve: bool = True) -> SearchResult:
+    """Compile-once planning: the cached verifier, the scenario injected through the environment; by its server
+    (``serve``), else a pan process per run.
 
     A cached verifier that will not start or answers nonsense is rebuilt once; if the rebuilt one
     fails too, the engine error names the cache to clear. Without a time limit pan gets
@@ -157,7 +183,7 @@ def search(problem: Problem, strategy: Strategy, timeout_s: float | None = None)
     for attempt in (1, 2):
         built = verifier(shape_of(problem), strategy)
         try:
-            return _search_with(built, problem, limit, started)
+            return _search_with(built, problem, limit, started, serve)
         except (EngineError, OSError) as err:
             reason = str(err) if isinstance(err, EngineError) else f"the verifier would not start ({err})"
             if attempt == 1 and built.cached:
@@ -168,16 +194,25 @@ def search(problem: Problem, strategy: Strategy, timeout_s: float | None = None)
     raise AssertionError("unreachable")
 
 
-def _search_with(built: Verifier, problem: Problem, timeout_s: float, started: float) -> SearchResult:
-    env = {**os.environ, ENV_VAR: scenario_values(problem)}
+def _search_with(built: Verifier, problem: Problem, timeout_s: float, started: float, serve: bool) -> SearchResult:
+    values = scenario_values(problem)
+    replay_args = ["-r", f"-w{HASH_BITS}", f"-m{problem.horizon + DEPTH_MARGIN}", f"{MODEL_FILE}.trail"]
+    if serve:
+        server = _server(built.path)
+        (server.folder / f"{MODEL_FILE}.trail").unlink(missing_ok=True)  # the last search's
+        outcome = _pan(server.folder, lambda args, limit: server.run(values, args, limit), problem, timeout_s,
+                       started)
+        if outcome.status is not Status.PLAN:
+            return _with_extra(outcome, built.cached, "compile-once, served")
+        _, printed = server.run(values, replay_args, 60.0)
+        return _with_extra(_plan_from(printed, problem, outcome.states_explored), built.cached, "compile-once, served")
+    env = {**os.environ, ENV_VAR: values}
     with tempfile.TemporaryDirectory(prefix="overtake-spin-") as work:
         folder = Path(work)
-        outcome = _pan(folder, [str(built.path)], problem, env, timeout_s, started)
+        outcome = _pan(folder, _executing(str(built.path), folder, env), problem, timeout_s, started)
         if outcome.status is not Status.PLAN:
             return _with_extra(outcome, built.cached, "compile-once")
-        replay = _run([str(built.path), "-r", f"-w{HASH_BITS}", f"-m{problem.horizon + DEPTH_MARGIN}",
-                       f"{MODEL_FILE}.trail"],
-                      cwd=folder, env=env, timeout=60)
+        replay = _run([str(built.path), *replay_args], cwd=folder, env=env, timeout=60)
         found = _plan_from(replay.stdout, problem, outcome.states_explored)
         return _with_extra(found, built.cached, "compile-once")
 
@@ -189,23 +224,35 @@ def search_compiling(problem: Problem, strategy: Strategy, timeout_s: float | No
     with tempfile.TemporaryDirectory(prefix="overtake-spin-") as work:
         folder = Path(work)
         _compile(folder, render_for(problem), _flags(strategy))
-        outcome = _pan(folder, ["./pan"], problem, dict(os.environ), timeout_s, started)
+        outcome = _pan(folder, _executing("./pan", folder, dict(os.environ)), problem, timeout_s, started)
         if outcome.status is not Status.PLAN:
             return _with_extra(outcome, False, "compile-every-time")
         replay = _run(["spin", "-t", MODEL_FILE], cwd=folder, timeout=60)
         return _with_extra(_plan_from(replay.stdout, problem, outcome.states_explored), False, "compile-every-time")
 
 
-def _pan(folder: Path, command: list[str], problem: Problem, env: dict[str, str], timeout_s: float | None,
+#: How a pan run is made: its arguments and time limit in, (exit code, stdout and stderr) out; TimeoutExpired at the
+#: limit.
+Execute = Callable[[list[str], "float | None"], tuple[int, str]]
+
+
+def _executing(pan: str, folder: Path, env: dict[str, str]) -> Execute:
+    """Runs of ``pan`` as processes of their own, in ``folder``."""
+    def execute(args: list[str], limit: float | None) -> tuple[int, str]:
+        done = _run([pan, *args], cwd=folder, env=env, timeout=limit)
+        return done.returncode, done.stdout + done.stderr
+    return execute
+
+
+def _pan(folder: Path, execute: Execute, problem: Problem, timeout_s: float | None,
          started: float) -> SearchResult:
     """Run pan: its answer, or (status PLAN, no actions yet, the states it stored) when it left a trail to replay."""
     remaining = None if timeout_s is None else max(0.01, timeout_s - (time.perf_counter() - started))
-    args = [*command, "-E", "-n", f"-m{problem.horizon + DEPTH_MARGIN}", f"-w{HASH_BITS}"]
+    args = ["-E", "-n", f"-m{problem.horizon + DEPTH_MARGIN}", f"-w{HASH_BITS}"]
     try:
-        done = _run(args, cwd=folder, env=env, timeout=remaining)
+        returncode, text = execute(args, remaining)
     except subprocess.TimeoutExpired:
         return SearchResult(Status.INCOMPLETE, detail=f"pan: time limit {timeout_s} s reached")
-    text = done.stdout + done.stderr
     explored = _explored(text)
     if "max search depth too small" in text:
         return SearchResult(Status.INCOMPLETE, (), explored, "pan: max search depth too small")
@@ -213,10 +260,92 @@ def _pan(folder: Path, command: list[str], problem: Problem, env: dict[str, str]
         return SearchResult(Status.INCOMPLETE, (), explored, "pan: memory limit reached")
     if "assertion violated" in text and (folder / f"{MODEL_FILE}.trail").exists():
         return SearchResult(Status.PLAN, (), explored, "a trail to replay")
-    if done.returncode == 0 and "errors: 0" in text:
+    if returncode == 0 and "errors: 0" in text:
         return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), explored,
                             f"no plan within {problem.horizon} actions (search completed)")
-    raise EngineError(f"pan failed (exit {done.returncode}): {_last_line(done)}")
+    lines = text.strip().splitlines()
+    raise EngineError(f"pan failed (exit {returncode}): {lines[-1] if lines else 'no output'}")
+
+
+# -- servers: one per verifier, process and thread ---------------------------------------------------
+class Server:
+    """A verifier started with ``--serve`` (see ``serve.c``): pan runs on many scenarios in one process."""
+
+    def __init__(self, pan: Path) -> None:
+        self.pan = pan
+        self._work = tempfile.TemporaryDirectory(prefix="overtake-served-")
+        self.folder = Path(self._work.name)
+        self.process = subprocess.Popen([str(pan), "--serve"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                        stderr=subprocess.DEVNULL, cwd=self.folder, text=True, bufsize=1)
+        if self._reply(SERVER_START_S) != "ready":
+            self.close()
+            raise EngineError("the verifier's server did not start")
+
+    def run(self, scenario: str, args: list[str], limit_s: float | None) -> tuple[int, str]:
+        """One pan run (``Execute``): the scenario's values, pan's arguments, a time limit (default: the module's)."""
+        limit = DEFAULT_TIMEOUT_S if limit_s is None else limit_s
+        request = "\t".join([str(self.folder), str(max(1, round(limit * 1000))), scenario, *args])
+        if "\n" in request or self.process.stdin is None:
+            raise EngineError("a request the verifier's server cannot read")
+        try:
+            self.process.stdin.write(request + "\n")
+            self.process.stdin.flush()
+        except OSError as err:
+            self.close()
+            raise EngineError(f"the verifier's server has stopped ({err.strerror or err})") from None
+        reply = self._reply(limit + SERVER_GRACE_S)
+        if reply == "timeout":
+            raise subprocess.TimeoutExpired([str(self.pan), *args], limit)
+        words = reply.split()
+        if len(words) == 2 and words[0] in ("exit", "signal") and words[1].isdigit():
+            code = int(words[1])
+            return (code if words[0] == "exit" else -code), (self.folder / "out.txt").read_text(errors="replace")
+        self.close()
+        raise EngineError(f"the verifier's server answered {reply!r}")
+
+    def _reply(self, wait_s: float) -> str:
+        stdout = self.process.stdout
+        if stdout is None or not select.select([stdout], [], [], wait_s)[0]:
+            self.close()
+            raise EngineError(f"the verifier's server did not answer within {wait_s:g} s")
+        line = stdout.readline()
+        if not line:
+            self.close()
+            raise EngineError("the verifier's server has stopped")
+        return line.strip()
+
+    def alive(self) -> bool:
+        return self.process.poll() is None
+
+    def close(self) -> None:
+        if self.process.poll() is None:
+            self.process.kill()
+        self.process.wait()
+        for stream in (self.process.stdin, self.process.stdout):
+            if stream is not None:
+                stream.close()
+        self._work.cleanup()
+
+
+_SERVERS: dict[tuple[Path, int, int], Server] = {}  # (pan, process, thread) -> its server
+
+
+def _server(pan: Path) -> Server:
+    """This process's and thread's server of ``pan``, started on first use and again when it has stopped."""
+    key = (pan, os.getpid(), threading.get_ident())
+    server = _SERVERS.get(key)
+    if server is None or not server.alive():
+        if server is not None:
+            server.close()
+        server = _SERVERS[key] = Server(pan)
+    return server
+
+
+@atexit.register
+def close_servers() -> None:
+    """Stop this process's servers (they would die with it anyway: PR_SET_PDEATHSIG)."""
+    for key in [k for k in _SERVERS if k[1] == os.getpid()]:
+        _SERVERS.pop(key).close()
 
 
 def _plan_from(replay: str, problem: Problem, explored: int) -> SearchResult:

@@ -26,6 +26,8 @@ class Action(enum.Enum):
     DRIVE = "drive"
     BRAKE = "brake"
 
+    __hash__ = object.__hash__  # members are singletons: identity is equality, and Enum's own hash is slow Python
+
 
 #: The search order every engine uses (sensible and shortest strategies).
 ACTION_ORDER: tuple[Action, ...] = tuple(Action)

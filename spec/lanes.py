@@ -11,6 +11,8 @@ class Lane(enum.Enum):
     LEFT = "left"
     RIGHT = "right"
 
+    __hash__ = object.__hash__  # members are singletons: identity is equality, and Enum's own hash is slow Python
+
     @property
     def other(self) -> Lane:
         """The other lane."""

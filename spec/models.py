@@ -40,6 +40,10 @@ class ModelRules:
     danger_m: Fraction  # an oncoming vehicle within this distance of the AV's cell collides (a whole number of cells)
     max_lane_changes: int
 
+    def __hash__(self) -> int:
+        """Without the fraction: rules key the collision spans' cache on every step, and hashing it is slow."""
+        return hash((self.kind.value, self.max_lane_changes))
+
 
 @dataclass(frozen=True, slots=True)
 class GoalRule:

@@ -29,6 +29,7 @@ def _cached(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[Path, Sear
     monkeypatch.setenv("OVERTAKE_CACHE", str(tmp_path))
     first = runner.search(problem_for(_scenario(), ModelKind.FINAL), Strategy.SENSIBLE)
     (pan,) = tmp_path.glob("pan-*/pan")
+    runner.close_servers()  # the damage below is what a later process finds
     return pan, first
 
 
@@ -67,16 +68,44 @@ def test_a_verifier_that_answers_nonsense_is_rebuilt_once_then_reported_with_the
     assert calls["n"] == 2 and str(tmp_path) in str(caught.value)
 
 
-def test_a_hung_verifier_is_incomplete_within_the_default_limit(tmp_path: Path,
-                                                                monkeypatch: pytest.MonkeyPatch) -> None:
-    pan, _ = _cached(tmp_path, monkeypatch)
-    monkeypatch.setattr(runner, "DEFAULT_TIMEOUT_S", 0.5)
+def _hanging(pan: Path) -> None:
+    """Replace a cached verifier with one that hangs but passes its checksum."""
     pan.write_text("#!/bin/sh\nsleep 30\n")
-    (pan.parent / runner.CHECKSUM_FILE).write_text(runner._sha256(pan))  # a hang that passes its checksum
+    (pan.parent / runner.CHECKSUM_FILE).write_text(runner._sha256(pan))
     pan.chmod(0o755)
     runner._VERIFIED.clear()
+
+
+def test_a_hung_pan_process_is_incomplete_within_the_default_limit(tmp_path: Path,
+                                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    pan, _ = _cached(tmp_path, monkeypatch)
+    monkeypatch.setattr(runner, "DEFAULT_TIMEOUT_S", 0.5)
+    _hanging(pan)
+    result = runner.search(problem_for(_scenario(), ModelKind.FINAL), Strategy.SENSIBLE, serve=False)
+    assert result.status is Status.INCOMPLETE and "time limit" in result.detail
+
+
+def test_a_hung_run_of_a_server_is_killed_and_incomplete_within_the_default_limit(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    pan, first = _cached(tmp_path, monkeypatch)
+    server = runner._server(pan)
+    output = server.folder / "out.txt"
+    output.unlink(missing_ok=True)
+    os.mkfifo(output)  # the forked pan blocks opening its output: a real hang, inside the server
+    monkeypatch.setattr(runner, "DEFAULT_TIMEOUT_S", 0.5)
     result = runner.search(problem_for(_scenario(), ModelKind.FINAL), Strategy.SENSIBLE)
     assert result.status is Status.INCOMPLETE and "time limit" in result.detail
+    output.unlink()
+    again = runner.search(problem_for(_scenario(), ModelKind.FINAL), Strategy.SENSIBLE)
+    assert again.actions == first.actions and runner._server(pan) is server  # the server lives on
+
+
+def test_a_server_that_will_not_start_is_rebuilt(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    pan, first = _cached(tmp_path, monkeypatch)
+    monkeypatch.setattr(runner, "SERVER_START_S", 0.5)
+    _hanging(pan)
+    again = runner.search(problem_for(_scenario(), ModelKind.FINAL), Strategy.SENSIBLE)
+    assert again.actions == first.actions and again.extra["verifier_cached"] is False
 
 
 def test_a_no_plan_the_interpreter_contradicts_is_an_engine_error() -> None:

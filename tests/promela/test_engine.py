@@ -54,22 +54,25 @@ def test_generated_scenarios_agree_with_the_interpreter(scenario: Scenario, mode
 
 
 @pytest.mark.parametrize("name", ["paper_example", "prep_case_a", "no_plan_within_horizon"])
-def test_compile_once_and_compile_every_time_give_the_same_plans(name: str) -> None:
+def test_served_compiled_once_and_compiled_every_time_give_the_same_plans(name: str) -> None:
     scenario = next(b for b in BUILTINS if b.name == name).load()
     for model in ModelKind:
         problem = problem_for(scenario, model)
-        once, every = runner.search(problem, Strategy.SENSIBLE), runner.search_compiling(problem, Strategy.SENSIBLE)
-        assert (once.status, once.actions, once.states) == (every.status, every.actions, every.states)
-        assert every.extra["spin_mode"] == "compile-every-time" and once.extra["spin_mode"] == "compile-once"
+        results = {"compile-once, served": runner.search(problem, Strategy.SENSIBLE),
+                   "compile-once": runner.search(problem, Strategy.SENSIBLE, serve=False),
+                   "compile-every-time": runner.search_compiling(problem, Strategy.SENSIBLE)}
+        assert len({(r.status, r.actions, r.states, r.states_explored) for r in results.values()}) == 1
+        assert all(r.extra["spin_mode"] == mode for mode, r in results.items())
 
 
-def test_concurrent_runs_never_share_a_trail() -> None:
+def test_concurrent_runs_never_share_a_trail_and_each_thread_has_its_own_server() -> None:
     cases = [make_scenario("left", [12 + k % 3], [40 - k], 1) for k in range(12)]
     problems = [problem_for(s, ModelKind.FINAL) for s in cases]
     with ThreadPoolExecutor(max_workers=6) as pool:
         results = list(pool.map(lambda p: runner.search(p, Strategy.SENSIBLE), problems))
     for problem, result in zip(problems, results, strict=True):
         assert result.actions == offsets.sensible(problem).actions
+    assert len({key[2] for key in runner._SERVERS}) > 1
 
 
 def test_verifier_is_cached_and_keyed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -129,7 +132,7 @@ def test_time_out_is_incomplete_not_no_plan(monkeypatch: pytest.MonkeyPatch) -> 
         return real(args, cwd=cwd, env=env, timeout=timeout)
 
     monkeypatch.setattr(runner, "_run", slow_pan)
-    result = runner.search(problem, Strategy.SENSIBLE, timeout_s=0.5)
+    result = runner.search(problem, Strategy.SENSIBLE, timeout_s=0.5, serve=False)  # served: tests/promela/test_cache
     assert result.status is Status.INCOMPLETE and "time limit" in result.detail
 
 
