@@ -37,6 +37,7 @@ class Shape:
     rules: ModelRules
     goal: GoalRule
     grid: Grid = PAPER_GRID
+    capacity: int | None = None  # vehicles per lane the arrays hold; None: every scenario the grid accepts
 
     @property
     def model(self) -> ModelKind:
@@ -44,14 +45,15 @@ class Shape:
 
     @property
     def name(self) -> str:
-        """``model-goal``, and the cell length when it is not the paper's: file and cache names."""
+        """``model-goal``, the cell length when it is not the paper's, the capacity when set: file and cache names."""
         cell = "" if self.grid.is_paper else f"-{float(self.grid.cell_m):g}m"
-        return f"{self.rules.kind.value}-{self.goal.kind.value}{cell}"
+        room = "" if self.capacity is None else f"-v{self.capacity}"
+        return f"{self.rules.kind.value}-{self.goal.kind.value}{cell}{room}"
 
     @property
     def max_vehicles(self) -> int:
-        """Array sizes of the injected verifier: every scenario the grid accepts fits."""
-        return self.grid.road_cells + 1
+        """Array sizes of the injected verifier."""
+        return self.grid.road_cells + 1 if self.capacity is None else self.capacity
 
 
 def standard_shape(model: ModelKind, goal: GoalKind, grid: Grid = PAPER_GRID) -> Shape:
@@ -59,9 +61,18 @@ def standard_shape(model: ModelKind, goal: GoalKind, grid: Grid = PAPER_GRID) ->
     return Shape(MODEL_RULES[model], GOAL_RULES[goal], grid)
 
 
+#: Array sizes a verifier is built for, smallest first: pan hashes and compresses the whole state vector on every
+#: state, and arrays sized for a full road (51 vehicles a lane on the paper's grid) make it ten times longer than
+#: the few vehicles of a typical scenario need.
+CAPACITIES = (2, 6)
+
+
 def shape_of(problem: Problem) -> Shape:
-    """The verifier shape that serves ``problem``."""
-    return Shape(problem.rules, problem.goal, problem.grid)
+    """The verifier shape that serves ``problem``: the smallest capacity that holds both of its lanes."""
+    scenario = problem.scenario
+    most = max(len(scenario.left_lane), len(scenario.right_lane))
+    capacity = next((c for c in CAPACITIES if c >= most), None)
+    return Shape(problem.rules, problem.goal, problem.grid, capacity)
 
 
 def _cell(grid: Grid, cell: int) -> str:

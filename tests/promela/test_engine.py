@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from oracle import bitplan, offsets
 from oracle.interpreter import validate
-from promela import runner
+from promela import render, runner
 from spec.answers import Status, Strategy
 from spec.errors import EngineError, ToolMissing
 from spec.library import BUILTINS
@@ -80,7 +80,20 @@ def test_verifier_is_cached_and_keyed(tmp_path: Path, monkeypatch: pytest.Monkey
     problem = problem_for(make_scenario("left", [12], [], 1), ModelKind.FINAL)
     first, second = runner.search(problem, Strategy.SHORTEST), runner.search(problem, Strategy.SHORTEST)
     assert (first.extra["verifier_cached"], second.extra["verifier_cached"]) == (False, True)
-    assert len(list(tmp_path.glob("pan-final-overtake-shortest-*/pan"))) == 1
+    assert len(list(tmp_path.glob("pan-final-overtake-v2-shortest-*/pan"))) == 1
+
+
+@pytest.mark.parametrize("name", ["paper_example", "prep_case_a", "no_plan_within_horizon"])
+def test_every_capacity_a_scenario_fits_gives_the_same_answer(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    scenario = next(b for b in BUILTINS if b.name == name).load()
+    answers = set()
+    for capacities in (render.CAPACITIES, (8,), ()):
+        monkeypatch.setattr(render, "CAPACITIES", capacities)
+        for model in ModelKind:
+            problem = problem_for(scenario, model)
+            result = runner.search(problem, Strategy.SHORTEST)
+            answers.add((model, result.status, result.actions, result.states, result.states_explored))
+    assert len(answers) == len(ModelKind)
 
 
 # -- failure modes: one clear error, never a wrong "no plan" -------------------------------------

@@ -1,0 +1,150 @@
+"""Conformance throughput: scenarios per second per engine run, Spin before and after serving, the sweep's scaling.
+
+Usage: python -m ci.bench_crossval [--count 200] [--seed 2026] [--workers 1,2] [--sweep-count 400]
+
+Part 1 times each engine run the properties read (the whole pipeline, ``oracle.planner.solve``)
+and the two independent searches the checks make, serially, on the same ``--count`` scenarios
+drawn (seeded) from the example space of issue 12; Spin runs twice in the same run, a pan
+process per search (before) and its verifier's server (after). Part 2 runs the conformance
+campaign itself (every property, three engines, a fresh ``--out``) on the first
+``--sweep-count`` scenarios of that space with each ``--workers`` count, and extrapolates the
+whole space's wall time from the rate.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import random
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+from ci.bench import machine
+from ci.crossval import check_scenario, parse_space
+from ci.properties import PROPERTIES
+from oracle.optimum import lexicographic_optimum
+from oracle.planner import solve
+from promela import runner
+from spec.answers import Limits, Strategy
+from spec.engines import Engine, get_engine, register
+from spec.grid import PAPER_GRID
+from spec.models import ModelKind
+from spec.scenario import Scenario, problem_for
+
+EXAMPLE_SPACE = "left=2@8..20,right=1@12..30,lanes=both"  # issue 12's example sweep
+PER_PROCESS = Engine("spin-per-process", (Strategy.SENSIBLE, Strategy.SHORTEST),
+                     lambda p, s, limits: runner.search(p, s, limits.timeout_s, serve=False),
+                     "Spin compiled once, a pan process per search (benchmark only)")
+
+
+def per_second(scenarios: list[Scenario], run: Callable[[Scenario], object]) -> tuple[float, float]:
+    """(scenarios per second, median ms) over ``scenarios``, after one warm-up call."""
+    run(scenarios[0])
+    ms = []
+    for scenario in scenarios:
+        started = time.perf_counter()
+        run(scenario)
+        ms.append((time.perf_counter() - started) * 1000)
+    return 1000 * len(ms) / sum(ms), float(np.median(ms))
+
+
+def sub_space(count: int) -> str:
+    """The example space with its left-lane cells cut (from the top) to the fewest that hold ``count`` scenarios."""
+    low, high = 8, 20
+    while high > low and _size(f"left=2@{low}..{high - 1},right=1@12..30,lanes=both") >= count:
+        high -= 1
+    return f"left=2@{low}..{high},right=1@12..30,lanes=both"
+
+
+def _size(space: str) -> int:
+    return sum(1 for _ in parse_space(space, PAPER_GRID).scenarios(PAPER_GRID, None))
+
+
+def sweep_rate(space: str, workers: int) -> float:
+    """Scenarios per wall second of ``overtake crossval`` (every property, three engines) over ``space``."""
+    with tempfile.TemporaryDirectory(prefix="bench-crossval-") as out:
+        started = time.perf_counter()
+        done = subprocess.run([sys.executable, "-m", "ci.cli.main", "crossval", "--source", "exhaustive",
+                               "--space", space, "--workers", str(workers), "--out", out, "--max-reproducers", "0"],
+                              capture_output=True, text=True, env={**os.environ, "COLUMNS": "120"})
+        wall_s = time.perf_counter() - started
+    if done.returncode not in (0, 6):
+        raise SystemExit(f"bench_crossval: crossval exited {done.returncode}: {done.stderr.strip()[-300:]}")
+    return _size(space) / wall_s
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--count", type=int, default=200, help="scenarios timed per engine run (part 1)")
+    parser.add_argument("--seed", type=int, default=2026)
+    parser.add_argument("--workers", default="1,2", help="worker counts for the campaign (part 2); '' skips it")
+    parser.add_argument("--sweep-count", type=int, default=400, help="scenarios per campaign (part 2)")
+    args = parser.parse_args()
+    console = Console(width=120)
+    space = list(parse_space(EXAMPLE_SPACE, PAPER_GRID).scenarios(PAPER_GRID, None))
+    scenarios = random.Random(args.seed).sample(space, min(args.count, len(space)))
+    console.print(f"seed {args.seed}; {len(scenarios)} scenarios drawn from {EXAMPLE_SPACE} ({len(space)} "
+                  f"scenarios); {runner.tool_versions()}; {machine()}")
+    register(PER_PROCESS)
+    limits = Limits(timeout_s=10.0)
+    spin = get_engine("spin")
+
+    def run_of(engine: Engine | str, strategy: Strategy) -> Callable[[Scenario], object]:
+        return lambda s: solve(s, strategy, engine=engine, limits=limits)
+
+    rows: dict[str, tuple[float, float]] = {}
+    for strategy in (Strategy.SENSIBLE, Strategy.SHORTEST):
+        for s in scenarios:  # build every verifier shape before timing
+            solve(s, strategy, engine=spin)
+        rows[f"interpreter {strategy.value}"] = per_second(scenarios, run_of("interpreter", strategy))
+        rows[f"spin {strategy.value}, pan process per search (before)"] = per_second(
+            scenarios, run_of(PER_PROCESS, strategy))
+        rows[f"spin {strategy.value}, verifier server (after)"] = per_second(scenarios, run_of(spin, strategy))
+    rows["z3 shortest"] = per_second(scenarios, run_of("z3", Strategy.SHORTEST))
+    rows["z3 optimal"] = per_second(scenarios, run_of("z3", Strategy.OPTIMAL))
+    rows["independent optimum (interpreter, both models)"] = per_second(
+        scenarios, lambda s: [lexicographic_optimum(problem_for(s, kind)) for kind in ModelKind])
+    every = list(PROPERTIES)
+    rows["every property, three engines (one scenario's whole check)"] = per_second(
+        scenarios, lambda s: check_scenario(s, every, ["interpreter", "spin", "z3"], limits.timeout_s))
+    table = Table(title="engine runs, serial, same scenarios")
+    for col in ("run (whole pipeline)", "scenarios/s", "median ms"):
+        table.add_column(col, justify="left" if col.startswith("run") else "right")
+    for name, (rate, median) in rows.items():
+        table.add_row(name, f"{rate:.1f}", f"{median:.2f}")
+    console.print(table)
+    for strategy in (Strategy.SENSIBLE, Strategy.SHORTEST):
+        before = rows[f"spin {strategy.value}, pan process per search (before)"]
+        after = rows[f"spin {strategy.value}, verifier server (after)"]
+        console.print(f"spin {strategy.value}: served / per process = {after[0] / before[0]:.2f}x scenarios per "
+                      f"second (median {before[1]:.2f} -> {after[1]:.2f} ms)")
+
+    counts = [int(w) for w in args.workers.split(",") if w.strip()]
+    if not counts:
+        return
+    cut = sub_space(args.sweep_count)
+    sweep = Table(title=f"overtake crossval --source exhaustive --space {cut} (every property, three engines)")
+    for col in ("workers", "scenarios", "scenarios/s", "speed-up", "example space at this rate"):
+        sweep.add_column(col, justify="right")
+    base, serial_ms, speed_up = 0.0, 1000 / rows["every property, three engines (one scenario's whole check)"][0], 1.0
+    for workers in counts:
+        rate = sweep_rate(cut, workers)
+        base, speed_up = base or rate, rate / (base or rate)
+        sweep.add_row(str(workers), str(_size(cut)), f"{rate:.1f}", f"{speed_up:.2f}x",
+                      f"{len(space) / rate / 60:.1f} min")
+    console.print(sweep)
+    console.print(f"example space from the random sample: {len(space)} scenarios x {serial_ms:.0f} ms (mean whole "
+                  f"check, serial) / {speed_up:.2f} (the last speed-up) = "
+                  f"{len(space) * serial_ms / 1000 / speed_up / 60:.1f} min; target: 5 min on 2 workers")
+
+
+if __name__ == "__main__":
+    main()
+
