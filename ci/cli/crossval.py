@@ -14,7 +14,7 @@ from rich.table import Table
 from rich.text import Text
 
 from ci.cli.common import cell_option, err, horizon_option, out, print_json
-from ci.cli.options import SECONDS, SEED, names
+from ci.cli.options import MAX_WORKERS, REPRODUCERS, SECONDS, SEED, WORKERS, names
 from ci.cli.options import out_dir as checked_out_dir
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.records import campaign_lock
@@ -41,7 +41,7 @@ class RateColumn(ProgressColumn):
 @click.option("--properties", "property_text", default="all", show_default=True,
               help="Comma-separated property names, or all (see --list).")
 @click.option("--engines", "engine_text", default="interpreter,spin,z3", show_default=True)
-@click.option("--workers", type=click.IntRange(min=1), default=None, help="Default: every core.")
+@click.option("--workers", type=WORKERS, default=None, help=f"Default: every core (at most {MAX_WORKERS}).")
 @click.option("--executor", "executor_kind", type=click.Choice([k.value for k in ExecutorKind]),
               default=ExecutorKind.PROCESSES.value, show_default=True)
 @click.option("--scheduler", default=None, help="With --executor dask: a running scheduler's address.")
@@ -49,7 +49,7 @@ class RateColumn(ProgressColumn):
               help="Seconds per engine run (past it: incomplete).")
 @click.option("--seed", type=SEED, default=None,
               help="With --source hypothesis (default: drawn, and printed).")
-@click.option("--max-reproducers", type=click.IntRange(min=0), default=3, show_default=True,
+@click.option("--max-reproducers", type=REPRODUCERS, default=3, show_default=True,
               help="Failures shrunk per property.")
 @cell_option()
 @horizon_option()
@@ -72,7 +72,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
     grid = grid_for(cell_m)
     properties = _properties(property_text)
     engines = _engines(engine_text)
-    executor = ExecutorChoice(ExecutorKind(executor_kind), workers or os.cpu_count() or 1, scheduler)
+    executor = ExecutorChoice(ExecutorKind(executor_kind), workers or min(os.cpu_count() or 1, MAX_WORKERS), scheduler)
     check_executor(executor)
     chosen = [p for p in properties if PROPERTIES[p].applies(engines)]
     if not chosen:
