@@ -10,7 +10,20 @@ import click
 from rich.table import Table
 
 from ci.cli.common import err, out, print_json
-from ci.cli.options import CELL_M, FRACTION, KM, METRES, PER_HOUR, PER_RUN, RUNS, SEED, WORKERS, convert, names
+from ci.cli.options import (
+    CELL_M,
+    FRACTION,
+    KM,
+    METRES,
+    PER_HOUR,
+    PER_RUN,
+    RUNS,
+    SCHEDULER,
+    SEED,
+    WORKERS,
+    convert,
+    names,
+)
 from ci.cli.options import out_dir as out_dir_checked
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.records import campaign_lock
@@ -67,7 +80,7 @@ def _cells(text: str) -> tuple[float, ...]:
 @click.option("--workers", type=WORKERS, default=2, show_default=True)
 @click.option("--executor", "executor_kind", type=click.Choice([k.value for k in ExecutorKind]),
               default=ExecutorKind.PROCESSES.value, show_default=True)
-@click.option("--scheduler", default=None, help="With --executor dask: a running scheduler's address.")
+@click.option("--scheduler", type=SCHEDULER, default=None, help="With --executor dask: a running scheduler's address.")
 @click.option("--out", "out_dir", default="out/audit", show_default=True,
               help="audit.jsonl (resumable), audit.json, audit.md and plots.")
 @click.option("--fresh", is_flag=True, help="Forget the runs already recorded in --out instead of resuming.")

@@ -14,7 +14,7 @@ from rich.table import Table
 from rich.text import Text
 
 from ci.cli.common import cell_option, err, horizon_option, out, print_json
-from ci.cli.options import MAX_WORKERS, REPRODUCERS, SECONDS, SEED, WORKERS, names
+from ci.cli.options import MAX_WORKERS, REPRODUCERS, SCHEDULER, SECONDS, SEED, WORKERS, names
 from ci.cli.options import out_dir as checked_out_dir
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.records import campaign_lock
@@ -44,7 +44,7 @@ class RateColumn(ProgressColumn):
 @click.option("--workers", type=WORKERS, default=None, help=f"Default: every core (at most {MAX_WORKERS}).")
 @click.option("--executor", "executor_kind", type=click.Choice([k.value for k in ExecutorKind]),
               default=ExecutorKind.PROCESSES.value, show_default=True)
-@click.option("--scheduler", default=None, help="With --executor dask: a running scheduler's address.")
+@click.option("--scheduler", type=SCHEDULER, default=None, help="With --executor dask: a running scheduler's address.")
 @click.option("--timeout", "timeout_s", type=SECONDS, default=10.0, show_default=True,
               help="Seconds per engine run (past it: incomplete).")
 @click.option("--seed", type=SEED, default=None,

@@ -5,6 +5,7 @@ and the reason, before any work starts.
 - ``Whole(low, high)``: a whole number in ``low .. high``; ``SEED``: one a generator takes (0 .. 2**32 - 1);
 - ``HORIZON``, ``WORKERS``, ``RUNS``, ``MAX_STATES``, ``PER_RUN``, ``REPRODUCERS``: whole numbers with stated bounds;
 - ``names``: a comma-separated list of distinct names, each one checked (bad input names the list's option);
+- ``SCHEDULER``: a dask scheduler's address;
 - ``convert``: any of these types outside click's own parsing (a list's items, ``python -m ci.conform``'s argparse);
 - ``out_dir`` / ``out_file``: an output that can be written (a directory that is not a file, in a place this user
   may write; a file whose folder exists and is writable, and which is not a directory).
@@ -67,6 +68,28 @@ class Number(click.ParamType):
             except ValueError:
                 raise OptionError(_name(param), value, "must be a number") from None
         return check_number(_name(param), number, self.high, self.low, positive=self.positive)
+
+
+class Address(click.ParamType):
+    """A dask scheduler's address as dask reads it (``tcp://host:port``, ``host:port``): a malformed one is bad input
+    before the campaign starts; whether a scheduler answers there is known only when the campaign connects."""
+
+    name = "address"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> str:
+        text = str(value).strip()
+        try:
+            from distributed.comm.addressing import get_address_host_port
+        except ImportError:  # the executor says how to install it (exit 4)
+            return text
+        try:
+            get_address_host_port(text)
+        except ValueError as error:
+            raise OptionError(_name(param), value, f"not a scheduler address ({error})") from None
+        return text
+
+
+SCHEDULER = Address()
 
 
 def names(option: str, text: str, check: Callable[[str], object] | None = None,

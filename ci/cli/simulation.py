@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from ci.cli.common import err, out, print_json, strategy_option
-from ci.cli.options import CELL_M, KM, RUNS, SEED, TOLERANCE, WORKERS
+from ci.cli.options import CELL_M, KM, RUNS, SCHEDULER, SEED, TOLERANCE, WORKERS
 from ci.cli.options import out_dir as out_dir_checked
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.records import campaign_lock
@@ -34,7 +34,7 @@ from spec.physical import LOOP
 @click.option("--executor", "executor_kind", type=click.Choice([k.value for k in ExecutorKind]),
               default=ExecutorKind.PROCESSES.value, show_default=True,
               help="Where runs go: local processes or a dask.distributed cluster.")
-@click.option("--scheduler", default=None, help="With --executor dask: a running scheduler's address.")
+@click.option("--scheduler", type=SCHEDULER, default=None, help="With --executor dask: a running scheduler's address.")
 @click.option("--out", "out_dir", default="out/sim", show_default=True,
               help="Runs (runs.jsonl, resumable), traces (JSON lines) and plots.")
 @click.option("--fresh", is_flag=True, help="Forget the runs already recorded in --out instead of resuming.")
