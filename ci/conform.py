@@ -22,6 +22,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
 from ci.cli.options import CELL_M, HORIZON, SECONDS, SEED, Whole, convert, names, out_dir
+from ci.cli.signals import handled
 from ci.gen import random_scenarios
 from ci.records import append, campaign_lock, open_for_append, read_records
 from oracle.conform import disagreements
@@ -48,8 +49,10 @@ class _Terminated(Exception):
     """SIGTERM, raised where the campaign is, so that it ends like Ctrl-C: one line, what was decided kept."""
 
 
-def _terminate(_signum: int, _frame: object) -> None:
-    raise _Terminated
+def _signalled(signum: int, _frame: object) -> None:
+    if signum == signal.SIGTERM:
+        raise _Terminated
+    raise KeyboardInterrupt
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -63,7 +66,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="out/conform")
     parser.add_argument("--cell-m", default=None, help="cell length in metres (default: the paper's 21)")
     console = Console(stderr=True)
-    signal.signal(signal.SIGTERM, _terminate)
+    try:
+        with handled(_signalled):
+            return _main(parser, argv, console)
+    except KeyboardInterrupt:
+        console.print("conform: interrupted (what was decided is in results.jsonl; run again to resume)",
+                      soft_wrap=True)
+        return ExitCode.INTERRUPTED
+    except _Terminated:
+        console.print("conform: terminated (SIGTERM; what was decided is in results.jsonl; run again to resume)",
+                      soft_wrap=True)
+        return ExitCode.TERMINATED
+
+
+def _main(parser: argparse.ArgumentParser, argv: list[str] | None, console: Console) -> int:
     try:
         args = parser.parse_args(argv)
         strategy = parse_strategy(args.strategy)
@@ -83,14 +99,6 @@ def main(argv: list[str] | None = None) -> int:
         out = out_dir("--out", args.out)
         with campaign_lock(out):
             return _campaign(args, console, strategy, grid, engines, out)
-    except KeyboardInterrupt:
-        console.print("conform: interrupted (what was decided is in results.jsonl; run again to resume)",
-                      soft_wrap=True)
-        return ExitCode.INTERRUPTED
-    except _Terminated:
-        console.print("conform: terminated (SIGTERM; what was decided is in results.jsonl; run again to resume)",
-                      soft_wrap=True)
-        return ExitCode.TERMINATED
     except SuiteError as err:
         console.print(f"conform: error: {err}", soft_wrap=True)
         return err.exit_code
