@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import re
 import resource
 import runpy
 import signal
@@ -468,3 +469,8 @@ def test_a_base_invocation_is_good_input(command: str, tmp_path: Path) -> None:
     done = subprocess.run([sys.executable, "-m", module, *BASE[command]], capture_output=True, text=True,
                           timeout=120, cwd=tmp_path, env=_env())
     assert done.returncode in (ExitCode.OK, ExitCode.NO), done.stderr
+
+
+def test_the_readme_documents_every_exit_code_and_no_other() -> None:
+    table = (ROOT / "README.md").read_text().split("| exit code | meaning |")[1].split("\n\n")[0]
+    assert {int(code) for code in re.findall(r"^\| (\d+) \|", table, re.MULTILINE)} == {int(c) for c in ExitCode}
