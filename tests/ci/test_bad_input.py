@@ -141,7 +141,8 @@ def unknown(command: str) -> list[Case]:
 SCENARIO_FILES = ("missing.json", "folder.json", "/dev/zero", "/dev/urandom", "zero.json", "urandom.toml",
                   "fifo.json", "huge.json", "binary.json", "duplicate.json", "malformed.json", "malformed.toml",
                   "list.json", "unknown_key.toml", "far_cell.json", "negative_cell.toml", "nan_cell.json",
-                  "nan_grid.toml", "nan_horizon.json", "too_many_targets.toml", "no_lane.json", "plan.txt")
+                  "nan_grid.toml", "nan_horizon.json", "too_many_targets.toml", "no_lane.json", "plan.txt",
+                  "deep.json", "deep.toml", "digits.json", "digits.toml", "long_string.json", "long_key.toml")
 
 
 def scenario_files(command: str) -> list[Case]:
@@ -173,6 +174,12 @@ def _hostile_files(folder: Path) -> None:
         "too_many_targets.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\ntargets = 3\n',
         "no_lane.json": '{"left_lane": [12], "right_lane": []}',
         "plan.txt": "lane = left\n",
+        "deep.json": '{"lane": ' + "[" * 50_000 + "]" * 50_000 + "}",
+        "deep.toml": "lane = " + "[" * 50_000 + "]" * 50_000 + "\n",
+        "digits.json": '{"lane": "left", "left_lane": [' + "9" * 5000 + '], "right_lane": []}',
+        "digits.toml": 'lane = "left"\nleft_lane = [' + "9" * 5000 + "]\nright_lane = []\n",
+        "long_string.json": '{"lane": "' + "x" * 200_000 + '", "left_lane": [], "right_lane": []}',
+        "long_key.toml": "k" * 200_000 + ' = 1\nlane = "left"\nleft_lane = []\nright_lane = []\n',
     }
     for name, text in files.items():
         (folder / name).write_text(text)
@@ -390,7 +397,7 @@ def _check(case: Case, done: Done) -> None:
     lines = done.stderr.strip().splitlines()
     assert "Traceback" not in done.stderr, done.stderr
     assert done.code == case.code and len(lines) == 1, (done.code, done.stderr)
-    assert case.named in lines[0], lines[0]
+    assert case.named in lines[0] and len(lines[0]) < 400, lines[0][:1000]
     assert done.stdout == "", done.stdout
     assert done.seconds < QUICK_S
 
