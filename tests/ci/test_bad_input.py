@@ -31,10 +31,12 @@ from typing import Any, NamedTuple
 import click
 import pytest
 
+from ci.cli.crossval import DEFAULT_SPACE, space_size
 from ci.cli.main import cli
 from ci.cli.options import HORIZON, MAX_STATES, PER_RUN, REPRODUCERS, RUNS, SEED, WORKERS
 from ci.conform import COUNT
 from spec.errors import ExitCode
+from spec.grid import PAPER_GRID
 
 ROOT = Path(__file__).resolve().parents[2]  # the checkout under test, whatever is installed
 QUICK_S = 10.0  # bad input is refused before any work: a case that takes longer started some, or hung
@@ -241,7 +243,7 @@ CASES: list[Case] = [
     *choices("crossval", "--engines", lists=True), *choices("crossval", "--executor"),
     *(_case("crossval", f"--space={value}", named="--space")
       for value in ("", "left=2", "left=9@0..50,right=0@0..0", "left=1@9..99,right=0@0..0",
-                    "left=1@20..10,right=0@0..0")),
+                    "left=1@20..10,right=0@0..0", "left=5@0..50,right=5@0..50")),
     *schedulers("crossval"), *out_dirs("crossval"), *unknown("crossval"),
     no_spin("crossval", "--engines=interpreter,spin"),
     # the older conformance campaign
@@ -481,3 +483,13 @@ def test_a_base_invocation_is_good_input(command: str, tmp_path: Path) -> None:
 def test_the_readme_documents_every_exit_code_and_no_other() -> None:
     table = (ROOT / "README.md").read_text().split("| exit code | meaning |")[1].split("\n\n")[0]
     assert {int(code) for code in re.findall(r"^\| (\d+) \|", table, re.MULTILINE)} == {int(c) for c in ExitCode}
+
+
+@pytest.mark.parametrize("space", [SPACE, DEFAULT_SPACE, "left=2@9..14,right=1@12..18,lanes=right",
+                                   "left=3@0..20,right=0@0..0"])
+def test_a_space_is_measured_from_its_bounds_as_its_candidates_are_counted(space: str) -> None:
+    """--space is refused above a million candidates by arithmetic on its bounds: the count the space gives."""
+    from ci.crossval import parse_space
+
+    parsed = parse_space(space, PAPER_GRID)
+    assert space_size(parsed) == parsed.candidates()
