@@ -6,78 +6,102 @@ Usage: python -m ci.conform --engines interpreter,spin --strategy sensible --cou
 Every scenario's verdict is appended to ``OUT/results.jsonl`` as it is decided, so an
 interrupted campaign resumes where it stopped (same seed, same scenarios). Each
 disagreement is shrunk to a minimal reproducer ``OUT/repro-N.toml``. Exit 0 when all
-agree, 6 on any disagreement, 2 on bad arguments.
+agree, 6 on any disagreement, 2 on bad arguments, 130 on Ctrl-C, 143 on SIGTERM.
 """
 
 from __future__ import annotations
 
 import argparse
 import itertools
+import signal
 import sys
 from pathlib import Path
+from typing import NoReturn
 
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-from ci.cli.options import MAX_SECONDS, out_dir
+from ci.cli.options import CELL_M, HORIZON, SECONDS, SEED, Whole, convert, names, out_dir
+from ci.cli.signals import handled
 from ci.gen import random_scenarios
 from ci.records import append, campaign_lock, open_for_append, read_records
 from oracle.conform import disagreements
 from oracle.planner import plan
 from oracle.shrink import engines_disagree, shrink, to_toml
 from spec.answers import Limits, Strategy
-from spec.constants import DEFAULT_HORIZON, MAX_HORIZON
+from spec.constants import DEFAULT_HORIZON
 from spec.engines import Engine, check_strategy, get_engine, parse_strategy
-from spec.errors import EngineError, ExitCode, OptionError, SuiteError, check_number
+from spec.errors import EngineError, ExitCode, OptionError, SuiteError
 from spec.files import scenario_to_dict
 from spec.grid import Grid, grid_for
 
+COUNT = Whole(0, 10_000_000)  # scenarios: ten million is weeks of Spin runs, more is a typo
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse whose own errors (an unknown option, a missing value) are one line and exit 2, as everywhere else."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(ExitCode.BAD_INPUT, f"conform: error: {message} (see --help)\n")
+
+
+class _Terminated(Exception):
+    """SIGTERM, raised where the campaign is, so that it ends like Ctrl-C: one line, what was decided kept."""
+
+
+def _signalled(signum: int, _frame: object) -> None:
+    if signum == signal.SIGTERM:
+        raise _Terminated
+    raise KeyboardInterrupt
+
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = _Parser(description=__doc__.splitlines()[0])
     parser.add_argument("--engines", default="interpreter,spin", help="comma-separated; the first is the reference")
     parser.add_argument("--strategy", default="sensible")
-    parser.add_argument("--count", type=int, default=500)
-    parser.add_argument("--seed", type=int, default=7)
-    parser.add_argument("--horizon", type=int, default=DEFAULT_HORIZON)
-    parser.add_argument("--timeout", type=float, default=None, help="seconds per scenario and engine")
+    parser.add_argument("--count", default="500")
+    parser.add_argument("--seed", default="7")
+    parser.add_argument("--horizon", default=str(DEFAULT_HORIZON))
+    parser.add_argument("--timeout", default=None, help="seconds per scenario and engine")
     parser.add_argument("--out", default="out/conform")
-    parser.add_argument("--cell-m", type=float, default=None, help="cell length in metres (default: the paper's 21)")
-    args = parser.parse_args(argv)
+    parser.add_argument("--cell-m", default=None, help="cell length in metres (default: the paper's 21)")
     console = Console(stderr=True)
     try:
+        with handled(_signalled):
+            return _main(parser, argv, console)
+    except KeyboardInterrupt:
+        console.print("conform: interrupted (what was decided is in results.jsonl; run again to resume)",
+                      soft_wrap=True)
+        return ExitCode.INTERRUPTED
+    except _Terminated:
+        console.print("conform: terminated (SIGTERM; what was decided is in results.jsonl; run again to resume)",
+                      soft_wrap=True)
+        return ExitCode.TERMINATED
+
+
+def _main(parser: argparse.ArgumentParser, argv: list[str] | None, console: Console) -> int:
+    try:
+        args = parser.parse_args(argv)
         strategy = parse_strategy(args.strategy)
-        grid = grid_for(args.cell_m)
-        engines = [get_engine(name.strip()) for name in args.engines.split(",") if name.strip()]
+        # an engine may be named twice: compared with itself, it must be deterministic
+        engines = [get_engine(name) for name in names("--engines", args.engines, get_engine, distinct=False)]
         if len(engines) < 2:
             raise OptionError("--engines", args.engines, "name at least two engines: a campaign compares them")
         for engine in engines:
             check_strategy(engine, strategy)
             engine.ready()
-        check_int("--count", args.count, 0, 10_000_000)
-        check_int("--seed", args.seed, 0, 2**32 - 1)
-        check_int("--horizon", args.horizon, 0, MAX_HORIZON)
-        if args.timeout is not None:
-            check_number("--timeout", args.timeout, MAX_SECONDS, positive=True)
+        args.count = convert("--count", COUNT, args.count)
+        args.seed = convert("--seed", SEED, args.seed)
+        args.horizon = convert("--horizon", HORIZON, args.horizon)
+        args.timeout = None if args.timeout is None else convert("--timeout", SECONDS, args.timeout)
+        args.cell_m = None if args.cell_m is None else convert("--cell-m", CELL_M, args.cell_m)
+        grid = grid_for(args.cell_m)
         out = out_dir("--out", args.out)
-    except SuiteError as err:
-        console.print(f"conform: error: {err}", soft_wrap=True)
-        return err.exit_code
-    try:
         with campaign_lock(out):
             return _campaign(args, console, strategy, grid, engines, out)
-    except KeyboardInterrupt:
-        console.print("conform: interrupted (what was decided is in results.jsonl; run again to resume)")
-        return ExitCode.INTERRUPTED
     except SuiteError as err:
         console.print(f"conform: error: {err}", soft_wrap=True)
         return err.exit_code
-
-
-def check_int(option: str, value: int, low: int, high: int) -> int:
-    if not low <= value <= high:
-        raise OptionError(option, value, f"must be between {low} and {high}")
-    return value
 
 
 def _campaign(args: argparse.Namespace, console: Console, strategy: Strategy, grid: Grid, engines: list[Engine],

@@ -34,7 +34,12 @@ class BadInput(SuiteError):
     def __init__(self, key: str, value: object, reason: str, source: str = "") -> None:
         self.source, self.key, self.value, self.reason = source, key, value, reason
         where = f"{source}: " if source else ""
-        super().__init__(f"{where}{key}={value!r}: {reason}")
+        super().__init__(f"{where}{_short(str(key))}={_short(repr(value))}: {reason}")
+
+
+def _short(text: str, limit: int = 100) -> str:
+    """``text``, or its start when it is long (a file's 200 kB string is not shown whole in a one-line message)."""
+    return text if len(text) <= limit else f"{text[:limit - 20]}... ({len(text)} characters)"
 
 
 class ScenarioError(BadInput):

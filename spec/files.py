@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import stat
+import sys
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -50,7 +51,7 @@ def _read(path: Path) -> dict[str, Any]:
     if len(raw) > MAX_BYTES:
         raise ScenarioError("file", path.name, f"larger than {MAX_BYTES} bytes (not a scenario)")
     try:
-        text = raw.decode("utf-8")
+        text = raw.decode("utf-8-sig")  # a byte-order mark, as some editors write, is not part of the text
         data = json.loads(text, object_pairs_hook=_unique) if suffix == ".json" else tomllib.loads(text)
     except UnicodeDecodeError:
         raise ScenarioError("file", path.name, "not UTF-8 text") from None
@@ -60,6 +61,11 @@ def _read(path: Path) -> dict[str, Any]:
         raise ScenarioError("file", path.name, f"malformed JSON: {err.msg} (line {err.lineno})") from None
     except tomllib.TOMLDecodeError as err:
         raise ScenarioError("file", path.name, f"malformed TOML: {err}") from None
+    except RecursionError:
+        raise ScenarioError("file", path.name, "nested too deeply (not a scenario)") from None
+    except ValueError as err:  # what the parsers leave to int(): a number of thousands of digits
+        digits = f"a number of more than {sys.get_int_max_str_digits()} digits"
+        raise ScenarioError("file", path.name, digits if "digits" in str(err) else f"unreadable: {err}") from None
     if not isinstance(data, dict):
         raise ScenarioError("file", path.name, "the top level must be an object")
     return data

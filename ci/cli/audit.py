@@ -10,10 +10,22 @@ import click
 from rich.table import Table
 
 from ci.cli.common import err, out, print_json
-from ci.cli.options import KM, SEED, names
+from ci.cli.options import (
+    CELL_M,
+    FRACTION,
+    KM,
+    METRES,
+    PER_HOUR,
+    PER_RUN,
+    RUNS,
+    SCHEDULER,
+    SEED,
+    WORKERS,
+    convert,
+    names,
+)
 from ci.cli.options import out_dir as out_dir_checked
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
-from ci.progress import km_progress
 from ci.records import campaign_lock
 from spec.errors import ExitCode, OptionError
 from spec.grid import STANDARD_CELLS_M, grid_for
@@ -30,11 +42,11 @@ def _models(option: str, text: str, known: dict[str, Any]) -> tuple[str, ...]:
 def _cells(text: str) -> tuple[float, ...]:
     cells = []
     for word in names("--cells", text):
+        value = convert("--cells", CELL_M, word)
         try:
-            value = float(word)
-        except ValueError:
-            raise OptionError("--cells", word, "must be a number of metres") from None
-        grid_for(value)  # bad input names --cell-m: say which list it came from
+            grid_for(value)
+        except OptionError as error:  # it names --cell-m: say which list the length came from
+            raise OptionError("--cells", word, f"not a usable --cell-m: {error.reason}") from None
         cells.append(value)
     if len(set(cells)) < len(cells):
         raise OptionError("--cells", text, "a cell length given twice")
@@ -48,27 +60,27 @@ def _cells(text: str) -> tuple[float, ...]:
 @click.option("--sensing", "sensing_text", default="exact,noisy", show_default=True)
 @click.option("--km", type=KM, default=25.0, show_default=True,
               help="Kilometres per run (a collision does not end a run: it starts again where it stands).")
-@click.option("--runs", type=click.IntRange(min=1), default=4, show_default=True, help="Seeds per combination.")
+@click.option("--runs", type=RUNS, default=4, show_default=True, help="Seeds per combination.")
 @click.option("--seed", type=SEED, default=1, show_default=True, help="Run i uses seed + i.")
 @click.option("--engine", default="interpreter", show_default=True, help="The planner in the loop.")
 @click.option("--engines", "cost_engines", default="interpreter,spin,z3", show_default=True,
               help="Engines whose planning cost is measured on the scenarios the planner saw.")
-@click.option("--snapshots", type=click.IntRange(min=0), default=20, show_default=True,
+@click.option("--snapshots", type=PER_RUN, default=20, show_default=True,
               help="Scenarios kept per run for the planning cost.")
-@click.option("--opportunity-checks", type=click.IntRange(min=0), default=50, show_default=True,
+@click.option("--opportunity-checks", type=PER_RUN, default=50, show_default=True,
               help="Decisions without an overtake replayed in physics per run, at most (a 1 in 4 sample).")
-@click.option("--stop-rate-per-h", type=float, default=EVENTS.stop_rate_per_h, show_default=True,
+@click.option("--stop-rate-per-h", type=PER_HOUR, default=EVENTS.stop_rate_per_h, show_default=True,
               help="Left-lane vehicles braking to a standstill, per vehicle-hour (spread, following).")
-@click.option("--min-spawn-gap-m", type=float, default=EVENTS.min_spawn_gap_m, show_default=True,
+@click.option("--min-spawn-gap-m", type=METRES, default=EVENTS.min_spawn_gap_m, show_default=True,
               help="Smallest bumper-to-bumper spawn gap (spread, following).")
-@click.option("--range-sd-m", type=float, default=NOISE.range_sd_m, show_default=True,
+@click.option("--range-sd-m", type=METRES, default=NOISE.range_sd_m, show_default=True,
               help="Range noise of the noisy sensor (standard deviation).")
-@click.option("--miss-rate", type=float, default=NOISE.miss_rate, show_default=True,
+@click.option("--miss-rate", type=FRACTION, default=NOISE.miss_rate, show_default=True,
               help="Missed detections of the noisy sensor, per reading.")
-@click.option("--workers", type=click.IntRange(min=1), default=2, show_default=True)
+@click.option("--workers", type=WORKERS, default=2, show_default=True)
 @click.option("--executor", "executor_kind", type=click.Choice([k.value for k in ExecutorKind]),
               default=ExecutorKind.PROCESSES.value, show_default=True)
-@click.option("--scheduler", default=None, help="With --executor dask: a running scheduler's address.")
+@click.option("--scheduler", type=SCHEDULER, default=None, help="With --executor dask: a running scheduler's address.")
 @click.option("--out", "out_dir", default="out/audit", show_default=True,
               help="audit.jsonl (resumable), audit.json, audit.md and plots.")
 @click.option("--fresh", is_flag=True, help="Forget the runs already recorded in --out instead of resuming.")
@@ -79,6 +91,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, km: float, runs: int
           scheduler: str | None, out_dir: str, fresh: bool, as_json: bool) -> None:
     """Audit the grid abstraction: cell size x traffic model x sensing model x seeds, driven closed-loop."""
     from ci.audit import AuditPlan, planning_cost, rows, run_audit, write_reports
+    from ci.progress import km_progress
     from sim.parts import SENSOR_MODELS, TRAFFIC_MODELS, DriveConfig
     from spec.engines import get_engine
 
@@ -86,7 +99,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, km: float, runs: int
     check_executor(executor)
     out_dir_checked("--out", out_dir)
     click.get_current_context().with_resource(campaign_lock(Path(out_dir)))  # before any line: one campaign per folder
-    engines = names("--engines", cost_engines, get_engine)
+    engines = names("--engines", cost_engines, lambda name: get_engine(name).ready())  # installed, or exit 4
     base = DriveConfig(km, engine=engine, stop_rate_per_h=stop_rate_per_h, min_spawn_gap_m=min_spawn_gap_m,
                        range_sd_m=range_sd_m, miss_rate=miss_rate, snapshots=snapshots, restart_after_collision=True,
                        opportunity_checks=opportunity_checks)
@@ -94,6 +107,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, km: float, runs: int
                      _models("--sensing", sensing_text, dict(SENSOR_MODELS)), tuple(range(seed, seed + runs)), base)
     configs = plan.configs()
     configs[0].parts()  # the engine exists and answers: bad input before any run starts
+    get_engine(engine).ready()  # its tools are installed (exit 4), or every plan of every run would fail
     total = len(configs) * runs
     err.print(f"audit: {len(configs)} combination(s) x seeds {seed}..{seed + runs - 1} = {total} run(s) of {km:g} km; "
               f"planner {engine}; on {executor.describe(total)}; results in {out_dir}")

@@ -14,7 +14,7 @@ from rich.console import Console
 from oracle.render import LEGEND, draw
 from spec.actions import Action
 from spec.answers import Answer, Status, Strategy
-from spec.constants import DEFAULT_HORIZON, MAX_HORIZON
+from spec.constants import DEFAULT_HORIZON
 from spec.errors import ScenarioError
 from spec.files import load_scenario
 from spec.library import builtin
@@ -44,7 +44,9 @@ def strategy_option(default: Strategy = Strategy.SENSIBLE, choices: tuple[Strate
 
 
 def horizon_option() -> Any:
-    return click.option("--horizon", type=click.IntRange(0, MAX_HORIZON), default=None,
+    from ci.cli.options import HORIZON
+
+    return click.option("--horizon", type=HORIZON, default=None,
                         help=f"Maximum plan length (default: the scenario's, else {DEFAULT_HORIZON}).")
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 import time
@@ -14,7 +15,7 @@ from rich.table import Table
 from rich.text import Text
 
 from ci.cli.common import cell_option, err, horizon_option, out, print_json
-from ci.cli.options import SECONDS, SEED, names
+from ci.cli.options import MAX_WORKERS, REPRODUCERS, SCHEDULER, SECONDS, SEED, WORKERS, names
 from ci.cli.options import out_dir as checked_out_dir
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.records import campaign_lock
@@ -41,15 +42,15 @@ class RateColumn(ProgressColumn):
 @click.option("--properties", "property_text", default="all", show_default=True,
               help="Comma-separated property names, or all (see --list).")
 @click.option("--engines", "engine_text", default="interpreter,spin,z3", show_default=True)
-@click.option("--workers", type=click.IntRange(min=1), default=None, help="Default: every core.")
+@click.option("--workers", type=WORKERS, default=None, help=f"Default: every core (at most {MAX_WORKERS}).")
 @click.option("--executor", "executor_kind", type=click.Choice([k.value for k in ExecutorKind]),
               default=ExecutorKind.PROCESSES.value, show_default=True)
-@click.option("--scheduler", default=None, help="With --executor dask: a running scheduler's address.")
+@click.option("--scheduler", type=SCHEDULER, default=None, help="With --executor dask: a running scheduler's address.")
 @click.option("--timeout", "timeout_s", type=SECONDS, default=10.0, show_default=True,
               help="Seconds per engine run (past it: incomplete).")
 @click.option("--seed", type=SEED, default=None,
               help="With --source hypothesis (default: drawn, and printed).")
-@click.option("--max-reproducers", type=click.IntRange(min=0), default=3, show_default=True,
+@click.option("--max-reproducers", type=REPRODUCERS, default=3, show_default=True,
               help="Failures shrunk per property.")
 @cell_option()
 @horizon_option()
@@ -61,7 +62,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
              scheduler: str | None, timeout_s: float, seed: int | None, max_reproducers: int, cell_m: float | None,
              horizon: int | None, out_dir: str, fresh: bool, list_only: bool, as_json: bool) -> None:
     """Check every property on scenarios from a source; exit 0 when all hold, 6 on any failure."""
-    from ci.crossval import VERDICTS_FILE, Campaign, Summary, library_scenarios, parse_space, write_reports
+    from ci.crossval import VERDICTS_FILE, Campaign, Summary, library_scenarios, write_reports
     from ci.properties import PROPERTIES
     from spec.grid import grid_for
 
@@ -72,7 +73,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
     grid = grid_for(cell_m)
     properties = _properties(property_text)
     engines = _engines(engine_text)
-    executor = ExecutorChoice(ExecutorKind(executor_kind), workers or os.cpu_count() or 1, scheduler)
+    executor = ExecutorChoice(ExecutorKind(executor_kind), workers or min(os.cpu_count() or 1, MAX_WORKERS), scheduler)
     check_executor(executor)
     chosen = [p for p in properties if PROPERTIES[p].applies(engines)]
     if not chosen:
@@ -89,7 +90,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
 
             scenarios = [replace(s, horizon=horizon) for s in scenarios]
     elif source == "exhaustive":
-        the_space = parse_space(space, grid)
+        the_space = checked_space(space, grid)
     if source == "hypothesis" and seed is None:
         seed = int.from_bytes(os.urandom(4), "little")
     campaign = Campaign(source, tuple(chosen), engines, float(grid.cell_m), horizon, timeout_s,
@@ -124,6 +125,33 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
         _print(data, wall_s)
         out.print("written: " + ", ".join(str(p) for p in paths))
     sys.exit(ExitCode.OK if summary.all_held else ExitCode.DISAGREE)
+
+
+MAX_CANDIDATES = 1_000_000  # every candidate is built and checked by every engine: a million is days of runs
+
+
+def checked_space(text: str, grid: Any) -> Any:
+    """``--space`` parsed, and its size known from its bounds before anything is built: a space of more than
+    ``MAX_CANDIDATES`` is bad input (left=5@0..50,right=5@0..50 has 10**13: counting them alone never ended)."""
+    from ci.crossval import parse_space
+
+    space = parse_space(text, grid)
+    size = space_size(space)
+    if size > MAX_CANDIDATES:
+        raise OptionError("--space", text, f"{size:,} candidates, more than {MAX_CANDIDATES:,} (each one is checked)")
+    return space
+
+
+def space_size(space: Any) -> int:
+    """How many candidates ``Space.candidates()`` would count, from the space's bounds (as many vehicle sets as
+    ways to choose up to N of the cells, per lane; times the AV's lanes and the target counts)."""
+    from ci.crossval import MAX_TARGETS
+
+    def vehicle_sets(most: int, cells: tuple[int, int]) -> int:
+        return sum(math.comb(cells[1] - cells[0] + 1, n) for n in range(most + 1))
+
+    return (len(space.lanes) * (MAX_TARGETS + 1) * vehicle_sets(space.left_max, space.left_cells)
+            * vehicle_sets(space.right_max, space.right_cells))
 
 
 def _properties(text: str) -> tuple[PropertyName, ...]:

@@ -15,6 +15,7 @@ import sys
 import click
 
 from ci.cli import audit, crossval, library, planning, simulation
+from ci.cli.signals import handled
 from spec.errors import ExitCode, SuiteError
 
 
@@ -44,10 +45,9 @@ def _interrupted(signum: int, _frame: object) -> None:
 
 def main() -> None:
     """Entry point: run the CLI, turning every suite error into one line and its exit code."""
-    signal.signal(signal.SIGTERM, _interrupted)
-    signal.signal(signal.SIGINT, _interrupted)
     try:
-        cli.main(standalone_mode=False)
+        with handled(_interrupted):
+            cli.main(standalone_mode=False)
     except click.exceptions.Exit as done:
         sys.exit(done.exit_code)
     except click.UsageError as error:

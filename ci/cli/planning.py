@@ -18,7 +18,7 @@ from ci.cli.common import (
     print_states,
     strategy_option,
 )
-from ci.cli.options import SECONDS, out_file
+from ci.cli.options import MAX_STATES, SECONDS, out_file
 from oracle.conform import disagreements
 from oracle.planner import plan as run_plan
 from oracle.planner import validate_pipeline
@@ -41,7 +41,7 @@ from spec.scenario import Scenario, problem_for
 @cell_option()
 @click.option("--engine", default="interpreter", show_default=True,
               help="An engine name (see `overtake engines`), or all: every engine that answers the strategy.")
-@click.option("--max-states", type=click.IntRange(min=1), default=Limits().max_states, show_default=True,
+@click.option("--max-states", type=MAX_STATES, default=Limits().max_states, show_default=True,
               help="Stored states before the search gives up (answer: incomplete).")
 @click.option("--timeout", type=SECONDS, default=None, help="Seconds before giving up (incomplete).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
@@ -105,9 +105,12 @@ def validate_cmd(file: str, actions_text: str, model: str | None, horizon: int |
     """Check that an action list is a plan for FILE: enabled, collision-free, goal first at the end."""
     scenario = load(file, cell_m)
     names = actions_text.split(",")
-    if any(not name.strip() for name in names) and actions_text.strip():
-        raise ActionError(f"--actions={actions_text!r}: an empty action between commas")
-    actions = tuple(parse_action(a) for a in names if a.strip())
+    if any(not name.strip() for name in names) and actions_text.strip():  # "" alone is the empty plan
+        raise OptionError("--actions", actions_text, "an empty action between commas")
+    try:
+        actions = tuple(parse_action(a) for a in names if a.strip())
+    except ActionError as error:
+        raise OptionError("--actions", actions_text, str(error)) from None
     checked = validate_pipeline(scenario, actions, ModelChoice(model) if model else None, horizon)
     verdict = checked.verdict
     if as_json:

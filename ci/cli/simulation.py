@@ -8,12 +8,12 @@ from pathlib import Path
 import click
 
 from ci.cli.common import err, out, print_json, strategy_option
-from ci.cli.options import CELL_M, KM, SEED, TOLERANCE
+from ci.cli.options import CELL_M, KM, RUNS, SCHEDULER, SEED, TOLERANCE, WORKERS
 from ci.cli.options import out_dir as out_dir_checked
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
-from ci.progress import km_progress
 from ci.records import campaign_lock
 from spec.answers import Strategy
+from spec.engines import get_engine
 from spec.errors import ExitCode, OptionError
 from spec.grid import PAPER_GRID
 from spec.physical import LOOP
@@ -28,13 +28,13 @@ from spec.physical import LOOP
 @strategy_option(choices=(Strategy.SENSIBLE, Strategy.SHORTEST))
 @click.option("--cell-m", "cell_m", type=CELL_M, default=PAPER_GRID.cell, show_default=True,
               help="The planner's cell length in metres (21, 10.5, 7, 5.25); the world stays the paper's.")
-@click.option("--runs", type=click.IntRange(min=1), default=1, show_default=True)
-@click.option("--workers", type=click.IntRange(min=1), default=1, show_default=True,
+@click.option("--runs", type=RUNS, default=1, show_default=True)
+@click.option("--workers", type=WORKERS, default=1, show_default=True,
               help="Local processes (with --executor dask and no --scheduler: the local cluster's workers).")
 @click.option("--executor", "executor_kind", type=click.Choice([k.value for k in ExecutorKind]),
               default=ExecutorKind.PROCESSES.value, show_default=True,
               help="Where runs go: local processes or a dask.distributed cluster.")
-@click.option("--scheduler", default=None, help="With --executor dask: a running scheduler's address.")
+@click.option("--scheduler", type=SCHEDULER, default=None, help="With --executor dask: a running scheduler's address.")
 @click.option("--out", "out_dir", default="out/sim", show_default=True,
               help="Runs (runs.jsonl, resumable), traces (JSON lines) and plots.")
 @click.option("--fresh", is_flag=True, help="Forget the runs already recorded in --out instead of resuming.")
@@ -49,6 +49,7 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: S
              workers: int, executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool,
              step_tolerance: float, plan_tolerance: float, paper_replanning: bool, as_json: bool) -> None:
     """Drive the PyBullet simulator closed-loop and check every action against the model's prediction."""
+    from ci.progress import km_progress
     from ci.simulate import RUNS_FILE
     from ci.simulate import simulate as run_campaign
     from sim.parts import DriveConfig
@@ -63,6 +64,7 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: S
     campaign = DriveConfig(km, until_failure, engine, strategy, not paper_replanning, step_tolerance, plan_tolerance,
                            cell_m)
     campaign.parts()  # the engine exists and answers the strategy: bad input before any run starts
+    get_engine(engine).ready()  # its tools are installed (exit 4), or every plan of every run would fail
     limit = f"{km:g} km" + (" or until failure" if until_failure else "")
     err.print(f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; engine {engine}, {strategy.value}, "
               f"{campaign.grid.describe()}; on {executor.describe(runs)}; results in {Path(out_dir) / RUNS_FILE}")

@@ -90,3 +90,59 @@ def test_a_second_campaign_on_the_same_folder_is_refused_naming_the_first(tmp_pa
     finally:
         first.send_signal(signal.SIGTERM)
         first.communicate(timeout=60)
+
+
+@pytest.mark.parametrize(("sig", "code", "word"), [(signal.SIGINT, ExitCode.INTERRUPTED, "interrupted"),
+                                                   (signal.SIGTERM, ExitCode.TERMINATED, "terminated")])
+def test_a_signal_ends_the_older_conformance_campaign_with_one_line(tmp_path: Path, sig: int, code: int,
+                                                                   word: str) -> None:
+    """``python -m ci.conform`` as well: its exit code, one last line, no traceback, and what it decided kept."""
+    results = tmp_path / "results.jsonl"
+    process = subprocess.Popen([sys.executable, "-m", "ci.conform", "--engines", "interpreter,z3", "--strategy",
+                                "shortest", "--count", "2000", "--out", str(tmp_path)], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 60
+        while (not results.exists() or not results.read_text().count("\n")) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        if sig == signal.SIGINT:
+            os.killpg(process.pid, sig)  # Ctrl-C reaches the whole foreground process group
+        else:
+            process.send_signal(sig)
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.communicate()
+    assert process.returncode == code, stderr
+    assert "Traceback" not in stderr and word in stderr.strip().splitlines()[-1], stderr
+    kept = results.read_text().count("\n")
+    assert 0 < kept < 2000
+
+
+# Three targets to pass and oncoming traffic at horizon 200: Z3's optimal plan is a check of minutes.
+LONG_CHECK = 'lane = "left"\nleft_lane = [12, 14, 16]\nright_lane = [40, 45]\ntargets = 3\nmodel = "final"\n' \
+             'horizon = 200\ncell_m = 21\n'
+
+
+@pytest.mark.parametrize(("sig", "code", "word"), [(signal.SIGINT, ExitCode.INTERRUPTED, "interrupted"),
+                                                   (signal.SIGTERM, ExitCode.TERMINATED, "terminated")])
+def test_a_signal_during_a_long_z3_check_ends_the_command_at_once(tmp_path: Path, sig: int, code: int,
+                                                                  word: str) -> None:
+    """Z3 took Ctrl-C for itself (the check answered "incomplete", exit 3) and SIGTERM waited for the check."""
+    scenario = tmp_path / "long.toml"
+    scenario.write_text(LONG_CHECK)
+    process = subprocess.Popen([sys.executable, "-m", "ci.cli.main", "plan", str(scenario), "--engine", "z3",
+                                "--strategy", "optimal"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        time.sleep(3)  # well into the check
+        assert process.poll() is None, process.communicate()
+        process.send_signal(sig)
+        signalled = time.monotonic()
+        out, stderr = process.communicate(timeout=20)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.communicate()
+    assert process.returncode == code and time.monotonic() - signalled < 5, (out, stderr)
+    assert out == "" and "Traceback" not in stderr and word in stderr.strip().splitlines()[-1], stderr

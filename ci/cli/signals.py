@@ -1,0 +1,71 @@
+"""Ctrl-C and SIGTERM reach a command at once, even while an engine runs native code.
+
+Python runs a signal handler between bytecodes only, so while Z3 solves (native code, for as long as a check
+takes: without --timeout, unbounded) SIGTERM waited for the check to end; and during a check Z3 takes SIGINT for
+itself (its ``ctrl_c`` parameter): it cancels the check and answers "unknown", so Ctrl-C became an "incomplete"
+answer (exit 3), or in a campaign an incomplete verdict or a planner failure recorded as a finding while the
+campaign went on. Within ``handled``, Z3 leaves SIGINT alone, and a thread that hears every signal through Python's
+wakeup descriptor cancels a running check (``Z3_interrupt``): the main thread returns to Python and runs the
+handler at once.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import socket
+import sys
+import threading
+from collections.abc import Callable, Iterator
+from typing import Any
+
+SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+@contextlib.contextmanager
+def handled(handler: Callable[[int, Any], None]) -> Iterator[None]:
+    """Within the block, ``handler`` handles SIGINT and SIGTERM in the main thread, promptly; after it, as before."""
+    if threading.current_thread() is not threading.main_thread():  # signals reach the main thread only
+        yield
+        return
+    z3_ctrl_c = _z3_ctrl_c("false")
+    previous = {sig: signal.signal(sig, handler) for sig in SIGNALS}
+    heard, wakeup = socket.socketpair()
+    wakeup.setblocking(False)
+    previous_fd = signal.set_wakeup_fd(wakeup.fileno(), warn_on_full_buffer=False)
+    watcher = threading.Thread(target=_cancel_native_work, args=(heard,), name="signals", daemon=True)
+    watcher.start()
+    try:
+        yield
+    finally:
+        signal.set_wakeup_fd(previous_fd)
+        for sig, old in previous.items():
+            if old is not None:
+                signal.signal(sig, old)
+        wakeup.close()  # the watcher hears the end of the stream and stops
+        watcher.join(timeout=1)
+        heard.close()
+        _z3_ctrl_c(z3_ctrl_c)
+
+
+def _cancel_native_work(heard: socket.socket) -> None:
+    """For each SIGINT or SIGTERM: cancel a running Z3 check, so that the main thread gets back to its handler."""
+    with contextlib.suppress(OSError):
+        while data := heard.recv(64):
+            z3 = sys.modules.get("z3")
+            if z3 is not None and any(number in SIGNALS for number in data):
+                with contextlib.suppress(Exception):
+                    z3.main_ctx().interrupt()
+
+
+def _z3_ctrl_c(value: str | None) -> str | None:
+    """Set Z3's ``ctrl_c`` parameter (its own SIGINT handler, installed for each check, takes Ctrl-C from Python);
+    the value it had."""
+    try:
+        import z3
+    except ImportError:
+        return None
+    before = str(z3.get_param("ctrl_c"))
+    if value is not None:
+        z3.set_param("ctrl_c", value == "true")
+    return before
