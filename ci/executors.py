@@ -144,6 +144,17 @@ def _drained(queue: Any, progress: Callable[[Any], None]) -> Iterator[None]:
         thread.join()
 
 
+def _local_cluster(make: Callable[..., Any], workers: int) -> Any:
+    """A local dask cluster whose worker processes ignore Ctrl-C (the campaign's process decides what it means;
+    they inherit the disposition when they start, and otherwise print a traceback each)."""
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        return make(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                    silence_logs=logging.ERROR)
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
 def _dask(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: ExecutorChoice) -> Iterator[tuple[int, R]]:
     try:
         from distributed import Client, LocalCluster
@@ -155,8 +166,7 @@ def _dask(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: Executo
         if choice.scheduler:
             client = Client(choice.scheduler, timeout=CONNECT_TIMEOUT_S)
         else:
-            cluster = LocalCluster(n_workers=choice.workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR)
+            cluster = _local_cluster(LocalCluster, choice.workers)
             client = Client(cluster)
     except ValueError as err:
         if not choice.scheduler:

@@ -198,12 +198,12 @@ def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
     """The smallest k whose bound is satisfiable, incrementally, or a proof that none is up to the horizon."""
     enc = Encoding(problem)
     solver = z3.SolverFor("QF_LIA")
-    _set_timeout(solver, limits)
+    started = time.perf_counter()
     solver.add(enc.initial)
     for k in range(problem.horizon + 1):
         reached = z3.Bool(f"goal_{k}")  # checked as an assumption, so learned lemmas carry over
         solver.add(reached == enc.goal_at(k))
-        verdict = solver.check(reached)
+        verdict = _check(solver, limits, started, reached)
         if verdict == z3.sat:
             actions, states = enc.decode(solver.model(), k)
             return SearchResult(Status.PLAN, actions, k + 1, f"shortest: bound {k} satisfiable", states)
@@ -289,19 +289,23 @@ def _gave_up(solver: z3.Solver, checks: int) -> SearchResult:
 
 
 def _check(solver: z3.Solver, limits: Limits | None, started: float, *assumptions: z3.BoolRef) -> z3.CheckSatResult:
-    """One check within what is left of the time limit."""
-    if limits is not None and limits.timeout_s is not None:
-        left_s = limits.timeout_s - (time.perf_counter() - started)
+    """One check within what is left of the time limit. A check cancelled before its limit was interrupted (Ctrl-C,
+    or a signal handler cancelling it): that is KeyboardInterrupt, never an "incomplete" answer."""
+    limit_s = None if limits is None else limits.timeout_s
+    if limit_s is not None:
+        left_s = limit_s - (time.perf_counter() - started)
         if left_s <= 0:
             return z3.unknown
         solver.set("timeout", max(1, int(left_s * 1000)))
-    return solver.check(*assumptions)
+    verdict = solver.check(*assumptions)
+    if verdict == z3.unknown and solver.reason_unknown() in CANCELLED:
+        if limit_s is None or limit_s - (time.perf_counter() - started) > CANCEL_MARGIN_S:
+            raise KeyboardInterrupt("z3: check interrupted")
+    return verdict
 
 
-def _set_timeout(solver: z3.Solver | z3.Optimize, limits: Limits | None) -> None:
-    if limits is not None and limits.timeout_s is not None:
-        solver.set("timeout", max(1, int(limits.timeout_s * 1000)))
-
+CANCELLED = ("canceled", "interrupted from keyboard")  # what Z3 says of a cancelled check (a time-out too)
+CANCEL_MARGIN_S = 0.05  # a check cancelled with more than this left of its limit was not stopped by the limit
 
 SOLVERS = {Strategy.SHORTEST: shortest, Strategy.OPTIMAL: optimal}
 

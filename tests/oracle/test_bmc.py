@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import threading
+from dataclasses import replace
+
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
@@ -87,3 +90,16 @@ def test_real_time_out_gives_incomplete_or_an_answer_never_a_wrong_one() -> None
     problem = problem_for(make_scenario("right", [8, 9, 11, 12], [14, 30], 0, horizon=60), ModelKind.FINAL)
     result = bmc.shortest(problem, Limits(timeout_s=0.001))
     assert result.status in (Status.INCOMPLETE, bitplan.shortest(problem).status)
+
+
+@pytest.mark.parametrize("limit_s", [None, 60.0])
+def test_a_check_interrupted_before_its_limit_is_keyboard_interrupt_never_an_answer(limit_s: float | None) -> None:
+    scenario = next(b for b in BUILTINS if b.name == "paper_example").load()
+    problem = problem_for(replace(scenario, horizon=120), ModelKind.FINAL)  # about 5 s of solving
+    timer = threading.Timer(0.5, bmc.z3.main_ctx().interrupt)  # what Ctrl-C or a signal handler does
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            bmc.optimal(problem, Limits(timeout_s=limit_s))
+    finally:
+        timer.cancel()
