@@ -22,7 +22,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
 from ci.cli.options import CELL_M, HORIZON, SECONDS, SEED, Whole, convert, names, out_dir
-from ci.cli.signals import handled
+from ci.cli.signals import handled, received
 from ci.gen import random_scenarios
 from ci.records import append, campaign_lock, open_for_append, read_records
 from oracle.conform import disagreements
@@ -69,14 +69,19 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with handled(_signalled):
             return _main(parser, argv, console)
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, _Terminated, Exception):
+        # a signal raises where the campaign is; inside a native call (ctypes) it arrives wrapped in another
+        # exception, and a cancelled check raises KeyboardInterrupt: whatever comes after a signal is the signal
+        signum = received()
+        if signum is None:
+            raise
+        if signum == signal.SIGTERM:
+            console.print("conform: terminated (SIGTERM; what was decided is in results.jsonl; run again to resume)",
+                          soft_wrap=True)
+            return ExitCode.TERMINATED
         console.print("conform: interrupted (what was decided is in results.jsonl; run again to resume)",
                       soft_wrap=True)
         return ExitCode.INTERRUPTED
-    except _Terminated:
-        console.print("conform: terminated (SIGTERM; what was decided is in results.jsonl; run again to resume)",
-                      soft_wrap=True)
-        return ExitCode.TERMINATED
 
 
 def _main(parser: argparse.ArgumentParser, argv: list[str] | None, console: Console) -> int:

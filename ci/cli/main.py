@@ -15,7 +15,7 @@ import sys
 import click
 
 from ci.cli import audit, crossval, library, planning, simulation
-from ci.cli.signals import handled
+from ci.cli.signals import handled, received
 from spec.errors import ExitCode, SuiteError
 
 
@@ -57,19 +57,21 @@ def main() -> None:
     except click.ClickException as error:
         click.echo(f"overtake: error: {error.format_message()}", err=True)
         sys.exit(error.exit_code)
-    except Interrupted as signalled:
-        if signalled.signum == signal.SIGTERM:
+    except (Interrupted, click.exceptions.Abort, KeyboardInterrupt) as signalled:  # the latter: a cancelled check
+        signum = signalled.signum if isinstance(signalled, Interrupted) else received()
+        if signum == signal.SIGTERM:
             click.echo("overtake: terminated (SIGTERM); what was finished is kept: run again to resume", err=True)
             sys.exit(ExitCode.TERMINATED)
-        click.echo("overtake: interrupted; what was finished is kept: run again to resume", err=True)
-        sys.exit(ExitCode.INTERRUPTED)
-    except (click.exceptions.Abort, KeyboardInterrupt):
         click.echo("overtake: interrupted; what was finished is kept: run again to resume", err=True)
         sys.exit(ExitCode.INTERRUPTED)
     except SuiteError as error:
         click.echo(f"overtake: error: {error}", err=True)
         sys.exit(error.exit_code)
     except Exception as error:
+        if received() is not None:  # a signal raised inside a native call arrives wrapped (ctypes.ArgumentError)
+            click.echo(f"overtake: {'terminated (SIGTERM)' if received() == signal.SIGTERM else 'interrupted'}; "
+                       f"what was finished is kept: run again to resume", err=True)
+            sys.exit(ExitCode.TERMINATED if received() == signal.SIGTERM else ExitCode.INTERRUPTED)
         if os.environ.get("OVERTAKE_DEBUG"):
             raise
         click.echo(f"overtake: internal error: {type(error).__name__}: {error} (set OVERTAKE_DEBUG=1 for details)",

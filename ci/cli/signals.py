@@ -7,11 +7,18 @@ answer (exit 3), or in a campaign an incomplete verdict or a planner failure rec
 campaign went on. Within ``handled``, Z3 leaves SIGINT alone, and a thread that hears every signal through Python's
 wakeup descriptor cancels a running check (``Z3_interrupt``): the main thread returns to Python and runs the
 handler at once.
+
+Python drops an exception raised inside a ``__del__`` (Z3 frees terms in one on almost every line), so a handler
+that raised there would be lost and the command would run on: ``handled`` catches that drop
+(``sys.unraisablehook``) and sends the signal again from another thread, so the handler raises once more, outside.
+``received`` says which signal came, for code that sees only the KeyboardInterrupt of a cancelled check or the
+``ctypes.ArgumentError`` that wraps a handler's exception raised inside a native call.
 """
 
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import socket
 import sys
@@ -20,6 +27,13 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
+_RECEIVED: list[int] = []  # the signals heard within ``handled``
+_RAISED: list[BaseException] = []  # what the handler raised for them
+
+
+def received() -> int | None:
+    """The first signal heard within ``handled``, if any."""
+    return _RECEIVED[0] if _RECEIVED else None
 
 
 @contextlib.contextmanager
@@ -29,7 +43,29 @@ def handled(handler: Callable[[int, Any], None]) -> Iterator[None]:
         yield
         return
     z3_ctrl_c = _z3_ctrl_c("false")
-    previous = {sig: signal.signal(sig, handler) for sig in SIGNALS}
+    _RECEIVED.clear()
+    _RAISED.clear()
+
+    def on_signal(signum: int, frame: Any) -> None:
+        _RECEIVED.append(signum)
+        try:
+            handler(signum, frame)
+        except BaseException as raised:
+            _RAISED.append(raised)
+            raise
+
+    previous_hook = sys.unraisablehook
+
+    def on_dropped(dropped: Any) -> None:
+        if any(dropped.exc_value is raised for raised in _RAISED):
+            # raised inside a __del__ and dropped there: the signal again, from another thread, so that the handler
+            # runs at the main thread's next line, outside (run from here, it would raise inside this hook)
+            threading.Timer(0.01, os.kill, (os.getpid(), _RECEIVED[-1])).start()
+            return
+        previous_hook(dropped)
+
+    sys.unraisablehook = on_dropped
+    previous = {sig: signal.signal(sig, on_signal) for sig in SIGNALS}
     heard, wakeup = socket.socketpair()
     wakeup.setblocking(False)
     previous_fd = signal.set_wakeup_fd(wakeup.fileno(), warn_on_full_buffer=False)
@@ -45,6 +81,7 @@ def handled(handler: Callable[[int, Any], None]) -> Iterator[None]:
         wakeup.close()  # the watcher hears the end of the stream and stops
         watcher.join(timeout=1)
         heard.close()
+        sys.unraisablehook = previous_hook
         _z3_ctrl_c(z3_ctrl_c)
 
 
