@@ -311,8 +311,15 @@ SOLVERS = {Strategy.SHORTEST: shortest, Strategy.OPTIMAL: optimal}
 
 
 def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult:
-    """shortest: incremental bounds; optimal: lexicographic tightening. sensible is left to the search engines."""
-    return SOLVERS[strategy](problem, limits)
+    """shortest: incremental bounds; optimal: lexicographic tightening. sensible is left to the search engines.
+    Z3 refusing a call because the context was interrupted (an interrupt that lands between checks) is an interrupt
+    too, never an engine failure."""
+    try:
+        return SOLVERS[strategy](problem, limits)
+    except z3.Z3Exception as err:
+        if "cancel" in str(err).lower() or "interrupt" in str(err).lower():
+            raise KeyboardInterrupt("z3: interrupted") from None
+        raise
 
 
 Z3 = register(Engine("z3", tuple(SOLVERS), _solve,

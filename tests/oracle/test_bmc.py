@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from oracle import bitplan, bmc, offsets
 from oracle.interpreter import validate
 from oracle.optimum import plan_cost
-from spec.answers import Limits, Status
+from spec.answers import Limits, Status, Strategy
 from spec.cost import COST_TERMS
 from spec.library import BUILTINS
 from spec.models import ModelKind
@@ -100,6 +100,6 @@ def test_a_check_interrupted_before_its_limit_is_keyboard_interrupt_never_an_ans
     timer.start()
     try:
         with pytest.raises(KeyboardInterrupt):
-            bmc.optimal(problem, Limits(timeout_s=limit_s))
+            bmc._solve(problem, Strategy.OPTIMAL, Limits(timeout_s=limit_s))
     finally:
         timer.cancel()
