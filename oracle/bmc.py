@@ -298,13 +298,13 @@ def _check(solver: z3.Solver, limits: Limits | None, started: float, *assumption
             return z3.unknown
         solver.set("timeout", max(1, int(left_s * 1000)))
     verdict = solver.check(*assumptions)
-    if verdict == z3.unknown and solver.reason_unknown() in CANCELLED:
+    if verdict == z3.unknown and any(word in solver.reason_unknown() for word in CANCELLED):
         if limit_s is None or limit_s - (time.perf_counter() - started) > CANCEL_MARGIN_S:
             raise KeyboardInterrupt("z3: check interrupted")
     return verdict
 
 
-CANCELLED = ("canceled", "interrupted from keyboard")  # what Z3 says of a cancelled check (a time-out too)
+CANCELLED = ("cancel", "interrupt")  # what Z3 says of a cancelled check ("canceled" of a time-out too)
 CANCEL_MARGIN_S = 0.05  # a check cancelled with more than this left of its limit was not stopped by the limit
 
 SOLVERS = {Strategy.SHORTEST: shortest, Strategy.OPTIMAL: optimal}

@@ -57,6 +57,8 @@ def handled(handler: Callable[[int, Any], None]) -> Iterator[None]:
     previous_hook = sys.unraisablehook
 
     def on_dropped(dropped: Any) -> None:
+        if _RECEIVED and not any(dropped.exc_value is raised for raised in _RAISED):
+            return  # debris of the work the signal broke off (a Z3 term half made when it came): the command is ending
         if any(dropped.exc_value is raised for raised in _RAISED):
             # raised inside a __del__ and dropped there: the signal again, from another thread, so that the handler
             # runs at the main thread's next line, outside (run from here, it would raise inside this hook)
@@ -81,7 +83,8 @@ def handled(handler: Callable[[int, Any], None]) -> Iterator[None]:
         wakeup.close()  # the watcher hears the end of the stream and stops
         watcher.join(timeout=1)
         heard.close()
-        sys.unraisablehook = previous_hook
+        if not _RECEIVED:  # after a signal the hook stays, for the debris the interpreter's exit collects
+            sys.unraisablehook = previous_hook
         _z3_ctrl_c(z3_ctrl_c)
 
 

@@ -96,10 +96,17 @@ def test_real_time_out_gives_incomplete_or_an_answer_never_a_wrong_one() -> None
 def test_a_check_interrupted_before_its_limit_is_keyboard_interrupt_never_an_answer(limit_s: float | None) -> None:
     scenario = next(b for b in BUILTINS if b.name == "paper_example").load()
     problem = problem_for(replace(scenario, horizon=120), ModelKind.FINAL)  # about 5 s of solving
-    timer = threading.Timer(0.5, bmc.z3.main_ctx().interrupt)  # what Ctrl-C or a signal handler does
-    timer.start()
+    stop = threading.Event()
+
+    def interrupting() -> None:  # what Ctrl-C or a signal handler does; Z3 ignores it while no check runs
+        while not stop.wait(0.05):
+            bmc.z3.main_ctx().interrupt()
+
+    thread = threading.Thread(target=interrupting, daemon=True)
+    thread.start()
     try:
         with pytest.raises(KeyboardInterrupt):
             bmc._solve(problem, Strategy.OPTIMAL, Limits(timeout_s=limit_s))
     finally:
-        timer.cancel()
+        stop.set()
+        thread.join()
