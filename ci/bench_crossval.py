@@ -26,7 +26,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from ci.bench import machine
+from ci.bench import machine, timed
 from ci.crossval import check_scenario, parse_space
 from ci.properties import PROPERTIES
 from oracle.optimum import lexicographic_optimum
@@ -46,13 +46,8 @@ PER_PROCESS = Engine("spin-per-process", (Strategy.SENSIBLE, Strategy.SHORTEST),
 
 def per_second(scenarios: list[Scenario], run: Callable[[Scenario], object]) -> tuple[float, float]:
     """(scenarios per second, median ms) over ``scenarios``, after one warm-up call."""
-    run(scenarios[0])
-    ms = []
-    for scenario in scenarios:
-        started = time.perf_counter()
-        run(scenario)
-        ms.append((time.perf_counter() - started) * 1000)
-    return 1000 * len(ms) / sum(ms), float(np.median(ms))
+    ms = timed(scenarios, run)
+    return 1000 * len(ms) / float(ms.sum()), float(np.median(ms))
 
 
 def sub_space(count: int) -> str:
