@@ -43,11 +43,11 @@ def main() -> None:
     results = {
         "spin, compile every time (spin -a, gcc -O2, pan, spin -t)":
             timed(scenarios, lambda s: plan(s, strategy, engine=COMPILING)),
-        "spin, compiled once (cached pan, scenario injected, pan -r)":
+        "spin, compiled once (cached pan served, scenario injected, pan -r)":
             timed(scenarios, lambda s: plan(s, strategy, engine=spin)),
         "interpreter": timed(scenarios, lambda s: plan(s, strategy)),
     }
-    once = results["spin, compiled once (cached pan, scenario injected, pan -r)"]
+    once = results["spin, compiled once (cached pan served, scenario injected, pan -r)"]
     table = latency_table("per-plan latency (ms), whole pipeline, same scenarios", "pipeline", results, once,
                           "median / compiled once")
     console.print(table)
