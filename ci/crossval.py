@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 import re
 from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -60,8 +61,13 @@ class Space:
                 f"right={self.right_max}@{self.right_cells[0]}..{self.right_cells[1]},lanes={lanes}")
 
     def candidates(self) -> int:
-        """How many scenarios the space names before validation (vehicle sets x lanes x target counts)."""
-        return sum(1 for _ in self._raw())
+        """How many scenarios the space names before validation (vehicle sets x lanes x target counts), from its
+        bounds: as many vehicle sets per lane as ways to choose up to N of its cells."""
+        def vehicle_sets(most: int, cells: tuple[int, int]) -> int:
+            return sum(math.comb(cells[1] - cells[0] + 1, n) for n in range(most + 1))
+
+        return (len(self.lanes) * (MAX_TARGETS + 1) * vehicle_sets(self.left_max, self.left_cells)
+                * vehicle_sets(self.right_max, self.right_cells))
 
     def _raw(self) -> Iterator[tuple[Lane, tuple[int, ...], tuple[int, ...], int]]:
         left_range = range(self.left_cells[0], self.left_cells[1] + 1)
@@ -84,6 +90,7 @@ class Space:
                 continue
 
 
+MAX_CANDIDATES = 1_000_000  # every candidate is built and checked by every engine: a million is days of runs
 _SPACE = re.compile(r"^left=(\d+)@(\d+)\.\.(\d+),right=(\d+)@(\d+)\.\.(\d+)(?:,lanes=(left|right|both))?$")
 
 
@@ -99,7 +106,11 @@ def parse_space(text: str, grid: Grid) -> Space:
             raise OptionError("--space", text, f"cells must satisfy 0 <= A <= B <= {grid.road_cells} on this grid")
     if ln > 5 or rn > 5:
         raise OptionError("--space", text, "at most 5 vehicles per lane (the space grows as cells^vehicles)")
-    return Space(ln, (la, lb), rn, (ra, rb), lanes)
+    space = Space(ln, (la, lb), rn, (ra, rb), lanes)
+    if space.candidates() > MAX_CANDIDATES:
+        raise OptionError("--space", text, f"{space.candidates():,} candidates, more than {MAX_CANDIDATES:,} (each "
+                                           f"one is checked)")
+    return space
 
 
 def library_scenarios(grid: Grid) -> list[Scenario]:
