@@ -21,13 +21,14 @@ import sys
 import tempfile
 import time
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 from rich.console import Console
 from rich.table import Table
 
 from ci.bench import machine, timed
-from ci.crossval import check_scenario, parse_space
+from ci.crossval import Space, check_scenario, parse_space
 from ci.properties import PROPERTIES
 from oracle.optimum import lexicographic_optimum
 from oracle.planner import solve
@@ -50,29 +51,31 @@ def per_second(scenarios: list[Scenario], run: Callable[[Scenario], object]) -> 
     return 1000 * len(ms) / float(ms.sum()), float(np.median(ms))
 
 
-def sub_space(count: int) -> str:
-    """The example space with its left-lane cells cut (from the top) to the fewest that hold ``count`` scenarios."""
-    low, high = 8, 20
-    while high > low and _size(f"left=2@{low}..{high - 1},right=1@12..30,lanes=both") >= count:
+def sub_space(example: Space, count: int) -> Space:
+    """``example`` with its left-lane cells cut (from the top) to the fewest that hold ``count`` scenarios."""
+    low, high = example.left_cells
+    while high > low and _size(replace(example, left_cells=(low, high - 1))) >= count:
         high -= 1
-    return f"left=2@{low}..{high},right=1@12..30,lanes=both"
+    return replace(example, left_cells=(low, high))
 
 
-def _size(space: str) -> int:
-    return sum(1 for _ in parse_space(space, PAPER_GRID).scenarios(PAPER_GRID, None))
+def _size(space: Space) -> int:
+    return sum(1 for _ in space.scenarios(PAPER_GRID, None))
 
 
-def sweep_rate(space: str, workers: int) -> float:
-    """Scenarios per wall second of ``overtake crossval`` (every property, three engines) over ``space``."""
+def sweep_rate(space: Space, size: int, workers: int) -> float:
+    """Scenarios per wall second of ``overtake crossval`` (every property, three engines) over ``space`` (``size``
+    scenarios)."""
     with tempfile.TemporaryDirectory(prefix="bench-crossval-") as out:
         started = time.perf_counter()
         done = subprocess.run([sys.executable, "-m", "ci.cli.main", "crossval", "--source", "exhaustive",
-                               "--space", space, "--workers", str(workers), "--out", out, "--max-reproducers", "0"],
+                               "--space", space.describe(), "--workers", str(workers), "--out", out,
+                               "--max-reproducers", "0"],
                               capture_output=True, text=True, env={**os.environ, "COLUMNS": "120"})
         wall_s = time.perf_counter() - started
     if done.returncode not in (0, 6):
         raise SystemExit(f"bench_crossval: crossval exited {done.returncode}: {done.stderr.strip()[-300:]}")
-    return _size(space) / wall_s
+    return size / wall_s
 
 
 def main() -> None:
@@ -83,7 +86,8 @@ def main() -> None:
     parser.add_argument("--sweep-count", type=int, default=400, help="scenarios per campaign (part 2)")
     args = parser.parse_args()
     console = Console(width=120)
-    space = list(parse_space(EXAMPLE_SPACE, PAPER_GRID).scenarios(PAPER_GRID, None))
+    example = parse_space(EXAMPLE_SPACE, PAPER_GRID)
+    space = list(example.scenarios(PAPER_GRID, None))
     scenarios = random.Random(args.seed).sample(space, min(args.count, len(space)))
     console.print(f"seed {args.seed}; {len(scenarios)} scenarios drawn from {EXAMPLE_SPACE} ({len(space)} "
                   f"scenarios); {runner.tool_versions()}; {machine()}")
@@ -124,15 +128,17 @@ def main() -> None:
     counts = [int(w) for w in args.workers.split(",") if w.strip()]
     if not counts:
         return
-    cut = sub_space(args.sweep_count)
-    sweep = Table(title=f"overtake crossval --source exhaustive --space {cut} (every property, three engines)")
+    cut = sub_space(example, args.sweep_count)
+    cut_size = _size(cut)
+    sweep = Table(title=f"overtake crossval --source exhaustive --space {cut.describe()} (every property, three "
+                        f"engines)")
     for col in ("workers", "scenarios", "scenarios/s", "speed-up", "example space at this rate"):
         sweep.add_column(col, justify="right")
     base, serial_ms, speed_up = 0.0, 1000 / rows["every property, three engines (one scenario's whole check)"][0], 1.0
     for workers in counts:
-        rate = sweep_rate(cut, workers)
+        rate = sweep_rate(cut, cut_size, workers)
         base, speed_up = base or rate, rate / (base or rate)
-        sweep.add_row(str(workers), str(_size(cut)), f"{rate:.1f}", f"{speed_up:.2f}x",
+        sweep.add_row(str(workers), str(cut_size), f"{rate:.1f}", f"{speed_up:.2f}x",
                       f"{len(space) / rate / 60:.1f} min")
     console.print(sweep)
     console.print(f"example space from the random sample: {len(space)} scenarios x {serial_ms:.0f} ms (mean whole "

@@ -69,11 +69,11 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with handled(_signalled):
             return _main(parser, argv, console)
-    except (KeyboardInterrupt, _Terminated, Exception):
+    except (KeyboardInterrupt, _Terminated, Exception) as stopped:
         # a signal raises where the campaign is; inside a native call (ctypes) it arrives wrapped in another
         # exception, and a cancelled check raises KeyboardInterrupt: whatever comes after a signal is the signal
         signum = received()
-        if signum is None:
+        if signum is None and not isinstance(stopped, KeyboardInterrupt):
             raise
         if signum == signal.SIGTERM:
             console.print("conform: terminated (SIGTERM; what was decided is in results.jsonl; run again to resume)",

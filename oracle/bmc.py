@@ -298,13 +298,20 @@ def _check(solver: z3.Solver, limits: Limits | None, started: float, *assumption
             return z3.unknown
         solver.set("timeout", max(1, int(left_s * 1000)))
     verdict = solver.check(*assumptions)
-    if verdict == z3.unknown and any(word in solver.reason_unknown() for word in CANCELLED):
+    if verdict == z3.unknown and _cancelled(solver.reason_unknown()):
         if limit_s is None or limit_s - (time.perf_counter() - started) > CANCEL_MARGIN_S:
             raise KeyboardInterrupt("z3: check interrupted")
     return verdict
 
 
 CANCELLED = ("cancel", "interrupt")  # what Z3 says of a cancelled check ("canceled" of a time-out too)
+
+
+def _cancelled(reason: str) -> bool:
+    """Whether Z3's words say a check, or a call, was cancelled or interrupted."""
+    return any(word in reason.lower() for word in CANCELLED)
+
+
 CANCEL_MARGIN_S = 0.05  # a check cancelled with more than this left of its limit was not stopped by the limit
 
 SOLVERS = {Strategy.SHORTEST: shortest, Strategy.OPTIMAL: optimal}
@@ -317,7 +324,7 @@ def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult
     try:
         return SOLVERS[strategy](problem, limits)
     except z3.Z3Exception as err:
-        if "cancel" in str(err).lower() or "interrupt" in str(err).lower():
+        if _cancelled(str(err)):
             raise KeyboardInterrupt("z3: interrupted") from None
         raise
 

@@ -159,14 +159,14 @@ def _compile(folder: Path, source: str, flags: list[str], serve: bool = False) -
     (folder / MODEL_FILE).write_text(source)
     spin = _run(["spin", "-a", MODEL_FILE], cwd=folder, timeout=COMPILE_TIMEOUT_S)
     if spin.returncode != 0 or not (folder / "pan.c").exists():
-        raise EngineError(f"spin -a failed on the rendered model: {_last_line(spin)}")
+        raise EngineError(f"spin -a failed on the rendered model: {_said(spin)}")
     main = "pan.c"
     if serve:
         main = SERVER_SOURCE.name
         (folder / main).write_text(_server_source())
     gcc = _run(["gcc", *flags, "-o", "pan", main], cwd=folder, timeout=COMPILE_TIMEOUT_S)
     if gcc.returncode != 0:
-        raise EngineError(f"gcc failed on pan.c: {_last_line(gcc)}")
+        raise EngineError(f"gcc failed on pan.c: {_said(gcc)}")
 
 
 def search(problem: Problem, strategy: Strategy, timeout_s: float | None = None,
@@ -263,8 +263,7 @@ def _pan(folder: Path, execute: Execute, problem: Problem, timeout_s: float | No
     if returncode == 0 and "errors: 0" in text:
         return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), explored,
                             f"no plan within {problem.horizon} actions (search completed)")
-    lines = text.strip().splitlines()
-    raise EngineError(f"pan failed (exit {returncode}): {lines[-1] if lines else 'no output'}")
+    raise EngineError(f"pan failed (exit {returncode}): {_last_line(text, returncode)}")
 
 
 # -- servers: one per verifier, process and thread ---------------------------------------------------
@@ -395,6 +394,12 @@ def _run(args: list[str], cwd: Path | None = None, env: dict[str, str] | None = 
         raise  # a verifier that vanished from the cache: the caller rebuilds it
 
 
-def _last_line(done: subprocess.CompletedProcess[str]) -> str:
-    lines = (done.stderr.strip() or done.stdout.strip()).splitlines()
-    return lines[-1] if lines else f"exit code {done.returncode}"
+def _last_line(text: str, returncode: int) -> str:
+    """The last line a tool printed, or its exit code when it printed nothing."""
+    lines = text.strip().splitlines()
+    return lines[-1] if lines else f"no output, exit code {returncode}"
+
+
+def _said(done: subprocess.CompletedProcess[str]) -> str:
+    """What a tool said last: its error output's last line, else its output's."""
+    return _last_line(done.stderr.strip() or done.stdout, done.returncode)

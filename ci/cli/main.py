@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import signal
 import sys
+from typing import NoReturn
 
 import click
 
@@ -43,6 +44,15 @@ def _interrupted(signum: int, _frame: object) -> None:
     raise Interrupted(signum)
 
 
+def _stopped(signum: int | None) -> NoReturn:
+    """End on a signal (None: Ctrl-C that no handler saw): one line, and 143 for SIGTERM, else 130."""
+    if signum == signal.SIGTERM:
+        click.echo("overtake: terminated (SIGTERM); what was finished is kept: run again to resume", err=True)
+        sys.exit(ExitCode.TERMINATED)
+    click.echo("overtake: interrupted; what was finished is kept: run again to resume", err=True)
+    sys.exit(ExitCode.INTERRUPTED)
+
+
 def main() -> None:
     """Entry point: run the CLI, turning every suite error into one line and its exit code."""
     try:
@@ -58,20 +68,13 @@ def main() -> None:
         click.echo(f"overtake: error: {error.format_message()}", err=True)
         sys.exit(error.exit_code)
     except (Interrupted, click.exceptions.Abort, KeyboardInterrupt) as signalled:  # the latter: a cancelled check
-        signum = signalled.signum if isinstance(signalled, Interrupted) else received()
-        if signum == signal.SIGTERM:
-            click.echo("overtake: terminated (SIGTERM); what was finished is kept: run again to resume", err=True)
-            sys.exit(ExitCode.TERMINATED)
-        click.echo("overtake: interrupted; what was finished is kept: run again to resume", err=True)
-        sys.exit(ExitCode.INTERRUPTED)
+        _stopped(signalled.signum if isinstance(signalled, Interrupted) else received())
     except SuiteError as error:
         click.echo(f"overtake: error: {error}", err=True)
         sys.exit(error.exit_code)
     except Exception as error:
         if received() is not None:  # a signal raised inside a native call arrives wrapped (ctypes.ArgumentError)
-            click.echo(f"overtake: {'terminated (SIGTERM)' if received() == signal.SIGTERM else 'interrupted'}; "
-                       f"what was finished is kept: run again to resume", err=True)
-            sys.exit(ExitCode.TERMINATED if received() == signal.SIGTERM else ExitCode.INTERRUPTED)
+            _stopped(received())
         if os.environ.get("OVERTAKE_DEBUG"):
             raise
         click.echo(f"overtake: internal error: {type(error).__name__}: {error} (set OVERTAKE_DEBUG=1 for details)",

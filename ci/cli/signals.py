@@ -57,14 +57,13 @@ def handled(handler: Callable[[int, Any], None]) -> Iterator[None]:
     previous_hook = sys.unraisablehook
 
     def on_dropped(dropped: Any) -> None:
-        if _RECEIVED and not any(dropped.exc_value is raised for raised in _RAISED):
-            return  # debris of the work the signal broke off (a Z3 term half made when it came): the command is ending
         if any(dropped.exc_value is raised for raised in _RAISED):
             # raised inside a __del__ and dropped there: the signal again, from another thread, so that the handler
             # runs at the main thread's next line, outside (run from here, it would raise inside this hook)
             threading.Timer(0.01, os.kill, (os.getpid(), _RECEIVED[-1])).start()
-            return
-        previous_hook(dropped)
+        elif not _RECEIVED:
+            previous_hook(dropped)
+        # else: debris of the work the signal broke off (a Z3 term half made when it came): the command is ending
 
     sys.unraisablehook = on_dropped
     previous = {sig: signal.signal(sig, on_signal) for sig in SIGNALS}
