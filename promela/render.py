@@ -62,7 +62,7 @@ def standard_shape(model: ModelKind, goal: GoalKind, grid: Grid = PAPER_GRID) ->
 
 
 #: Array sizes a verifier is built for, smallest first: pan hashes and compresses the whole state vector on every
-#: state, and arrays sized for a full road (51 vehicles a lane on the paper's grid) make it ten times longer than
+#: state, and arrays sized for a full road (51 vehicles a lane on the paper's grid) make it eight times longer than
 #: the few vehicles of a typical scenario need.
 CAPACITIES = (2, 6)
 
