@@ -33,7 +33,7 @@ from spec.constants import DEFAULT_HORIZON
 from spec.engines import Engine, check_strategy, get_engine, parse_strategy
 from spec.errors import EngineError, ExitCode, OptionError, SuiteError
 from spec.files import scenario_to_dict
-from spec.grid import Grid, grid_for
+from spec.grid import PAPER_GRID, Grid, grid_for
 
 COUNT = Whole(0, 10_000_000)  # scenarios: ten million is weeks of Spin runs, more is a typo
 
@@ -64,7 +64,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--horizon", default=str(DEFAULT_HORIZON))
     parser.add_argument("--timeout", default=None, help="seconds per scenario and engine")
     parser.add_argument("--out", default="out/conform")
-    parser.add_argument("--cell-m", default=None, help="cell length in metres (default: the paper's 21)")
+    parser.add_argument("--cell-m", default=None,
+                        help=f"cell length in metres (default: the paper's {float(PAPER_GRID.cell_m):g})")
     console = Console(stderr=True)
     try:
         with handled(_signalled):
