@@ -45,8 +45,9 @@ class _Parser(argparse.ArgumentParser):
         self.exit(ExitCode.BAD_INPUT, f"conform: error: {message} (see --help)\n")
 
 
-class _Terminated(Exception):
-    """SIGTERM, raised where the campaign is, so that it ends like Ctrl-C: one line, what was decided kept."""
+class _Terminated(BaseException):
+    """SIGTERM, raised where the campaign is, so that it ends like Ctrl-C: one line, what was decided kept (a
+    BaseException, as KeyboardInterrupt is: no ``except Exception`` on the way may take it for a finding)."""
 
 
 def _signalled(signum: int, _frame: object) -> None:

@@ -8,9 +8,11 @@ campaign went on. Within ``handled``, Z3 leaves SIGINT alone, and a thread that 
 wakeup descriptor cancels a running check (``Z3_interrupt``): the main thread returns to Python and runs the
 handler at once.
 
-Python drops an exception raised inside a ``__del__`` (Z3 frees terms in one on almost every line), so a handler
-that raised there would be lost and the command would run on: ``handled`` catches that drop
-(``sys.unraisablehook``) and sends the signal again from another thread, so the handler raises once more, outside.
+Python drops an exception raised inside a ``__del__`` (Z3 frees terms in one on almost every line, through ctypes,
+which wraps the handler's exception in an ``ArgumentError`` of its own), so a handler that raised there would be
+lost and the command would run on: while a signal has not yet ended the block, ``handled`` takes any dropped
+exception (``sys.unraisablehook``) as that loss and sends the signal again from another thread, so the handler
+raises once more, outside.
 ``received`` says which signal came, for code that sees only the KeyboardInterrupt of a cancelled check or the
 ``ctypes.ArgumentError`` that wraps a handler's exception raised inside a native call.
 """
@@ -28,7 +30,7 @@ from typing import Any
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 _RECEIVED: list[int] = []  # the signals heard within ``handled``
-_RAISED: list[BaseException] = []  # what the handler raised for them
+_PENDING = threading.Event()  # a signal came and has not yet ended the ``handled`` block
 
 
 def received() -> int | None:
@@ -38,29 +40,28 @@ def received() -> int | None:
 
 @contextlib.contextmanager
 def handled(handler: Callable[[int, Any], None]) -> Iterator[None]:
-    """Within the block, ``handler`` handles SIGINT and SIGTERM in the main thread, promptly; after it, as before."""
+    """Within the block, ``handler`` handles SIGINT and SIGTERM in the main thread, promptly; after it, as before
+    (after a signal: ignored, since the command is ending on it)."""
     if threading.current_thread() is not threading.main_thread():  # signals reach the main thread only
         yield
         return
     z3_ctrl_c = _z3_ctrl_c("false")
     _RECEIVED.clear()
-    _RAISED.clear()
+    _PENDING.clear()
 
     def on_signal(signum: int, frame: Any) -> None:
         _RECEIVED.append(signum)
-        try:
-            handler(signum, frame)
-        except BaseException as raised:
-            _RAISED.append(raised)
-            raise
+        _PENDING.set()
+        handler(signum, frame)
 
     previous_hook = sys.unraisablehook
 
     def on_dropped(dropped: Any) -> None:
-        if any(dropped.exc_value is raised for raised in _RAISED):
-            # raised inside a __del__ and dropped there: the signal again, from another thread, so that the handler
-            # runs at the main thread's next line, outside (run from here, it would raise inside this hook)
-            threading.Timer(0.01, os.kill, (os.getpid(), _RECEIVED[-1])).start()
+        if _PENDING.is_set():
+            # the handler's exception (or ctypes' wrapping of it) raised inside a __del__ and dropped there: the
+            # signal again, from another thread, so that the handler runs at the main thread's next line, outside
+            # (run from here, it would raise inside this hook)
+            threading.Timer(0.01, _resend, (_RECEIVED[-1],)).start()
         elif not _RECEIVED:
             previous_hook(dropped)
         # else: debris of the work the signal broke off (a Z3 term half made when it came): the command is ending
@@ -75,9 +76,12 @@ def handled(handler: Callable[[int, Any], None]) -> Iterator[None]:
     try:
         yield
     finally:
+        _PENDING.clear()  # the block is over: what ends it is the signal's, no more resending
         signal.set_wakeup_fd(previous_fd)
         for sig, old in previous.items():
-            if old is not None:
+            if _RECEIVED:  # the command is ending on a signal: a late re-sent one, or a second, changes nothing
+                signal.signal(sig, signal.SIG_IGN)
+            elif old is not None:
                 signal.signal(sig, old)
         wakeup.close()  # the watcher hears the end of the stream and stops
         watcher.join(timeout=1)
@@ -85,6 +89,12 @@ def handled(handler: Callable[[int, Any], None]) -> Iterator[None]:
         if not _RECEIVED:  # after a signal the hook stays, for the debris the interpreter's exit collects
             sys.unraisablehook = previous_hook
         _z3_ctrl_c(z3_ctrl_c)
+
+
+def _resend(signum: int) -> None:
+    """The signal again, unless the block it is meant to end has ended (after it the signal is ignored)."""
+    if _PENDING.is_set():
+        os.kill(os.getpid(), signum)
 
 
 def _cancel_native_work(heard: socket.socket) -> None:
