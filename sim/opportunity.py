@@ -29,12 +29,13 @@ missed / checked x qualifying / km, per reason.
 
 from __future__ import annotations
 
+import copy
 from collections import Counter
 from dataclasses import asdict, dataclass, field
 from enum import Enum
 from typing import Any
 
-from sim.executor import Executor, plan_profiles
+from sim.executor import Executor, SpeedProfile, plan_profiles
 from sim.safety import SafetyMonitor
 from sim.scene import Scene
 from sim.traffic import TrafficModel
@@ -125,9 +126,13 @@ class WorldSave:
         self.car.wheel_target_mps = self.wheel_target_mps
         self.traffic.restore(self.traffic_state)
 
+    def discard(self) -> None:
+        """Free the saved physics state (the world stays as it is)."""
+        self.scene.client.removeState(self.state_id)
+
     def close(self) -> None:
         self.restore()
-        self.scene.client.removeState(self.state_id)
+        self.discard()
 
 
 def target_ahead(av_x_m: float, left: list[KinematicCar]) -> KinematicCar | None:
@@ -146,54 +151,101 @@ class Replay:
         """The outcome of the shortest overtake that succeeds (and its accelerates), or of the longest tried.
 
         Overtakes share their start (a lane change, then accelerating), so one that fails before its return
-        ends the search: every longer one fails there too."""
-        saved = WorldSave(self.scene, self.car, self.traffic)
+        ends the search: every longer one fails there too. The shared start is driven once: the overtake with
+        ``m`` accelerates goes on from a checkpoint after the lane change and ``m - 1`` of them (the speed
+        reference up to there does not depend on ``m``: the ramp back to the common speed starts within the
+        last accelerate), and the checkpoint for ``m + 1`` is that one driven on through one more accelerate."""
+        start = WorldSave(self.scene, self.car, self.traffic)
+        speed_mps = self.car.pose().speed_mps
+        attempt = _Attempt(self, target)
+        checkpoint: _Checkpoint | None = None
         outcome = Outcome.NOT_PASSED
         try:
+            if not attempt.run(Action.RIGHT_LANE_CHANGE, plan_profiles(overtake(1), speed_mps, self.grid)[0]):
+                return attempt.failed[0], 0
             for accelerates in range(1, MAX_ACCELERATES + 1):
-                outcome, in_return = self._one(overtake(accelerates), target)
-                saved.restore()
+                checkpoint = attempt.save()  # the lane change and accelerates - 1 accelerates behind
+                profiles = plan_profiles(overtake(accelerates), speed_mps, self.grid)
+                outcome, in_return = attempt.finish(profiles[accelerates:])
                 if outcome is Outcome.MISSED:
                     return outcome, accelerates
-                if outcome is not Outcome.NOT_PASSED and not in_return:
+                if (outcome is not Outcome.NOT_PASSED and not in_return) or accelerates == MAX_ACCELERATES:
                     break
+                attempt.restore(checkpoint)
+                checkpoint.world.discard()
+                checkpoint = None
+                longer = plan_profiles(overtake(accelerates + 1), speed_mps, self.grid)
+                if not attempt.run(Action.ACCELERATE, longer[accelerates]):
+                    return attempt.failed[0], 0  # the longer overtakes fail before their return
         finally:
-            saved.close()
+            if checkpoint is not None:
+                checkpoint.world.discard()
+            start.close()
         return outcome, 0
 
-    def _one(self, actions: tuple[Action, ...], target: KinematicCar) -> tuple[Outcome, bool]:
-        """Replay one overtake; its outcome, and whether a failure came only in its return (the last lane change
-        or the hold after it)."""
-        monitor = SafetyMonitor(SAFETY)
-        executor = Executor(self.scene, self.car, Lane.LEFT, self.grid)
-        respawns = target.respawns
-        first = True  # a near miss open on the first step was under way before the overtake began
-        failed: list[Outcome] = []
 
-        def tick(dt_s: float) -> bool:
-            nonlocal first
-            pose = self.car.pose()
-            self.traffic.advance(dt_s, pose)
-            if first_contact(self.scene, self.car.body, self.traffic.cars()) is not None:
-                failed.append(Outcome.CONTACT)
-                return False
-            before = monitor.report.near_misses
-            monitor.observe(pose, Executor.lane_of(pose.y_m), self.traffic.left, self.traffic.oncoming,
-                            0.0, 0.0, "", lambda body: None)
-            if not first and monitor.report.near_misses > before:
-                failed.append(Outcome.NEAR_MISS)
-                return False
-            first = False
-            self.traffic.respawn_behind(pose.x_m)
-            return True
+@dataclass(slots=True)
+class _Checkpoint:
+    """An overtake part-way: the world, and where its controller and safety monitor stood."""
 
-        profiles = plan_profiles(actions, self.car.pose().speed_mps, self.grid)
-        for k, (action, profile) in enumerate(zip(actions, profiles)):
-            if not executor.run(action, tick, profile):
-                return failed[0], k == len(actions) - 1
-        if not executor.hold(LOOP.wait_s, self.grid.speed, tick):
-            return failed[0], True
+    world: WorldSave
+    x_ref_m: float
+    lane: Lane
+    monitor: SafetyMonitor
+    first: bool
+
+
+class _Attempt:
+    """One overtake being driven in a replay: its controller, and a safety monitor that ends it at the first
+    contact or new near miss."""
+
+    def __init__(self, replay: Replay, target: KinematicCar) -> None:
+        self.scene, self.car, self.traffic = replay.scene, replay.car, replay.traffic
+        self.target, self.respawns = target, target.respawns
+        self.executor = Executor(replay.scene, replay.car, Lane.LEFT, replay.grid)
+        self.monitor = SafetyMonitor(SAFETY)
+        self.first = True  # a near miss open on the first step was under way before the overtake began
+        self.failed: list[Outcome] = []
+
+    def tick(self, dt_s: float) -> bool:
         pose = self.car.pose()
-        passed = target.respawns != respawns or target.x_m < pose.x_m - CAR.length_m - SAFETY.near_gap_m
+        self.traffic.advance(dt_s, pose)
+        if first_contact(self.scene, self.car.body, self.traffic.cars()) is not None:
+            self.failed.append(Outcome.CONTACT)
+            return False
+        before = self.monitor.report.near_misses
+        self.monitor.observe(pose, Executor.lane_of(pose.y_m), self.traffic.left, self.traffic.oncoming,
+                             0.0, 0.0, "", lambda body: None)
+        if not self.first and self.monitor.report.near_misses > before:
+            self.failed.append(Outcome.NEAR_MISS)
+            return False
+        self.first = False
+        self.traffic.respawn_behind(pose.x_m)
+        return True
+
+    def run(self, action: Action, profile: SpeedProfile) -> bool:
+        return self.executor.run(action, self.tick, profile)
+
+    def finish(self, profiles: list[SpeedProfile]) -> tuple[Outcome, bool]:
+        """Drive the last accelerate and the return (``profiles``: theirs), then keep the lane; the outcome, and
+        whether a failure came only in the return (the lane change back or the hold after it)."""
+        if not self.run(Action.ACCELERATE, profiles[0]):
+            return self.failed[0], False
+        back_in_lane = self.run(Action.LEFT_LANE_CHANGE, profiles[1])
+        if not back_in_lane or not self.executor.hold(LOOP.wait_s, self.executor.grid.speed, self.tick):
+            return self.failed[0], True
+        pose = self.car.pose()
+        behind_m = pose.x_m - CAR.length_m - SAFETY.near_gap_m
+        passed = self.target.respawns != self.respawns or self.target.x_m < behind_m
         back = Executor.lane_of(pose.y_m) is Lane.LEFT
         return (Outcome.MISSED, False) if passed and back else (Outcome.NOT_PASSED, True)
+
+    def save(self) -> _Checkpoint:
+        return _Checkpoint(WorldSave(self.scene, self.car, self.traffic), self.executor.x_ref_m, self.executor.lane,
+                           copy.deepcopy(self.monitor), self.first)
+
+    def restore(self, checkpoint: _Checkpoint) -> None:
+        checkpoint.world.restore()
+        self.executor.x_ref_m, self.executor.lane = checkpoint.x_ref_m, checkpoint.lane
+        self.monitor, self.first = copy.deepcopy(checkpoint.monitor), checkpoint.first
+        self.failed.clear()

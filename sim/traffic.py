@@ -183,21 +183,27 @@ class SpreadTraffic(PaperTraffic):
         self.t_s += dt_s
         av_in_left = av.y_m >= 0
         for lane, cars, sign in ((Lane.LEFT, self.left, 1.0), (Lane.RIGHT, self.oncoming, -1.0)):
-            ahead_first = sorted(cars, key=lambda c: -sign * c.x_m)  # the front-most (in its direction) first
-            leaders: list[tuple[float, float, KinematicCar | None]] = []  # (x, speed, car; None: the AV)
-            if lane is Lane.LEFT and av_in_left:
-                leaders.append((av.x_m, av.speed_mps, None))
-            for car in ahead_first:
+            av_leader = lane is Lane.LEFT and av_in_left
+            done: list[KinematicCar] = []  # the cars already moved this step, the front-most first
+            ordered = True  # ``done`` is ordered by position, the front-most first
+            for car in sorted(cars, key=lambda c: -sign * c.x_m):  # the front-most (in its direction) first
                 driver = self.drivers[car.body]
-                ahead = [item for item in leaders if sign * (item[0] - car.x_m) > 0]
-                leader = min(ahead, key=lambda item: sign * (item[0] - car.x_m)) if ahead else None
-                gap_m = math.inf if leader is None else sign * (leader[0] - car.x_m) - CAR.length_m
-                if gap_m < 0 and leader is not None and leader[2] is not None and not driver.wrecked:
-                    self._wreck(car, leader[2])  # touching the AV is the AV's collision: PyBullet reports it
-                self._drive(car, driver, lane, gap_m, 0.0 if leader is None else leader[1], dt_s)
+                leader = _nearest_ahead(done, ordered, car.x_m, sign)
+                if av_leader and sign * (av.x_m - car.x_m) > 0 and (
+                        leader is None or av.x_m - car.x_m <= leader.x_m - car.x_m):
+                    gap_m, leader_mps = av.x_m - car.x_m - CAR.length_m, av.speed_mps  # the AV (first on ties)
+                elif leader is None:
+                    gap_m, leader_mps = math.inf, 0.0
+                else:
+                    gap_m = sign * (leader.x_m - car.x_m) - CAR.length_m
+                    leader_mps = self.drivers[leader.body].speed_mps
+                    if gap_m < 0 and not driver.wrecked:
+                        self._wreck(car, leader)  # touching the AV is the AV's collision: PyBullet reports it
+                self._drive(car, driver, lane, gap_m, leader_mps, dt_s)
                 car.velocity_mps = sign * driver.speed_mps
                 car.advance(dt_s)
-                leaders.append((car.x_m, driver.speed_mps, car))
+                ordered = ordered and (not done or sign * (done[-1].x_m - car.x_m) >= 0)
+                done.append(car)
 
     def _drive(self, car: KinematicCar, driver: Driver, lane: Lane, gap_m: float, leader_mps: float,
                dt_s: float) -> None:
@@ -234,6 +240,25 @@ class SpreadTraffic(PaperTraffic):
         self.collisions += 1
         self.drivers[car.body].wrecked = True
         self.drivers[leader.body].wrecked = True
+
+
+def _nearest_ahead(done: list[KinematicCar], ordered: bool, x_m: float, sign: float) -> KinematicCar | None:
+    """The nearest of ``done`` strictly ahead of ``x_m`` in the lane's direction ``sign`` (the first of equals).
+
+    ``done`` holds the cars moved so far this step, the front-most first, so it is usually ordered by position
+    (``ordered``); then the cars ahead come first and the nearest is the last of them, found from the end. Only
+    when a step has reordered the cars (one ran through another) are all of them compared."""
+    if not ordered:
+        ahead = [c for c in done if sign * (c.x_m - x_m) > 0]
+        return min(ahead, key=lambda c: sign * (c.x_m - x_m)) if ahead else None
+    k = len(done) - 1
+    while k >= 0 and not sign * (done[k].x_m - x_m) > 0:
+        k -= 1
+    if k < 0:
+        return None
+    while k > 0 and sign * (done[k - 1].x_m - x_m) == sign * (done[k].x_m - x_m):
+        k -= 1  # equally near: the first one moved, as a scan in order finds it
+    return done[k]
 
 
 class FollowingTraffic(SpreadTraffic):

@@ -8,8 +8,8 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from sim.executor import Executor
-from sim.opportunity import Outcome, Refusal, Replay, WorldSave, overtake
+from sim.executor import Executor, plan_profiles
+from sim.opportunity import MAX_ACCELERATES, Outcome, Refusal, Replay, WorldSave, _Attempt, overtake
 from sim.parts import DriveConfig
 from sim.scene import Scene
 from sim.simulator import Simulator, run_drive
@@ -66,6 +66,42 @@ def test_an_overtake_into_a_near_oncoming_vehicle_is_no_opportunity(scene: Scene
     car, traffic = _road(scene, 25.0, 120.0)
     outcome, accelerates = Replay(scene, car, traffic, PAPER_GRID).first_success(traffic.left[0])
     assert outcome in (Outcome.CONTACT, Outcome.NEAR_MISS) and accelerates == 0
+
+
+def _from_the_start(scene: Scene, car: WheeledCar, traffic: PaperTraffic, target: object) -> tuple[Outcome, int]:
+    """``first_success`` the plain way: every overtake driven from the saved moment, none from a checkpoint."""
+    replay = Replay(scene, car, traffic, PAPER_GRID)
+    start, speed_mps = WorldSave(scene, car, traffic), car.pose().speed_mps
+    outcome = Outcome.NOT_PASSED
+    try:
+        for accelerates in range(1, MAX_ACCELERATES + 1):
+            attempt = _Attempt(replay, target)  # type: ignore[arg-type]
+            profiles = plan_profiles(overtake(accelerates), speed_mps, PAPER_GRID)
+            if not all(attempt.run(action, profile) for action, profile in zip(overtake(accelerates)[:accelerates],
+                                                                              profiles)):
+                outcome, in_return = attempt.failed[0], False
+            else:
+                outcome, in_return = attempt.finish(profiles[accelerates:])
+            start.restore()
+            if outcome is Outcome.MISSED:
+                return outcome, accelerates
+            if outcome is not Outcome.NOT_PASSED and not in_return:
+                break
+    finally:
+        start.close()
+    return outcome, 0
+
+
+@pytest.mark.parametrize("oncoming_m", [100.0, 180.0, 260.0, 340.0, 420.0, FAR_M])
+@pytest.mark.parametrize("ahead_m", [15.0, 25.0, 60.0, 150.0])
+def test_replaying_from_checkpoints_ends_as_replaying_every_overtake_from_the_start(
+        scene: Scene, ahead_m: float, oncoming_m: float) -> None:
+    car, traffic = _road(scene, ahead_m, oncoming_m)
+    target = traffic.left[0]
+    expected = _from_the_start(scene, car, traffic, target)
+    before = (car.pose(), [c.x_m for c in traffic.cars()])
+    assert Replay(scene, car, traffic, PAPER_GRID).first_success(target) == expected
+    assert (car.pose(), [c.x_m for c in traffic.cars()]) == before
 
 
 def test_a_traffic_model_saved_and_restored_moves_and_draws_the_same_again(scene: Scene) -> None:

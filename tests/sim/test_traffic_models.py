@@ -4,16 +4,19 @@ from __future__ import annotations
 
 import itertools
 import math
+import types
 from collections.abc import Iterator
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from sim.idm import idm_accel_mps2
 from sim.parts import SENSOR_MODELS, TRAFFIC_MODELS
 from sim.scene import Scene
 from sim.sensors import NoisySensor, RaySensor, in_range
-from sim.traffic import FollowingTraffic, PaperTraffic, SpreadTraffic, draw_speed_mps
+from sim.traffic import FollowingTraffic, PaperTraffic, SpreadTraffic, _nearest_ahead, draw_speed_mps
 from sim.vehicle import Pose
 from spec.lanes import Lane
 from spec.physical import CAR, IDM, SPEEDS, EventSpec, NoiseSpec
@@ -154,3 +157,16 @@ def test_two_vehicles_that_touch_are_one_traffic_collision_and_both_stop(scene: 
     assert traffic.drivers[front.body].wrecked and traffic.drivers[behind.body].wrecked
     traffic.advance(1 / 30, FAR_BEHIND)
     assert traffic.collisions == 1 and traffic.drivers[behind.body].speed_mps == 0.0
+
+
+@given(st.lists(st.sampled_from([-30.0, -12.5, 0.0, 0.0, 4.0, 17.25, 40.0]) | st.floats(-100, 100), max_size=8),
+       st.floats(-100, 100), st.sampled_from([1.0, -1.0]), st.booleans())
+def test_the_leader_found_from_the_end_is_the_nearest_vehicle_ahead_and_the_first_of_equals(
+        xs: list[float], x_m: float, sign: float, front_first: bool) -> None:
+    cars = [types.SimpleNamespace(x_m=x) for x in xs]
+    if front_first:  # as a step moves them: then the search from the end is taken
+        cars.sort(key=lambda c: -sign * c.x_m)
+    ordered = all(sign * (a.x_m - b.x_m) >= 0 for a, b in itertools.pairwise(cars))
+    ahead = [c for c in cars if sign * (c.x_m - x_m) > 0]
+    plain = min(ahead, key=lambda c: sign * (c.x_m - x_m)) if ahead else None
+    assert _nearest_ahead(cars, ordered, x_m, sign) is plain  # type: ignore[arg-type]
