@@ -5,9 +5,10 @@ compared lexicographically (every term only grows along a plan, so the first goa
 from the queue is optimal). A state taken from the queue after the same situation (lanes,
 cells, lane changes) was taken with no more steps is dominated and skipped: it costs no less
 (the queue's order), and the earlier one has at least as much horizon left, while what can
-follow, and the goal, depend on the situation alone, so each situation's successors (the interpreter's
-steps) and goal are worked out once, however many step counts it is met at. It shares nothing with the Z3 encoding but the spec: an engine
-whose objective orders or counts the terms differently returns a plan this search beats.
+follow, and the goal, depend on the situation alone; so each situation's successors (the
+interpreter's steps) and goal are worked out once, however many step counts it is met at. It
+shares nothing with the Z3 encoding but the spec: an engine whose objective orders or counts
+the terms differently returns a plan this search beats.
 """
 
 from __future__ import annotations
