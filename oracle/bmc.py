@@ -156,12 +156,16 @@ class Encoding:
 
     def extend(self) -> z3.BoolRef:
         """Add one decision step; return its transition constraint (the step template on this step's variables)."""
+        a, action_var, b = self.advance()
+        here, action, after, template = self._step_template
+        return z3.substitute(template, (action, action_var), *_pairs(here, a), *_pairs(after, b))
+
+    def advance(self) -> tuple[Step, z3.ArithRef, Step]:
+        """Add the variables of one more decision step: the state it starts from, its action, the state it ends in."""
         a = self.steps[-1]
         action_var = z3.Int(f"a_{len(self.actions) + 1}")
         self.actions.append(action_var)
-        here, action, after, template = self._step_template
-        b = self.new_step()
-        return z3.substitute(template, (action, action_var), *_pairs(here, a), *_pairs(after, b))
+        return a, action_var, self.new_step()
 
     def goal_at(self, k: int) -> z3.BoolRef:
         """The goal on the state after k actions (the goal template on its variables)."""
@@ -215,33 +219,35 @@ def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
                         f"proved: every bound up to {problem.horizon} is unsatisfiable")
 
 
-def bounded(enc: Encoding) -> tuple[z3.ArithRef, list[z3.BoolRef]]:
-    """Plans of any length up to the horizon: a symbolic length N; steps after N repeat the last state."""
+def bounded(enc: Encoding) -> tuple[z3.ArithRef, list[z3.BoolRef], dict[str, z3.ArithRef]]:
+    """Plans of any length up to the horizon: a symbolic length N; steps after N repeat the last state. Also the
+    plan's cost, term by term (COST_TERMS).
+
+    Everything one step adds (its transition or, from N on, a copy of its state; the goal at N and not before;
+    what it adds to each cost term) is one template over placeholder states, the step's number and N, substituted
+    once per step."""
     horizon = enc.problem.horizon
     length = z3.Int("length")
-    constraints = [enc.initial, length >= 0, length <= horizon]
-    for k in range(horizon + 1):
-        here, goal = enc.steps[k], enc.goal_at(k)
-        constraints.append(z3.Implies(length == k, goal))
-        constraints.append(z3.Implies(k < length, z3.Not(goal)))
-        if k < horizon:
-            move = enc.extend()
-            nxt = enc.steps[-1]
-            frozen = z3.And(nxt.right == here.right, nxt.lc == here.lc, nxt.l == here.l, nxt.o == here.o)
-            constraints.append(z3.If(k < length, move, frozen))
-    return length, constraints
-
-
-def cost_terms(enc: Encoding, length: z3.ArithRef) -> dict[str, z3.ArithRef]:
-    """The cost of a plan in the bounded encoding, term by term (COST_TERMS)."""
+    here, after, action, k_var = _placeholder("a"), _placeholder("b"), z3.Int("action"), z3.Int("k")
+    goal = enc.goal(here)
+    reached = z3.And(z3.Implies(length == k_var, goal), z3.Implies(k_var < length, z3.Not(goal)))
+    frozen = z3.And(after.right == here.right, after.lc == here.lc, after.l == here.l, after.o == here.o)
+    move = z3.And(reached, z3.If(k_var < length, enc.transition(here, action, after), frozen))
+    live = k_var + 1 <= length  # the step's action is part of the plan
     brake = ACTION_ORDER.index(Action.BRAKE)
-    live = list(range(1, len(enc.steps)))
-    return {
-        "lane_changes": enc.steps[-1].lc,
-        "right_lane_steps": z3.Sum([z3.If(z3.And(k <= length, enc.steps[k].right), 1, 0) for k in live] or [0]),
-        "brakes": z3.Sum([z3.If(z3.And(k <= length, enc.actions[k - 1] == brake), 1, 0) for k in live] or [0]),
-        "length": length,
-    }
+    right_term, brake_term = z3.If(z3.And(live, after.right), 1, 0), z3.If(z3.And(live, action == brake), 1, 0)
+    constraints = [enc.initial, length >= 0, length <= horizon]
+    rights, brakes = [], []
+    for k in range(horizon):
+        a, action_var, b = enc.advance()
+        pairs = [(k_var, z3.IntVal(k)), (action, action_var), *_pairs(here, a), *_pairs(after, b)]
+        constraints.append(z3.substitute(move, *pairs))
+        rights.append(z3.substitute(right_term, *pairs))
+        brakes.append(z3.substitute(brake_term, *pairs))
+    constraints.append(z3.substitute(reached, (k_var, z3.IntVal(horizon)), *_pairs(here, enc.steps[horizon])))
+    terms = {"lane_changes": enc.steps[-1].lc, "right_lane_steps": z3.Sum(rights) if rights else z3.IntVal(0),
+             "brakes": z3.Sum(brakes) if brakes else z3.IntVal(0), "length": length}
+    return length, constraints, terms
 
 
 def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
@@ -253,14 +259,14 @@ def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
     The last model is a least-cost plan. (``z3.Optimize`` answers the same, about twice as slowly.)"""
     started = time.perf_counter()
     enc = Encoding(problem)
-    length, constraints = bounded(enc)
+    length, constraints, terms = bounded(enc)
     solver = z3.SolverFor("QF_LIA")
     solver.add(*constraints)
     verdict = _check(solver, limits, started)
     if verdict == z3.unsat:
         return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 1,
                             f"proved: no plan of at most {problem.horizon} actions")
-    checks, terms = 1, cost_terms(enc, length)
+    checks = 1
     if verdict == z3.unknown:
         return _gave_up(solver, checks)
     model = solver.model()
