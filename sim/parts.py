@@ -29,7 +29,7 @@ from spec.engines import Engine, check_strategy, get_engine, parse_strategy
 from spec.errors import OptionError, check_number
 from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
-from spec.physical import EVENTS, LOOP, NOISE, EventSpec, NoiseSpec
+from spec.physical import EVENTS, LOOP, MAX_STOP_RATE_PER_H, NOISE, EventSpec, NoiseSpec
 from spec.scenario import Scenario
 
 TrafficFactory = Callable[[Scene, np.random.Generator, float], TrafficModel]
@@ -106,7 +106,8 @@ class DriveConfig:
         check_name("--traffic", self.traffic, TRAFFIC_MODELS)
         check_name("--sensor", self.sensor, SENSOR_MODELS)
         grid_for(self.cell_m)
-        for option, value, high in (("--km", self.km, math.inf), ("--stop-rate-per-h", self.stop_rate_per_h, math.inf),
+        for option, value, high in (("--km", self.km, math.inf), ("--stop-rate-per-h", self.stop_rate_per_h,
+                                                                      MAX_STOP_RATE_PER_H),
                                     ("--min-spawn-gap-m", self.min_spawn_gap_m, math.inf),
                                     ("--range-sd-m", self.range_sd_m, math.inf), ("--miss-rate", self.miss_rate, 1.0)):
             check_number(option, value, high)

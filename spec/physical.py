@@ -144,3 +144,6 @@ class LoopSpec:
 
 ROAD, CAR, SENSORS, TRAFFIC, LOOP = RoadSpec(), CarSpec(), SensorSpec(), TrafficSpec(), LoopSpec()
 SPEEDS, IDM, EVENTS, NOISE, SAFETY = SpeedSpec(), IdmSpec(), EventSpec(), NoiseSpec(), SafetySpec()
+
+#: The highest stop rate that means anything: a stop starts at most once per vehicle per control step (a chance of 1).
+MAX_STOP_RATE_PER_H = 3600 / (LOOP.physics_dt_s * LOOP.control_every_steps)

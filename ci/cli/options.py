@@ -23,6 +23,7 @@ import click
 
 from spec.constants import MAX_HORIZON
 from spec.errors import OptionError, check_number
+from spec.physical import MAX_STOP_RATE_PER_H
 
 
 class Whole(click.IntRange):
@@ -126,7 +127,7 @@ SECONDS = Number(0.0, MAX_SECONDS, positive=True)
 KM = Number(0.01, MAX_KM)
 TOLERANCE = Number(0.0, 100.0, positive=True)
 CELL_M = Number(0.0, 1000.0, positive=True)
-PER_HOUR = Number(0.0)  # events per vehicle-hour: any finite rate (a huge one stops every vehicle at once)
+PER_HOUR = Number(0.0, MAX_STOP_RATE_PER_H)  # events per vehicle-hour: at most one start per control step
 METRES = Number(0.0, 1000.0)  # a gap or a noise in metres: the sensed window is a kilometre
 FRACTION = Number(0.0, 1.0)  # a probability
 
