@@ -228,11 +228,11 @@ def bounded(enc: Encoding) -> tuple[z3.ArithRef, list[z3.BoolRef], dict[str, z3.
     once per step."""
     horizon = enc.problem.horizon
     length = z3.Int("length")
-    here, after, action, k_var = _placeholder("a"), _placeholder("b"), z3.Int("action"), z3.Int("k")
-    goal = enc.goal(here)
+    here, action, after, transition = enc._step_template  # the encoding's own templates, on the same placeholders
+    goal, k_var = enc._goal_template[1], z3.Int("k")
     reached = z3.And(z3.Implies(length == k_var, goal), z3.Implies(k_var < length, z3.Not(goal)))
     frozen = z3.And(after.right == here.right, after.lc == here.lc, after.l == here.l, after.o == here.o)
-    move = z3.And(reached, z3.If(k_var < length, enc.transition(here, action, after), frozen))
+    move = z3.And(reached, z3.If(k_var < length, transition, frozen))
     live = k_var + 1 <= length  # the step's action is part of the plan
     brake = ACTION_ORDER.index(Action.BRAKE)
     right_term, brake_term = z3.If(z3.And(live, after.right), 1, 0), z3.If(z3.And(live, action == brake), 1, 0)

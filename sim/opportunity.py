@@ -160,12 +160,12 @@ class Replay:
         attempt = _Attempt(self, target)
         checkpoint: _Checkpoint | None = None
         outcome = Outcome.NOT_PASSED
+        profiles = plan_profiles(overtake(1), speed_mps, self.grid)
         try:
-            if not attempt.run(Action.RIGHT_LANE_CHANGE, plan_profiles(overtake(1), speed_mps, self.grid)[0]):
+            if not attempt.run(Action.RIGHT_LANE_CHANGE, profiles[0]):
                 return attempt.failed[0], 0
             for accelerates in range(1, MAX_ACCELERATES + 1):
                 checkpoint = attempt.save()  # the lane change and accelerates - 1 accelerates behind
-                profiles = plan_profiles(overtake(accelerates), speed_mps, self.grid)
                 outcome, in_return = attempt.finish(profiles[accelerates:])
                 if outcome is Outcome.MISSED:
                     return outcome, accelerates
@@ -174,8 +174,8 @@ class Replay:
                 attempt.restore(checkpoint)
                 checkpoint.world.discard()
                 checkpoint = None
-                longer = plan_profiles(overtake(accelerates + 1), speed_mps, self.grid)
-                if not attempt.run(Action.ACCELERATE, longer[accelerates]):
+                profiles = plan_profiles(overtake(accelerates + 1), speed_mps, self.grid)
+                if not attempt.run(Action.ACCELERATE, profiles[accelerates]):
                     return attempt.failed[0], 0  # the longer overtakes fail before their return
         finally:
             if checkpoint is not None:
