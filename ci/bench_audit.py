@@ -1,12 +1,13 @@
 """The audit's closed-loop speed by worker count: km per wall minute, whole command, in one run.
 
-Usage: python -m ci.bench_audit [--km 4] [--workers 1,2] [--default-km 100]
+Usage: python -m ci.bench_audit [--km 4] [--workers 1,2] [--default-km KM]
 
 Runs ``overtake audit`` on the default grid (every cell size, traffic and sensing model) with
 ``--km KM --runs 1 --engines interpreter --snapshots 0`` once per worker count, each as a whole
 process into a fresh folder, and prints km driven, wall time, km per wall minute (in all and per
 worker) and the speed-up over the first count; then what the default audit (``--default-km`` per
-combination, before its planning-cost pass) takes at each rate. Every count drives the same runs,
+combination, by default the command's own ``--km`` x ``--runs``, before its planning-cost pass) takes at each
+rate. Every count drives the same runs,
 which the table checks (the same km, collisions and near misses).
 """
 
@@ -19,12 +20,14 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 from rich.console import Console
 from rich.table import Table
 
 from ci.audit import AuditPlan
 from ci.bench import machine
+from ci.cli.audit import audit as audit_command
 
 
 def audit(km: float, workers: int, out: Path) -> tuple[float, float, tuple[int, int]]:
@@ -44,7 +47,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--km", type=float, default=4.0, help="km per combination (one run each)")
     parser.add_argument("--workers", default="1,2", help="worker counts, comma-separated")
-    parser.add_argument("--default-km", type=float, default=100.0, help="km per combination of the default audit")
+    defaults: dict[str | None, Any] = {param.name: param.default for param in audit_command.params}
+    parser.add_argument("--default-km", type=float, default=float(defaults["km"]) * int(defaults["runs"]),
+                        help="km per combination of the default audit (its --km x --runs)")
     args = parser.parse_args()
     counts = [int(w) for w in args.workers.split(",")]
     combinations = len(AuditPlan().configs())
