@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from ci.properties import PROPERTIES, PropertyName, Run, Runs, Verdict, first_difference
+from oracle import bmc
 from oracle.interpreter import validate
 from oracle.shrink import shrink, to_toml
 from spec.actions import plan_text
@@ -33,11 +34,13 @@ def fails(name: PropertyName, engines: Sequence[str], limits: Limits) -> Any:
 
 def reproduce(name: PropertyName, scenario: Scenario, engines: Sequence[str], timeout_s: float | None, out: Path,
               number: int, origin: str) -> dict[str, Any]:
-    """Shrink ``scenario`` (which fails ``name``) and write its reproducer files; what was written, as a record."""
+    """Shrink ``scenario`` (which fails ``name``) and write its reproducer files; what was written, as a record.
+    Z3 gets a solver of its own for each problem here, as in the fresh process the regression test runs in."""
     limits = Limits(timeout_s=timeout_s)
-    small, checks = shrink(scenario, fails(name, engines, limits), MAX_SHRINK_CHECKS)
-    runs = Runs(small, limits)
-    outcome = PROPERTIES[name].verdict(small, runs, engines)
+    with bmc.isolated():
+        small, checks = shrink(scenario, fails(name, engines, limits), MAX_SHRINK_CHECKS)
+        runs = Runs(small, limits)
+        outcome = PROPERTIES[name].verdict(small, runs, engines)
     folder = out / REPRO_DIR
     folder.mkdir(parents=True, exist_ok=True)
     stem = f"{name.value}-{number}"

@@ -7,32 +7,46 @@ together and so do all oncoming ones, so these four values are the whole state; 
 vehicle's collision and goal conditions are written on its own cell. Every intermediate
 oncoming tick gets its own collision check, as in the interpreter.
 
+The vehicles' initial cells are parameters of the encoding, not constants: an encoding
+depends only on the problem's *shape* (the AV's lane, how many vehicles each lane holds,
+which are targets, the model, the goal, the horizon, the grid). A process keeps one solver
+per shape and strategy, and each problem fixes its cells by assumption literals, so what the
+solver learned on one problem (lemmas over the parameters, valid for every problem of that
+shape) carries over to the next: a campaign of thousands of similar scenarios pays for
+building an unrolling once per shape, the way the Spin engine serves many scenarios from
+one verifier process. Least costs, lengths and statuses do not depend on what the solver
+saw before; which of several equally good plans it returns may (``isolated()`` gives a
+solver of its own to each problem, for reproducers).
+
 One decision step is built once, as a template over placeholder states, and every step of the
 unrolling is that template with the step's own variables substituted in (one call into Z3, not
 thousands of Python-built terms).
 
-``shortest`` adds one step at a time to one solver and asks, under push/pop, whether the
-goal holds at step k (having not held before): the first satisfiable k is the shortest
-length; all bounds unsatisfiable up to the horizon is a proof of "no plan within the
-horizon". ``optimal`` unrolls to the horizon with a symbolic length and minimises the
-lexicographic cost term by term on one incremental solver. A solver time-out is "incomplete", never "no plan".
+``shortest`` adds one step at a time and asks, under assumptions, whether the goal holds at
+step k (having not held before): the first satisfiable k is the shortest length; all bounds
+unsatisfiable up to the horizon is a proof of "no plan within the horizon". ``optimal``
+unrolls to the horizon with a symbolic length and minimises the lexicographic cost term by
+term. A solver time-out is "incomplete", never "no plan".
 """
 
 from __future__ import annotations
 
 import time
+from collections import OrderedDict
+from collections.abc import Callable, Hashable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import TypeVar
 
 import z3
 
-from oracle.abstraction import merged, offsets_of
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.answers import Limits, SearchResult, Status, Strategy
 from spec.cost import COST_DOC, COST_TERMS, total_cost
 from spec.engines import Engine, register
 from spec.lanes import Lane
 from spec.rules import behind_line, collision_span, left_path, nearest_span, passed_line
-from spec.scenario import Problem
+from spec.scenario import Problem, Scenario
 from spec.state import State
 
 
@@ -47,26 +61,30 @@ class Step:
 
 
 class Encoding:
-    """The transition system of one problem as Z3 terms; ``present`` guards each vehicle (explanations)."""
+    """The transition system of one problem shape as Z3 terms over its vehicles' cells (``left``, ``right``: one
+    integer parameter per vehicle); ``present`` guards each vehicle (explanations)."""
 
     def __init__(self, problem: Problem, present: dict[tuple[Lane, int], z3.BoolRef] | None = None) -> None:
         self.problem = problem
         scenario = problem.scenario
         self.present = present or {}
+        self.left = tuple(z3.Int(f"left_cell_{i}") for i in range(len(scenario.left_lane)))
+        self.right = tuple(z3.Int(f"right_cell_{i}") for i in range(len(scenario.right_lane)))
         self.steps: list[Step] = []
         self.actions: list[z3.ArithRef] = []
         self.targets = list(scenario.target_indices)
         self.grid = problem.grid
-        self.form = offsets_of(problem)
         self.ticks = {a: self.grid.ticks(a) for a in ACTION_ORDER}
-        self.right_hits = {t: list(merged([(lo - t, hi) for lo, hi in self.form.right_hits]))
-                           for t in {*self.ticks.values(), 0}}  # starting tick counts that meet a danger zone
         start = self.new_step()
         self.initial = z3.And(start.right == (scenario.lane is Lane.RIGHT), start.lc == 0, start.l == 0, start.o == 0,
                               self.safe(start.right, start.l, 0, start.o, 0))
         here, after, action = _placeholder("a"), _placeholder("b"), z3.Int("action")
         self._step_template = (here, action, after, self.transition(here, action, after))
         self._goal_template = (here, self.goal(here))
+
+    def cells(self, scenario: Scenario) -> list[tuple[z3.ArithRef, int]]:
+        """Each cell parameter with its value in ``scenario`` (a scenario of this encoding's shape)."""
+        return [*zip(self.left, scenario.left_lane, strict=True), *zip(self.right, scenario.right_lane, strict=True)]
 
     def _here(self, lane: Lane, index: int) -> z3.BoolRef | bool:
         return self.present.get((lane, index), True)
@@ -89,23 +107,14 @@ class Encoding:
     def safe(self, right: z3.BoolRef, l_end: z3.ArithRef, shift: int, o_start: z3.ArithRef,
              ticks: int) -> z3.BoolRef:
         """No collision while the left lane shifts by ``shift`` (one cell at a time) to ``l_end``, nor after
-        each of ``ticks`` oncoming ticks from ``o_start``."""
-        if self.present:
-            return self._safe_per_vehicle(right, l_end, shift, o_start, ticks)
-        left_ok = [l_end != v for v in sorted(self.form.left_bad_ends(shift))]
-        right_ok = [z3.Or(o_start < lo, o_start > hi) for lo, hi in self.right_hits[ticks]]
-        return z3.If(right, z3.And(*right_ok, True), z3.And(*left_ok, True))
-
-    def _safe_per_vehicle(self, right: z3.BoolRef, l_end: z3.ArithRef, shift: int, o_start: z3.ArithRef,
-                          ticks: int) -> z3.BoolRef:
-        """The same condition written per vehicle, each guarded by its presence literal (explanations)."""
-        scenario, rules = self.problem.scenario, self.problem.rules
+        each of ``ticks`` oncoming ticks from ``o_start``: per vehicle, on its own cell."""
+        rules = self.problem.rules
         (l_lo, l_hi), (r_lo, r_hi) = (collision_span(lane, rules, self.grid) for lane in (Lane.LEFT, Lane.RIGHT))
-        passed = [(i, c - shift + j) for i, c in enumerate(scenario.left_lane) for j in left_path(shift)]
+        passed = [(i, c - shift + j) for i, c in enumerate(self.left) for j in left_path(shift)]
         left_ok = [z3.Implies(self._here(Lane.LEFT, i), z3.Or(cell + l_end < l_lo, cell + l_end > l_hi))
                    for i, cell in passed]
         right_ok = [z3.Implies(self._here(Lane.RIGHT, i), z3.Or(c - (o_start + j) > r_hi, c - (o_start + j) < r_lo))
-                    for i, c in enumerate(scenario.right_lane) for j in range(ticks + 1)]
+                    for i, c in enumerate(self.right) for j in range(ticks + 1)]
         return z3.If(right, z3.And(*right_ok, True), z3.And(*left_ok, True))
 
     def transition(self, a: Step, action_var: z3.ArithRef, b: Step) -> z3.BoolRef:
@@ -126,16 +135,16 @@ class Encoding:
                                   safe[self._effect(action)]))
         return z3.Or(*options)
 
-    def _effect(self, action: Action) -> tuple[frozenset[int], int]:
-        """What a step's collision condition depends on: the offsets it may not end at, and its ticks."""
-        return self.form.left_bad_ends(self.grid.left_shift(action)), self.ticks[action]
+    def _effect(self, action: Action) -> tuple[int, int]:
+        """What a step's collision condition depends on: how far it shifts the left lane, and its ticks."""
+        return self.grid.left_shift(action), self.ticks[action]
 
     def goal(self, s: Step) -> z3.BoolRef:
         """The problem's goal on the state ``s``, field by field from the GoalRule."""
-        goal, scenario, parts = self.problem.goal, self.problem.scenario, []
+        goal, parts = self.problem.goal, []
         if goal.av_lane is not None:
             parts.append(s.right == (goal.av_lane is Lane.RIGHT))
-        cells, grid = scenario.left_lane, self.grid
+        cells, grid = self.left, self.grid
         if goal.targets_behind:
             parts += [z3.Implies(self._here(Lane.LEFT, i), cells[i] + s.l <= behind_line(grid)) for i in self.targets]
         span = nearest_span(goal, grid)
@@ -143,14 +152,14 @@ class Encoding:
             parts.append(self._nearest_within(s, span))
         if goal.oncoming_passed:
             parts += [z3.Implies(self._here(Lane.RIGHT, i), c - s.o <= passed_line(grid))
-                      for i, c in enumerate(scenario.right_lane)]
+                      for i, c in enumerate(self.right)]
         return z3.And(*parts, True)
 
     def _nearest_within(self, s: Step, span: tuple[int, int]) -> z3.BoolRef | bool:
         """The nearest present target is within ``span``; false without one."""
         result: z3.BoolRef | bool = False
         for i in reversed(self.targets):
-            here, cell = self._here(Lane.LEFT, i), self.problem.scenario.left_lane[i] + s.l
+            here, cell = self._here(Lane.LEFT, i), self.left[i] + s.l
             result = z3.If(here, z3.And(cell >= span[0], cell <= span[1]), result)
         return result
 
@@ -173,20 +182,26 @@ class Encoding:
         return z3.substitute(template, *_pairs(here, self.steps[k]))
 
     def decode(self, model: z3.ModelRef, length: int) -> tuple[tuple[Action, ...], tuple[State, ...]]:
-        """The plan of ``length`` actions in ``model`` and the states the model itself assigns along it (the
-        pipeline and the trace-equality property compare them with the interpreter's)."""
-        actions = tuple(ACTION_ORDER[model.eval(a, model_completion=True).as_long()] for a in self.actions[:length])
-        return actions, tuple(self._state(model, k) for k in range(length + 1))
-
-    def _state(self, model: z3.ModelRef, k: int) -> State:
-        s, scenario = self.steps[k], self.problem.scenario
-
+        """The plan of ``length`` actions in ``model`` and the states the model itself assigns along it, cells
+        included (the pipeline and the trace-equality property compare them with the interpreter's)."""
         def value(term: z3.ArithRef) -> int:
             return int(model.eval(term, model_completion=True).as_long())
 
+        actions = tuple(ACTION_ORDER[value(a)] for a in self.actions[:length])
+        return actions, tuple(self._state(model, value, k) for k in range(length + 1))
+
+    def _state(self, model: z3.ModelRef, value: Callable[[z3.ArithRef], int], k: int) -> State:
+        s = self.steps[k]
         right = z3.is_true(model.eval(s.right, model_completion=True))
-        return State(Lane.RIGHT if right else Lane.LEFT, tuple(c + value(s.l) for c in scenario.left_lane),
-                     tuple(c - value(s.o) for c in scenario.right_lane), value(s.lc), k)
+        return State(Lane.RIGHT if right else Lane.LEFT, tuple(value(c + s.l) for c in self.left),
+                     tuple(value(c - s.o) for c in self.right), value(s.lc), k)
+
+
+def shape(problem: Problem) -> Hashable:
+    """What an encoding depends on: everything in ``problem`` but the vehicles' cells."""
+    scenario = problem.scenario
+    return (scenario.lane, len(scenario.left_lane), len(scenario.right_lane), scenario.target_indices,
+            problem.rules, problem.goal, problem.horizon, problem.grid)
 
 
 def _placeholder(name: str) -> Step:
@@ -198,23 +213,134 @@ def _pairs(template: Step, step: Step) -> list[tuple[z3.ExprRef, z3.ExprRef]]:
     return [(template.right, step.right), (template.lc, step.lc), (template.l, step.l), (template.o, step.o)]
 
 
+class Kept:
+    """One shape's encoding on one solver, kept for every problem of that shape; conditions a problem assumes
+    (its cells, a cost bound) are literals defined once, so assuming them leaves no trace."""
+
+    def __init__(self, problem: Problem) -> None:
+        self.enc = Encoding(problem)
+        self.solver = z3.SolverFor("QF_LIA")
+        self.gave_up = False  # a check ran out of time or was cancelled: the solver is not kept
+        self._literals: dict[int, tuple[z3.BoolRef, z3.BoolRef]] = {}
+        self._asserted: list[z3.BoolRef] = []
+        self._whole: z3.BoolRef | None = None  # the conjunction of _asserted, made when a model is checked
+
+    def add(self, *constraints: z3.BoolRef) -> None:
+        self.solver.add(*constraints)
+        self._asserted += constraints
+        self._whole = None
+
+    def check(self, limits: Limits | None, started: float, *assumptions: z3.BoolRef) -> z3.CheckSatResult:
+        """One check within what is left of the time limit (``_check``). A satisfiable answer is trusted only if
+        its model satisfies everything asserted and assumed: Z3 interrupted while it took in constraints (Ctrl-C
+        between checks) answers "sat" with a model of part of them; that is an interrupt, never an answer."""
+        verdict = z3.unknown
+        try:
+            verdict = _check(self.solver, limits, started, *assumptions)
+            if verdict == z3.sat:
+                if self._whole is None:
+                    self._whole = z3.And(*self._asserted)
+                model = self.solver.model()
+                if not all(z3.is_true(model.eval(c)) for c in (self._whole, *assumptions)):
+                    verdict = z3.unknown
+                    raise KeyboardInterrupt("z3: interrupted (a model of part of the constraints)")
+        finally:
+            self.gave_up = self.gave_up or verdict == z3.unknown
+        return verdict
+
+    def literal(self, condition: z3.BoolRef) -> z3.BoolRef:
+        """A literal that implies ``condition``, defined the first time it is asked for."""
+        key = condition.get_id()  # Z3 terms are hash-consed: an equal condition is the same term, while it lives
+        if key not in self._literals:
+            self._literals[key] = (condition, z3.Bool(f"assume_{len(self._literals)}"))  # kept alive with its id
+            self.add(z3.Implies(self._literals[key][1], condition))
+        return self._literals[key][1]
+
+    def fixing(self, scenario: Scenario) -> list[z3.BoolRef]:
+        """The literals that fix every cell parameter at ``scenario``'s cells."""
+        return [self.literal(term == value) for term, value in self.enc.cells(scenario)]
+
+
+class Shortest(Kept):
+    """``shortest``'s solver: the unrolling grows one step at a time, as the longest problem so far needed;
+    ``reached[k]`` is a literal equal to the goal after k actions."""
+
+    def __init__(self, problem: Problem) -> None:
+        super().__init__(problem)
+        self.add(self.enc.initial)
+        self.reached: list[z3.BoolRef] = []
+
+    def goal(self, k: int) -> z3.BoolRef:
+        while len(self.reached) <= k:
+            if self.reached:
+                self.add(self.enc.extend(), self.enc.bounds(len(self.reached)))
+            literal = z3.Bool(f"goal_{len(self.reached)}")
+            self.add(literal == self.enc.goal_at(len(self.reached)))
+            self.reached.append(literal)
+        return self.reached[k]
+
+
+class Optimal(Kept):
+    """``optimal``'s solver: the whole unrolling to the horizon with a symbolic length, and the cost terms."""
+
+    def __init__(self, problem: Problem) -> None:
+        super().__init__(problem)
+        self.length, constraints, self.terms = bounded(self.enc)
+        self.add(*constraints)
+
+    def below(self, name: str, value: int) -> z3.BoolRef:
+        return self.literal(self.terms[name] < value)
+
+    def equal(self, name: str, value: int) -> z3.BoolRef:
+        return self.literal(self.terms[name] == value)
+
+
+KEEP_AT_MOST = 256  # shapes kept per process (least recently used dropped): a campaign meets tens to hundreds
+_kept: OrderedDict[tuple[type[Kept], Hashable], Kept] = OrderedDict()
+K = TypeVar("K", bound=Kept)
+_isolated = False
+
+
+@contextmanager
+def isolated() -> Iterator[None]:
+    """Within this block every problem gets a solver of its own, as in a fresh process: its plan does not depend
+    on what was solved before (reproducers need that; costs and statuses never depend on it)."""
+    global _isolated
+    before, _isolated = _isolated, True
+    try:
+        yield
+    finally:
+        _isolated = before
+
+
+@contextmanager
+def _solver_for(kind: type[K], problem: Problem) -> Iterator[K]:
+    """The kept solver of ``problem``'s shape (made if new). One that gave up, was interrupted or raised is
+    dropped: what a cancelled check leaves behind is not trusted."""
+    key = (kind, shape(problem))
+    found = None if _isolated else _kept.pop(key, None)
+    kept = found if isinstance(found, kind) else kind(problem)
+    yield kept  # an exception leaves it out of _kept
+    if not (_isolated or kept.gave_up):
+        _kept[key] = kept
+        while len(_kept) > KEEP_AT_MOST:
+            _kept.popitem(last=False)
+
+
 def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
     """The smallest k whose bound is satisfiable, incrementally, or a proof that none is up to the horizon."""
-    enc = Encoding(problem)
-    solver = z3.SolverFor("QF_LIA")
     started = time.perf_counter()
-    solver.add(enc.initial)
-    for k in range(problem.horizon + 1):
-        reached = z3.Bool(f"goal_{k}")  # checked as an assumption, so learned lemmas carry over
-        solver.add(reached == enc.goal_at(k))
-        verdict = _check(solver, limits, started, reached)
-        if verdict == z3.sat:
-            actions, states = enc.decode(solver.model(), k)
-            return SearchResult(Status.PLAN, actions, k + 1, f"shortest: bound {k} satisfiable", states)
-        if verdict == z3.unknown:
-            return SearchResult(Status.INCOMPLETE, (), k, f"z3: {solver.reason_unknown()} at bound {k}")
-        if k < problem.horizon:
-            solver.add(z3.Not(reached), enc.extend(), enc.bounds(k + 1))
+    with _solver_for(Shortest, problem) as kept:
+        fixed, not_before = kept.fixing(problem.scenario), list[z3.BoolRef]()
+        for k in range(problem.horizon + 1):
+            reached = kept.goal(k)
+            verdict = kept.check(limits, started, *fixed, *not_before, reached)
+            if verdict == z3.sat:
+                actions, states = kept.enc.decode(kept.solver.model(), k)
+                return SearchResult(Status.PLAN, actions, k + 1, f"shortest: bound {k} satisfiable", states)
+            if verdict == z3.unknown:
+                return SearchResult(Status.INCOMPLETE, (), k, f"z3: {kept.solver.reason_unknown()} at bound {k}")
+            not_before.append(z3.Not(reached))
     return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), problem.horizon + 1,
                         f"proved: every bound up to {problem.horizon} is unsatisfiable")
 
@@ -253,38 +379,35 @@ def bounded(enc: Encoding) -> tuple[z3.ArithRef, list[z3.BoolRef], dict[str, z3.
 def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
     """The plan of least cost (COST_DOC) among all plans of at most ``horizon`` actions.
 
-    Lexicographic by successive tightening on one incremental solver: any plan first; then, term by
-    term in COST_TERMS order, ask for a plan whose term is below the best value seen (as an
-    assumption, so an unsatisfiable bound leaves no trace) until none is, and fix the term there.
-    The last model is a least-cost plan. (``z3.Optimize`` answers the same, about twice as slowly.)"""
+    Lexicographic by successive tightening: any plan first; then, term by term in COST_TERMS
+    order, ask for a plan whose term is below the best value seen (as an assumption, so an
+    unsatisfiable bound leaves no trace) until none is, and fix the term there (an assumption
+    too). The last model is a least-cost plan. (``z3.Optimize`` answers the same, about twice as
+    slowly.)"""
     started = time.perf_counter()
-    enc = Encoding(problem)
-    length, constraints, terms = bounded(enc)
-    solver = z3.SolverFor("QF_LIA")
-    solver.add(*constraints)
-    verdict = _check(solver, limits, started)
-    if verdict == z3.unsat:
-        return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 1,
-                            f"proved: no plan of at most {problem.horizon} actions")
-    checks = 1
-    if verdict == z3.unknown:
-        return _gave_up(solver, checks)
-    model = solver.model()
-    for name in COST_TERMS:
-        best = model.eval(terms[name], model_completion=True).as_long()
-        while best > 0:
-            below = z3.Bool(f"{name}_below_{best}")
-            solver.add(z3.Implies(below, terms[name] < best))
-            verdict, checks = _check(solver, limits, started, below), checks + 1
-            if verdict == z3.unknown:
-                return _gave_up(solver, checks)
-            if verdict == z3.unsat:
-                break
-            model = solver.model()
+    with _solver_for(Optimal, problem) as kept:
+        solver, terms, assumed = kept.solver, kept.terms, kept.fixing(problem.scenario)
+        verdict = kept.check(limits, started, *assumed)
+        if verdict == z3.unsat:
+            return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 1,
+                                f"proved: no plan of at most {problem.horizon} actions")
+        checks = 1
+        if verdict == z3.unknown:
+            return _gave_up(solver, checks)
+        model = solver.model()
+        for name in COST_TERMS:
             best = model.eval(terms[name], model_completion=True).as_long()
-        solver.add(terms[name] == best)
-    n = model.eval(length).as_long()
-    actions, states = enc.decode(model, n)
+            while best > 0:
+                verdict, checks = kept.check(limits, started, *assumed, kept.below(name, best)), checks + 1
+                if verdict == z3.unknown:
+                    return _gave_up(solver, checks)
+                if verdict == z3.unsat:
+                    break
+                model = solver.model()
+                best = model.eval(terms[name], model_completion=True).as_long()
+            assumed.append(kept.equal(name, best))
+        n = model.eval(kept.length).as_long()
+        actions, states = kept.enc.decode(model, n)
     cost = dict(zip(COST_TERMS, total_cost(zip(actions, states[1:])), strict=True))  # as the model's states say
     return SearchResult(Status.PLAN, actions, checks, f"optimal under {COST_DOC}", states,
                         {"cost": cost, "cost_order": list(COST_TERMS)})
@@ -298,17 +421,21 @@ def _check(solver: z3.Solver, limits: Limits | None, started: float, *assumption
     """One check within what is left of the time limit. A check cancelled before its limit was interrupted (Ctrl-C,
     or a signal handler cancelling it): that is KeyboardInterrupt, never an "incomplete" answer."""
     limit_s = None if limits is None else limits.timeout_s
+    timeout_ms = NO_TIMEOUT_MS  # set every time: a kept solver carries the last problem's limit otherwise
     if limit_s is not None:
         left_s = limit_s - (time.perf_counter() - started)
         if left_s <= 0:
             return z3.unknown
-        solver.set("timeout", max(1, int(left_s * 1000)))
+        timeout_ms = max(1, int(left_s * 1000))
+    solver.set("timeout", timeout_ms)
     verdict = solver.check(*assumptions)
     if verdict == z3.unknown and _cancelled(solver.reason_unknown()):
         if limit_s is None or limit_s - (time.perf_counter() - started) > CANCEL_MARGIN_S:
             raise KeyboardInterrupt("z3: check interrupted")
     return verdict
 
+
+NO_TIMEOUT_MS = 4294967295  # Z3's own default for "timeout": no limit
 
 CANCELLED = ("cancel", "interrupt")  # what Z3 says of a cancelled check ("canceled" of a time-out too)
 

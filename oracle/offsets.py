@@ -39,13 +39,16 @@ class OffsetSearch:
         lc, l_off, o, steps = key
         if steps >= self.horizon:
             return []
+        return [(action, (*after, steps + 1)) for action, after in self.moves_from(lc, l_off, o)]
+
+    def moves_from(self, lc: int, l_off: int, o: int) -> list[tuple[Action, tuple[int, int, int]]]:
+        """The collision-free moves from ``(lc, l, o)`` in the action order, each with the offsets it ends at."""
         out = []
         for action, lc_dst, to_left, shift, ticks in self.moves[lc]:
             l2 = l_off + shift
             if (l2 in self.left_bad_end[shift]) if to_left else (o in self.right_bad[ticks]):
                 continue
-            out.append((action, (lc_dst, l2 if self.track_left else 0, o + ticks if self.track_right else 0,
-                                 steps + 1)))
+            out.append((action, (lc_dst, l2 if self.track_left else 0, o + ticks if self.track_right else 0)))
         return out
 
 

@@ -1,31 +1,35 @@
-"""The least-cost plan found by the interpreter alone: the conformance check of the ``optimal`` strategy.
+"""The least-cost plan found without Z3: the conformance check of the ``optimal`` strategy.
 
-A uniform-cost search over the interpreter's states, with the cost of ``spec.cost`` as a tuple
-compared lexicographically (every term only grows along a plan, so the first goal state taken
-from the queue is optimal). A state taken from the queue after the same situation (lanes,
-cells, lane changes) was taken with no more steps is dominated and skipped: it costs no less
-(the queue's order), and the earlier one has at least as much horizon left, while what can
-follow, and the goal, depend on the situation alone; so each situation's successors (the
-interpreter's steps) and goal are worked out once, however many step counts it is met at. It
-shares nothing with the Z3 encoding but the spec: an engine whose objective orders or counts
-the terms differently returns a plan this search beats.
+A uniform-cost search with the cost of ``spec.cost`` as a tuple compared lexicographically
+(every term only grows along a plan, so the first goal state taken from the queue is
+optimal), over the offset form of ``oracle.abstraction`` (a state is its lane changes and
+the two lanes' offsets; the offsets engines use it, and it is checked against the
+interpreter's states by the tests and by every campaign's trace-equality property). A state
+taken from the queue after the same situation (lane changes and offsets) was taken with no
+more steps is dominated and skipped: it costs no less (the queue's order), and the earlier
+one has at least as much horizon left, while what can follow, and the goal, depend on the
+situation alone. It shares nothing with the Z3 encoding but the spec (``oracle.bmc``
+translates the rules on its own): an engine whose objective orders or counts the terms
+differently returns a plan this search beats. ``tests/oracle/test_optimum.py`` checks it
+against every plan walked through the interpreter.
 """
 
 from __future__ import annotations
 
+import functools
 import heapq
 import itertools
-import operator
 from dataclasses import dataclass
 
-from oracle.interpreter import enabled_actions, problem_collision, problem_goal, problem_step
+from oracle.interpreter import problem_collision, problem_step
+from oracle.offsets import OffsetSearch
 from spec.actions import Action
-from spec.cost import COST_TERMS, step_cost, total_cost
-from spec.lanes import Lane
+from spec.cost import COST_TERMS, action_cost, total_cost
 from spec.scenario import Problem
 from spec.state import State
 
 Cost = tuple[int, ...]
+Situation = tuple[int, int, int]  # lane changes, left-lane offset, oncoming ticks
 
 
 @dataclass(frozen=True, slots=True)
@@ -49,16 +53,18 @@ def plan_cost(problem: Problem, actions: tuple[Action, ...]) -> Cost:
 
 
 def lexicographic_optimum(problem: Problem, max_states: int = 2_000_000) -> Optimum:
-    """The least-cost plan of at most ``problem.horizon`` actions (a plan ends at its first goal state)."""
-    start = problem.scenario.initial_state()
-    if problem_collision(problem, start) is not None:
+    """The least-cost plan of at most ``problem.horizon`` actions (a plan ends at its first goal state).
+
+    A cost is packed into one integer, its terms the digits in base horizon + 1 (an action adds at most 1 to
+    each term, so none exceeds the horizon): the lexicographic order of the terms is the order of the integers."""
+    if problem_collision(problem, problem.scenario.initial_state()) is not None:
         return Optimum(None, ())
-    situations = _Situations(problem)
+    base = problem.horizon + 1
+    situations = _Situations(OffsetSearch(problem), base)
     order = itertools.count()
-    zero: Cost = (0,) * len(COST_TERMS)
-    first = situations.of(start)
-    queue: list[tuple[Cost, int, Situation, int, tuple[Action, ...]]] = [(zero, next(order), first, 0, ())]
-    best: dict[tuple[Situation, int], Cost] = {(first, 0): zero}  # (situation, steps) -> the least cost pushed
+    first: Situation = (0, 0, 0)
+    queue: list[tuple[int, int, Situation, int, tuple[Action, ...]]] = [(0, next(order), first, 0, ())]
+    best: dict[tuple[Situation, int], int] = {(first, 0): 0}  # (situation, steps) -> the least cost pushed
     fewest_steps: dict[Situation, int] = {}  # situation -> the fewest steps it was taken with
     while queue:
         cost, _, situation, steps, actions = heapq.heappop(queue)
@@ -66,13 +72,13 @@ def lexicographic_optimum(problem: Problem, max_states: int = 2_000_000) -> Opti
             continue
         fewest_steps[situation] = steps
         if situations.goal(situation):
-            return Optimum(cost, actions)
+            return Optimum(_unpacked(cost, base), actions)
         if steps >= problem.horizon:
             continue
         for action, after, added in situations.successors(situation):
             if fewest_steps.get(after, steps + 2) <= steps + 1:
                 continue  # taken already with no more steps: it would be skipped when taken from the queue
-            total = tuple(map(operator.add, cost, added))
+            total = cost + added
             known = best.get((after, steps + 1))
             if known is None or total < known:
                 best[after, steps + 1] = total
@@ -82,39 +88,33 @@ def lexicographic_optimum(problem: Problem, max_states: int = 2_000_000) -> Opti
     return Optimum(None, ())
 
 
-Situation = tuple[Lane, tuple[int, ...], tuple[int, ...], int]  # a state's lane, cells and lane changes
+def _packed(cost: Cost, base: int) -> int:
+    return functools.reduce(lambda packed, term: packed * base + term, cost, 0)
+
+
+def _unpacked(packed: int, base: int) -> Cost:
+    terms = []
+    for _ in COST_TERMS:
+        packed, term = divmod(packed, base)
+        terms.append(term)
+    return tuple(reversed(terms))
 
 
 class _Situations:
-    """The interpreter's steps and goal on situations (a state less its step count, which no rule reads), each
-    worked out once: a search meets the same situation at many step counts."""
+    """The moves and the goal of each situation, worked out once: a search meets one at many step counts."""
 
-    def __init__(self, problem: Problem) -> None:
-        self.problem = problem
-        self._state: dict[Situation, State] = {}
-        self._successors: dict[Situation, list[tuple[Action, Situation, Cost]]] = {}
-        self._goal: dict[Situation, bool] = {}
-
-    def of(self, state: State) -> Situation:
-        """The situation of ``state`` (kept with a state of it, to step from)."""
-        key = (state.lane, state.left_lane, state.right_lane, state.lane_changes)
-        self._state.setdefault(key, state)
-        return key
+    def __init__(self, search: OffsetSearch, base: int) -> None:
+        self.search, self.base = search, base
+        self._successors: dict[Situation, list[tuple[Action, Situation, int]]] = {}
 
     def goal(self, situation: Situation) -> bool:
-        known = self._goal.get(situation)
-        if known is None:
-            known = self._goal[situation] = problem_goal(self.problem, self._state[situation])
-        return known
+        return self.search.form.goal(*situation)
 
-    def successors(self, situation: Situation) -> list[tuple[Action, Situation, Cost]]:
-        """The collision-free successors in the action order, each with what it adds to the cost."""
+    def successors(self, situation: Situation) -> list[tuple[Action, Situation, int]]:
+        """The collision-free successors in the action order, each with what it adds to the cost (packed)."""
         known = self._successors.get(situation)
         if known is None:
-            state, known = self._state[situation], []
-            for action in enabled_actions(state, self.problem.rules):
-                after = problem_step(self.problem, state, action)
-                if isinstance(after, State):
-                    known.append((action, self.of(after), step_cost(action, after)))
-            self._successors[situation] = known
+            lanes, base = self.search.form.lanes, self.base
+            known = self._successors[situation] = [(action, after, _packed(action_cost(action, lanes[after[0]]), base))
+                                                   for action, after in self.search.moves_from(*situation)]
         return known

@@ -7,6 +7,7 @@ One declaration that the Z3 encoding (``oracle.bmc``) translates into an objecti
 from __future__ import annotations
 
 from collections.abc import Iterable
+from functools import cache
 
 from spec.actions import ACTION_RULES, Action
 from spec.lanes import Lane
@@ -20,7 +21,13 @@ COST_DOC = ("lexicographic: lane changes, then actions that end in the right lan
 
 def step_cost(action: Action, after: State) -> tuple[int, ...]:
     """What one action, ending in ``after``, adds to each term, in ``COST_TERMS`` order."""
-    added = {"lane_changes": int(ACTION_RULES[action].changes_lane), "right_lane_steps": int(after.lane is Lane.RIGHT),
+    return action_cost(action, after.lane)
+
+
+@cache
+def action_cost(action: Action, lane_after: Lane) -> tuple[int, ...]:
+    """What one action that leaves the AV in ``lane_after`` adds to each term, in ``COST_TERMS`` order."""
+    added = {"lane_changes": int(ACTION_RULES[action].changes_lane), "right_lane_steps": int(lane_after is Lane.RIGHT),
              "brakes": int(action is Action.BRAKE), "length": 1}
     return tuple(added[name] for name in COST_TERMS)
 

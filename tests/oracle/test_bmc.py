@@ -12,8 +12,10 @@ from hypothesis import strategies as st
 from oracle import bitplan, bmc, offsets
 from oracle.interpreter import validate
 from oracle.optimum import plan_cost
-from spec.answers import Limits, Status, Strategy
+from spec.answers import Limits, SearchResult, Status, Strategy
 from spec.cost import COST_TERMS
+from spec.grid import PAPER_GRID
+from spec.lanes import Lane
 from spec.library import BUILTINS
 from spec.models import ModelKind
 from spec.scenario import Scenario, make_scenario, problem_for
@@ -82,7 +84,8 @@ def test_solver_time_out_is_incomplete_never_no_plan(monkeypatch: pytest.MonkeyP
             return bmc.z3.unknown
 
     monkeypatch.setattr(bmc.z3, "SolverFor", lambda logic: GivingUp())
-    result = bmc.shortest(problem, Limits(timeout_s=0.001))
+    with bmc.isolated():  # a solver of its own, made with the patched SolverFor
+        result = bmc.shortest(problem, Limits(timeout_s=0.001))
     assert result.status is Status.INCOMPLETE
 
 
@@ -110,3 +113,45 @@ def test_a_check_interrupted_before_its_limit_is_keyboard_interrupt_never_an_ans
     finally:
         stop.set()
         thread.join()
+
+
+@st.composite
+def same_shape(draw: st.DrawFn) -> list[Scenario]:
+    """Scenarios of one shape (lane, vehicles per lane, targets, horizon), differing in their cells only."""
+    grid, lane = PAPER_GRID, draw(st.sampled_from(list(Lane)))
+    n_left, n_right = draw(st.integers(0, 2)), draw(st.integers(0, 1))
+    targets, horizon = draw(st.integers(0, n_left)), draw(st.integers(0, 10))
+    ahead = st.integers(grid.av_cell + 1, grid.av_cell + 12)  # every left-lane vehicle ahead: the targets stay
+    oncoming = st.integers(0, grid.av_cell + 20).filter(lambda c: lane is Lane.LEFT or c != grid.av_cell)
+    cells = st.tuples(st.lists(ahead, min_size=n_left, max_size=n_left, unique=True),
+                      st.lists(oncoming, min_size=n_right, max_size=n_right, unique=True))
+    return [make_scenario(lane, left, right, targets, horizon=horizon, grid=grid)
+            for left, right in draw(st.lists(cells, min_size=2, max_size=5))]
+
+
+def answer(result: SearchResult) -> tuple[object, ...]:
+    """What must not depend on the solver's history: the status, the length and the least cost."""
+    return result.status, len(result.actions), (result.extra or {}).get("cost")
+
+
+@given(same_shape(), MODELS)
+def test_answers_on_kept_solvers_equal_answers_on_fresh_ones(scenarios: list[Scenario], model: ModelKind) -> None:
+    problems = [problem_for(s, model) for s in scenarios]
+    for solve in (bmc.shortest, bmc.optimal):
+        kept = [solve(p) for p in problems]  # one solver for the shape, problem after problem
+        with bmc.isolated():
+            fresh = [solve(p) for p in problems]
+        assert [answer(r) for r in kept] == [answer(r) for r in fresh]
+        for p, r in zip(problems, kept, strict=True):  # and each kept answer's plan is the problem's own
+            if r.status is Status.PLAN:
+                assert validate(p, r.actions).states == r.states
+
+
+def test_a_solver_that_gave_up_is_not_kept() -> None:
+    problem = problem_for(next(b for b in BUILTINS if b.name == "paper_example").load(), ModelKind.FINAL)
+    expected = answer(bmc.optimal(problem))
+    key = (bmc.Optimal, bmc.shape(problem))
+    assert key in bmc._kept
+    assert bmc.optimal(problem, Limits(timeout_s=1e-9)).status is Status.INCOMPLETE
+    assert key not in bmc._kept
+    assert answer(bmc.optimal(problem)) == expected and key in bmc._kept
