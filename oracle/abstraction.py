@@ -1,4 +1,4 @@
-"""The offset abstraction that ``offsets``, ``bitplan`` and ``bmc`` share: one problem as integer offsets.
+"""The offset abstraction that ``offsets``, ``bitplan`` and ``optimum`` share: one problem as integer offsets.
 
 Every left-lane vehicle moves by the same shift and every oncoming vehicle by the same
 ticks, so a state is ``(lc, l, o)``: lane changes, the left-lane offset (cells added to

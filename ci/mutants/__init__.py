@@ -43,8 +43,10 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("promela-horizon", "promela/render.py", 'guard = ["!crashed", "steps < horizon"]',
            'guard = ["!crashed", "steps <= horizon"]', "one step beyond the horizon, in Promela"),
     # -- Z3 -----------------------------------------------------------------------------------------
-    Mutant("z3-cost-order", "oracle/bmc.py", "        for name in COST_TERMS:\n            floor, best = ",
-           "        for name in (*COST_TERMS[:2], COST_TERMS[3], COST_TERMS[2]):\n            floor, best = ",
+    Mutant("z3-cost-order", "oracle/bmc.py",
+           "        for index, name in enumerate(COST_TERMS):\n            floor, best = ",
+           "        for index, name in enumerate((*COST_TERMS[:2], COST_TERMS[3], COST_TERMS[2])):\n"
+           "            floor, best = ",
            "brakes and plan length swapped in the Z3 objective"),
     Mutant("z3-goal-lane", "oracle/bmc.py", "            parts.append(s.right == (goal.av_lane is Lane.RIGHT))",
            "            parts.append(True)", "the goal's lane condition dropped in the Z3 encoding"),
