@@ -269,6 +269,12 @@ class Shortest(Kept):
         super().__init__(problem)
         self.add(self.enc.initial)
         self.reached: list[z3.BoolRef] = []
+        self.last_bound: int | None = None  # the first satisfiable bound of the last problem (horizon + 1: none)
+
+    def goal_before(self, k: int) -> z3.BoolRef:
+        """A literal that implies the goal holds after fewer than k actions."""
+        self.goal(k - 1)
+        return self.literal(z3.Or(*self.reached[:k]))
 
     def goal(self, k: int) -> z3.BoolRef:
         while len(self.reached) <= k:
@@ -333,21 +339,36 @@ def _solver_for(kind: type[K], problem: Problem) -> Iterator[K]:
 
 
 def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
-    """The smallest k whose bound is satisfiable, incrementally, or a proof that none is up to the horizon."""
+    """The smallest k whose bound is satisfiable, incrementally, or a proof that none is up to the horizon.
+
+    Warm start: a kept solver remembers the last problem's first satisfiable bound g (in a campaign,
+    often this one's too) and first asks whether the goal holds anywhere below it, one check for
+    bounds 0 .. g - 1 together: "unsat" proves them all at once and the bounds go on from g; "sat"
+    (the guess was too high) goes back to bound 0. The answer is proved the same way either way."""
     started = time.perf_counter()
+    horizon = problem.horizon
     with _solver_for(Shortest, problem) as kept:
-        fixed, not_before = kept.fixing(problem.scenario), list[z3.BoolRef]()
-        for k in range(problem.horizon + 1):
+        fixed, not_before, start = kept.fixing(problem.scenario), list[z3.BoolRef](), 0
+        guess = None if kept.last_bound is None else min(kept.last_bound, horizon + 1)
+        if guess is not None and guess > 1:
+            verdict = kept.check(limits, started, *fixed, kept.goal_before(guess))
+            if verdict == z3.unknown:
+                return SearchResult(Status.INCOMPLETE, (), 0, f"z3: {kept.solver.reason_unknown()} below bound {guess}")
+            if verdict == z3.unsat:
+                start, not_before = guess, [z3.Not(kept.goal(k)) for k in range(guess)]
+        for k in range(start, horizon + 1):
             reached = kept.goal(k)
             verdict = kept.check(limits, started, *fixed, *not_before, reached)
             if verdict == z3.sat:
+                kept.last_bound = k
                 actions, states = kept.enc.decode(kept.solver.model(), k)
                 return SearchResult(Status.PLAN, actions, k + 1, f"shortest: bound {k} satisfiable", states)
             if verdict == z3.unknown:
                 return SearchResult(Status.INCOMPLETE, (), k, f"z3: {kept.solver.reason_unknown()} at bound {k}")
             not_before.append(z3.Not(reached))
-    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), problem.horizon + 1,
-                        f"proved: every bound up to {problem.horizon} is unsatisfiable")
+        kept.last_bound = horizon + 1
+    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), horizon + 1,
+                        f"proved: every bound up to {horizon} is unsatisfiable")
 
 
 def bounded(enc: Encoding) -> tuple[z3.ArithRef, list[z3.BoolRef], dict[str, z3.ArithRef]]:

@@ -48,6 +48,10 @@ MUTANTS: tuple[Mutant, ...] = (
            "        for index, name in enumerate((*COST_TERMS[:2], COST_TERMS[3], COST_TERMS[2])):\n"
            "            floor, best = ",
            "brakes and plan length swapped in the Z3 objective"),
+    Mutant("z3-warm-start-skips-a-bound", "oracle/bmc.py",
+           "start, not_before = guess, [z3.Not(kept.goal(k)) for k in range(guess)]",
+           "start, not_before = guess + 1, [z3.Not(kept.goal(k)) for k in range(guess + 1)]",
+           "Z3's shortest, warm-started, skips the bound it guessed"),
     Mutant("z3-goal-lane", "oracle/bmc.py", "            parts.append(s.right == (goal.av_lane is Lane.RIGHT))",
            "            parts.append(True)", "the goal's lane condition dropped in the Z3 encoding"),
     Mutant("z3-oncoming-passed", "oracle/bmc.py", "c - s.o <= passed_line(grid))",

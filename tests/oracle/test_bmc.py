@@ -118,16 +118,29 @@ def test_a_check_interrupted_before_its_limit_is_keyboard_interrupt_never_an_ans
 
 @st.composite
 def same_shape(draw: st.DrawFn) -> list[Scenario]:
-    """Scenarios of one shape (lane, vehicles per lane, targets, horizon), differing in their cells only."""
+    """Scenarios of one shape (lane, vehicles per lane, targets, horizon), differing in their cells only: each
+    the one before with one vehicle moved a cell, as an exhaustive sweep walks its space."""
     grid, lane = PAPER_GRID, draw(st.sampled_from(list(Lane)))
     n_left, n_right = draw(st.integers(0, 2)), draw(st.integers(0, 1))
     targets, horizon = draw(st.integers(0, n_left)), draw(st.integers(0, 10))
-    ahead = st.integers(grid.av_cell + 1, grid.av_cell + 12)  # every left-lane vehicle ahead: the targets stay
-    oncoming = st.integers(0, grid.av_cell + 20).filter(lambda c: lane is Lane.LEFT or c != grid.av_cell)
-    cells = st.tuples(st.lists(ahead, min_size=n_left, max_size=n_left, unique=True),
-                      st.lists(oncoming, min_size=n_right, max_size=n_right, unique=True))
-    return [make_scenario(lane, left, right, targets, horizon=horizon, grid=grid)
-            for left, right in draw(st.lists(cells, min_size=2, max_size=5))]
+    ahead = (grid.av_cell + 1, grid.av_cell + 12)  # every left-lane vehicle ahead: the targets stay the same
+    oncoming = (0, grid.av_cell + 20)
+
+    def fits(left: list[int], right: list[int]) -> bool:
+        return (len(set(left)) == len(left) and all(ahead[0] <= c <= ahead[1] for c in left)
+                and all(oncoming[0] <= c <= oncoming[1] and (lane is Lane.LEFT or c != grid.av_cell) for c in right))
+
+    left = draw(st.lists(st.integers(*ahead), min_size=n_left, max_size=n_left, unique=True))
+    right = draw(st.lists(st.integers(*oncoming).filter(lambda c: fits([], [c])), min_size=n_right, max_size=n_right))
+    cells = [(left, right)]
+    for vehicle, delta in draw(st.lists(st.tuples(st.integers(0, n_left + n_right - 1), st.sampled_from([-1, 1])),
+                                        min_size=1, max_size=6)) if n_left + n_right else []:
+        left, right = list(cells[-1][0]), list(cells[-1][1])
+        lane_cells, index = (left, vehicle) if vehicle < n_left else (right, vehicle - n_left)
+        lane_cells[index] += delta
+        if fits(left, right):
+            cells.append((left, right))
+    return [make_scenario(lane, left, right, targets, horizon=horizon, grid=grid) for left, right in cells]
 
 
 def answer(result: SearchResult) -> tuple[object, ...]:
