@@ -234,18 +234,15 @@ class Kept:
         """One check within what is left of the time limit (``_check``). A satisfiable answer is trusted only if
         its model satisfies everything asserted and assumed: Z3 interrupted while it took in constraints (Ctrl-C
         between checks) answers "sat" with a model of part of them; that is an interrupt, never an answer."""
-        verdict = z3.unknown
-        try:
-            verdict = _check(self.solver, limits, started, *assumptions)
-            if verdict == z3.sat:
-                if self._whole is None:
-                    self._whole = z3.And(*self._asserted)
-                model = self.solver.model()
-                if not all(z3.is_true(model.eval(c)) for c in (self._whole, *assumptions)):
-                    verdict = z3.unknown
-                    raise KeyboardInterrupt("z3: interrupted (a model of part of the constraints)")
-        finally:
-            self.gave_up = self.gave_up or verdict == z3.unknown
+        verdict = _check(self.solver, limits, started, *assumptions)  # an exception drops the solver (_solver_for)
+        if verdict == z3.unknown:
+            self.gave_up = True
+        elif verdict == z3.sat:
+            if self._whole is None:
+                self._whole = z3.And(*self._asserted)
+            model = self.solver.model()
+            if not all(z3.is_true(model.eval(c)) for c in (self._whole, *assumptions)):
+                raise KeyboardInterrupt("z3: interrupted (a model of part of the constraints)")
         return verdict
 
     def literal(self, condition: z3.BoolRef) -> z3.BoolRef:
