@@ -18,13 +18,13 @@ from __future__ import annotations
 
 import functools
 import heapq
-import itertools
 from dataclasses import dataclass
 
 from oracle.interpreter import problem_collision, problem_step
 from oracle.offsets import OffsetSearch
 from spec.actions import Action
 from spec.cost import COST_TERMS, action_cost, total_cost
+from spec.lanes import Lane
 from spec.scenario import Problem
 from spec.state import State
 
@@ -61,18 +61,18 @@ def lexicographic_optimum(problem: Problem, max_states: int = 2_000_000) -> Opti
         return Optimum(None, ())
     base = problem.horizon + 1
     situations = _Situations(OffsetSearch(problem), base)
-    order = itertools.count()
     first: Situation = (0, 0, 0)
-    queue: list[tuple[int, int, Situation, int, tuple[Action, ...]]] = [(0, next(order), first, 0, ())]
+    links: list[tuple[int, Action | None]] = [(-1, None)]  # per queue entry: the entry it came from, its action
+    queue: list[tuple[int, int, Situation, int]] = [(0, 0, first, 0)]  # cost, entry (ties: pushed first), ...
     best: dict[tuple[Situation, int], int] = {(first, 0): 0}  # (situation, steps) -> the least cost pushed
     fewest_steps: dict[Situation, int] = {}  # situation -> the fewest steps it was taken with
     while queue:
-        cost, _, situation, steps, actions = heapq.heappop(queue)
+        cost, entry, situation, steps = heapq.heappop(queue)
         if best[situation, steps] < cost or fewest_steps.get(situation, steps + 1) <= steps:
             continue
         fewest_steps[situation] = steps
         if situations.goal(situation):
-            return Optimum(_unpacked(cost, base), actions)
+            return Optimum(_unpacked(cost, base), _actions(links, entry))
         if steps >= problem.horizon:
             continue
         for action, after, added in situations.successors(situation):
@@ -84,8 +84,19 @@ def lexicographic_optimum(problem: Problem, max_states: int = 2_000_000) -> Opti
                 best[after, steps + 1] = total
                 if len(best) > max_states:
                     raise MemoryError(f"optimum: more than {max_states} states")
-                heapq.heappush(queue, (total, next(order), after, steps + 1, (*actions, action)))
+                links.append((entry, action))
+                heapq.heappush(queue, (total, len(links) - 1, after, steps + 1))
     return Optimum(None, ())
+
+
+def _actions(links: list[tuple[int, Action | None]], entry: int) -> tuple[Action, ...]:
+    """The actions that led to a queue entry, first to last."""
+    actions = []
+    while entry > 0:
+        entry, action = links[entry]
+        assert action is not None  # only the first entry has none
+        actions.append(action)
+    return tuple(reversed(actions))
 
 
 def _packed(cost: Cost, base: int) -> int:
@@ -101,10 +112,15 @@ def _unpacked(packed: int, base: int) -> Cost:
 
 
 class _Situations:
-    """The moves and the goal of each situation, worked out once: a search meets one at many step counts."""
+    """The moves and the goal of each situation, worked out once: a search meets one at many step counts.
+
+    Oncoming ticks are counted up to the form's saturation only: from there on every oncoming vehicle is past every
+    danger zone and the goal line, and ticks only grow, so situations that differ only beyond it behave alike (the
+    dominance rule above then merges them)."""
 
     def __init__(self, search: OffsetSearch, base: int) -> None:
-        self.search, self.base = search, base
+        self.search, self.sat = search, search.form.o_saturation
+        self.added = {(action, lane): _packed(action_cost(action, lane), base) for action in Action for lane in Lane}
         self._successors: dict[Situation, list[tuple[Action, Situation, int]]] = {}
 
     def goal(self, situation: Situation) -> bool:
@@ -114,7 +130,7 @@ class _Situations:
         """The collision-free successors in the action order, each with what it adds to the cost (packed)."""
         known = self._successors.get(situation)
         if known is None:
-            lanes, base = self.search.form.lanes, self.base
-            known = self._successors[situation] = [(action, after, _packed(action_cost(action, lanes[after[0]]), base))
-                                                   for action, after in self.search.moves_from(*situation)]
+            lanes, added, sat = self.search.form.lanes, self.added, self.sat
+            known = self._successors[situation] = [(action, (lc, l_off, min(o, sat)), added[action, lanes[lc]])
+                                                   for action, (lc, l_off, o) in self.search.moves_from(*situation)]
         return known
