@@ -70,7 +70,7 @@ def explain(scenario: Scenario, strategy: Strategy = Strategy.SHORTEST) -> Expla
 
 def _solver(scenario: Scenario, kind: ModelKind, literals: dict[Vehicle, z3.BoolRef]) -> z3.Solver:
     enc = Encoding(problem_for(scenario, kind), present=literals)
-    _, constraints, _ = bounded(enc)
+    _, constraints, _, _ = bounded(enc)
     solver = z3.SolverFor("QF_LIA")
     solver.set("unsat_core", True)
     solver.add(*constraints, *(term == value for term, value in enc.cells(scenario)))
