@@ -43,8 +43,7 @@ class Offsets:
     l_at_most: int | None  # goal: every target behind the AV iff l <= this
     l_within: Interval | None  # goal: the nearest target in its span iff l is in this (empty: no target)
     o_at_least: int | None  # goal: every oncoming vehicle passed iff o >= this
-    track_left: bool  # an empty lane's offset is not part of the state: it stays 0
-    track_right: bool
+    track_left: bool  # an empty lane's offset is not part of the state: it stays 0 (o: see o_saturation)
 
     @property
     def shifts(self) -> frozenset[int]:
@@ -118,7 +117,7 @@ def offsets_of(problem: Problem) -> Offsets:
     o_at_least = max(scenario.right_lane) - passed_line(grid) if goal.oncoming_passed and scenario.right_lane else None
     return Offsets(lanes, tuple(moves), left_hits, right_hits,
                    frozenset(lc for lc, lane in enumerate(lanes) if goal.av_lane in (None, lane)),
-                   l_at_most, l_within, o_at_least, bool(scenario.left_lane), bool(scenario.right_lane))
+                   l_at_most, l_within, o_at_least, bool(scenario.left_lane))
 
 
 def merged(spans: list[Interval]) -> tuple[Interval, ...]:

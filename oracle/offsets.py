@@ -1,9 +1,14 @@
 """The sensible depth-first search over integer offsets: the same search as ``search.sensible``, faster.
 
-A state ``(lane changes, l, o, steps)`` maps one-to-one to the interpreter's ``State``
-(see ``oracle.abstraction``; an empty lane's offset is not part of the state and stays 0),
-so visited-state pruning prunes exactly the same states and the action list is identical;
-tests check that on generated scenarios. Collisions become set look-ups.
+A state ``(lane changes, l, o, steps)`` stands for the interpreter's ``State`` (see
+``oracle.abstraction``; an empty lane's offset is not part of the state and stays 0), with
+one merge: oncoming ticks are counted up to the form's saturation only. From there on every
+oncoming vehicle is past every danger zone and the goal line, and ticks only grow, so the
+states merged have the same moves and the same goal from then on. Pruning a state because an
+equivalent one was visited at the same step count cuts no plan the search could still find
+(when the first one's search ended, nothing reachable from it was a goal), so the action list
+is the state search's own, with fewer states stored; tests check both on generated scenarios.
+Collisions become set look-ups.
 """
 
 from __future__ import annotations
@@ -25,7 +30,8 @@ class OffsetSearch:
     def __init__(self, problem: Problem) -> None:
         form = self.form = offsets_of(problem)
         self.horizon = problem.horizon
-        self.track_left, self.track_right = form.track_left, form.track_right
+        self.track_left = form.track_left
+        self.o_sat = form.o_saturation  # 0 without oncoming vehicles: o stays 0, as an empty lane's offset
         self.moves = [[(m.action, m.lc_dst, form.lanes[m.lc_dst] is Lane.LEFT, m.shift, m.ticks) for m in moves]
                       for moves in form.moves]
         self.left_bad_end = {s: form.left_bad_ends(s) for s in form.shifts}
@@ -42,13 +48,14 @@ class OffsetSearch:
         return [(action, (*after, steps + 1)) for action, after in self.moves_from(lc, l_off, o)]
 
     def moves_from(self, lc: int, l_off: int, o: int) -> list[tuple[Action, tuple[int, int, int]]]:
-        """The collision-free moves from ``(lc, l, o)`` in the action order, each with the offsets it ends at."""
+        """The collision-free moves from ``(lc, l, o)`` in the action order, each with the offsets it ends at
+        (ticks counted up to saturation)."""
         out = []
         for action, lc_dst, to_left, shift, ticks in self.moves[lc]:
             l2 = l_off + shift
             if (l2 in self.left_bad_end[shift]) if to_left else (o in self.right_bad[ticks]):
                 continue
-            out.append((action, (lc_dst, l2 if self.track_left else 0, o + ticks if self.track_right else 0)))
+            out.append((action, (lc_dst, l2 if self.track_left else 0, min(o + ticks, self.o_sat))))
         return out
 
 

@@ -112,14 +112,12 @@ def _unpacked(packed: int, base: int) -> Cost:
 
 
 class _Situations:
-    """The moves and the goal of each situation, worked out once: a search meets one at many step counts.
-
-    Oncoming ticks are counted up to the form's saturation only: from there on every oncoming vehicle is past every
-    danger zone and the goal line, and ticks only grow, so situations that differ only beyond it behave alike (the
-    dominance rule above then merges them)."""
+    """The moves and the goal of each situation, worked out once: a search meets one at many step counts. (Oncoming
+    ticks are counted up to saturation, ``oracle.offsets``: situations that differ only beyond it are one, and the
+    dominance rule above applies to them.)"""
 
     def __init__(self, search: OffsetSearch, base: int) -> None:
-        self.search, self.sat = search, search.form.o_saturation
+        self.search = search
         self.added = {(action, lane): _packed(action_cost(action, lane), base) for action in Action for lane in Lane}
         self._successors: dict[Situation, list[tuple[Action, Situation, int]]] = {}
 
@@ -130,7 +128,7 @@ class _Situations:
         """The collision-free successors in the action order, each with what it adds to the cost (packed)."""
         known = self._successors.get(situation)
         if known is None:
-            lanes, added, sat = self.search.form.lanes, self.added, self.sat
-            known = self._successors[situation] = [(action, (lc, l_off, min(o, sat)), added[action, lanes[lc]])
-                                                   for action, (lc, l_off, o) in self.search.moves_from(*situation)]
+            lanes, added = self.search.form.lanes, self.added
+            known = self._successors[situation] = [(action, after, added[action, lanes[after[0]]])
+                                                   for action, after in self.search.moves_from(*situation)]
         return known

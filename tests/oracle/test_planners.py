@@ -87,11 +87,11 @@ def test_shortest_is_never_longer_than_sensible_and_they_agree_on_existence(
 
 
 @given(scenarios_on_grids(span=30), MODELS)
-def test_offset_dfs_equals_the_state_dfs(scenario: Scenario, model: ModelKind) -> None:
+def test_offset_dfs_returns_the_state_dfs_answer_storing_no_more_states(scenario: Scenario, model: ModelKind) -> None:
     problem = problem_for(scenario, model)
     fast, ref = offsets.sensible(problem), search.sensible(problem)
-    assert (fast.status, fast.actions, fast.states, fast.states_explored) == (
-        ref.status, ref.actions, ref.states, ref.states_explored)
+    assert (fast.status, fast.actions, fast.states) == (ref.status, ref.actions, ref.states)
+    assert fast.states_explored <= ref.states_explored
 
 
 @given(scenarios_on_grids(span=30), MODELS)
