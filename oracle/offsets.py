@@ -8,7 +8,8 @@ states merged have the same moves and the same goal from then on. Pruning a stat
 equivalent one was visited at the same step count cuts no plan the search could still find
 (when the first one's search ended, nothing reachable from it was a goal), so the action list
 is the state search's own, with fewer states stored; tests check both on generated scenarios.
-Collisions become set look-ups.
+The merge is of search states only: a plan's states are the interpreter's replay, cells never
+clipped (semantics.md). Collisions become set look-ups.
 """
 
 from __future__ import annotations
