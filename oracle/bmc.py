@@ -298,7 +298,8 @@ class Optimal(Kept):
 
     def below(self, name: str, value: int) -> z3.BoolRef:
         """A literal that implies the term is below ``value``: a cardinality constraint on a term that counts steps
-        (Z3 propagates those as a count, where a sum of 0/1 terms takes case splits: 1.38x faster on a campaign)."""
+        (Z3 propagates those as a count, where a sum of 0/1 terms takes case splits: 1.34x faster on 600 problems
+        of a sweep)."""
         literals = self.counted.get(name)
         if not literals:
             return self.literal(self.terms[name] < value)

@@ -14,6 +14,8 @@ clipped (semantics.md). Collisions become set look-ups.
 
 from __future__ import annotations
 
+import sys
+
 from oracle.abstraction import offsets_of
 from oracle.interpreter import replay
 from oracle.search import depth_first, trivial_answer
@@ -28,11 +30,13 @@ Key = tuple[int, int, int, int]  # lane changes, left offset, oncoming ticks, st
 class OffsetSearch:
     """Successors and the goal of one problem's offset form, for ``depth_first`` (its hot loop: set look-ups)."""
 
-    def __init__(self, problem: Problem) -> None:
+    def __init__(self, problem: Problem, merge_saturated: bool = True) -> None:
         form = self.form = offsets_of(problem)
         self.horizon = problem.horizon
         self.track_left = form.track_left
-        self.o_sat = form.o_saturation  # 0 without oncoming vehicles: o stays 0, as an empty lane's offset
+        # 0 without oncoming vehicles: o stays 0, as an empty lane's offset. Unmerged, a state is one interpreter
+        # State (the tests check that mapping by the states stored), o counted only while a lane holds a vehicle.
+        self.o_sat = form.o_saturation if merge_saturated or not problem.scenario.right_lane else sys.maxsize
         self.moves = [[(m.action, m.lc_dst, form.lanes[m.lc_dst] is Lane.LEFT, m.shift, m.ticks) for m in moves]
                       for moves in form.moves]
         self.left_bad_end = {s: form.left_bad_ends(s) for s in form.shifts}
@@ -60,13 +64,15 @@ class OffsetSearch:
         return out
 
 
-def sensible(problem: Problem, limits: Limits | None = None) -> SearchResult:
-    """Depth-first search in the action order with visited-state pruning (Spin's default search)."""
+def sensible(problem: Problem, limits: Limits | None = None, merge_saturated: bool = True) -> SearchResult:
+    """Depth-first search in the action order with visited-state pruning (Spin's default search). The same
+    ``limits.max_states`` lets the merged search go further than a search over states (or Spin's): where that one
+    runs out of states this one may still answer."""
     limits = limits or Limits()
     trivial = trivial_answer(problem)
     if trivial is not None:
         return trivial
-    search = OffsetSearch(problem)
+    search = OffsetSearch(problem, merge_saturated)
     start: Key = (0, 0, 0, 0)
     status, actions, _, explored, detail = depth_first(start, search.successors, search.goal, limits.max_states,
                                                        limits.timeout_s)

@@ -87,11 +87,27 @@ def test_shortest_is_never_longer_than_sensible_and_they_agree_on_existence(
 
 
 @given(scenarios_on_grids(span=30), MODELS)
-def test_offset_dfs_returns_the_state_dfs_answer_storing_no_more_states(scenario: Scenario, model: ModelKind) -> None:
+def test_offset_dfs_is_the_state_dfs_state_for_state_and_merged_returns_its_answer(scenario: Scenario,
+                                                                                  model: ModelKind) -> None:
     problem = problem_for(scenario, model)
-    fast, ref = offsets.sensible(problem), search.sensible(problem)
-    assert (fast.status, fast.actions, fast.states) == (ref.status, ref.actions, ref.states)
-    assert fast.states_explored <= ref.states_explored
+    ref = search.sensible(problem)
+    unmerged, merged = offsets.sensible(problem, merge_saturated=False), offsets.sensible(problem)
+    assert (unmerged.status, unmerged.actions, unmerged.states, unmerged.states_explored) == (
+        ref.status, ref.actions, ref.states, ref.states_explored)  # one offset state per interpreter state
+    if ref.status is not Status.INCOMPLETE:  # out of states, the merged search (fewer states) may still answer
+        assert (merged.status, merged.actions, merged.states) == (ref.status, ref.actions, ref.states)
+    assert merged.states_explored <= ref.states_explored
+
+
+@given(scenarios_on_grids(span=30), MODELS, st.integers(0, 2), st.integers(-40, 40), st.integers(0, 60))
+def test_past_saturation_the_oncoming_ticks_change_no_move_and_no_goal(scenario: Scenario, model: ModelKind,
+                                                                      lc: int, l_off: int, beyond: int) -> None:
+    unmerged = offsets.OffsetSearch(problem_for(scenario, model), merge_saturated=False)
+    form, sat = unmerged.form, unmerged.form.o_saturation
+    lc = min(lc, len(form.lanes) - 1)
+    at_sat, later = unmerged.moves_from(lc, l_off, sat), unmerged.moves_from(lc, l_off, sat + beyond)
+    assert [(a, lc2, l2) for a, (lc2, l2, _) in at_sat] == [(a, lc2, l2) for a, (lc2, l2, _) in later]
+    assert form.goal(lc, l_off, sat) == form.goal(lc, l_off, sat + beyond)
 
 
 @given(scenarios_on_grids(span=30), MODELS)
