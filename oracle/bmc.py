@@ -221,6 +221,7 @@ class Kept:
         self.enc = Encoding(problem)
         self.solver = z3.SolverFor("QF_LIA")
         self.gave_up = False  # a check ran out of time or was cancelled: the solver is not kept
+        self.model: z3.ModelRef | None = None  # the last satisfiable check's model, checked (``check``)
         self._literals: dict[int, tuple[z3.BoolRef, z3.BoolRef]] = {}
         self._asserted: list[z3.BoolRef] = []
         self._whole: z3.BoolRef | None = None  # the conjunction of _asserted, made when a model is checked
@@ -231,19 +232,32 @@ class Kept:
         self._whole = None
 
     def check(self, limits: Limits | None, started: float, *assumptions: z3.BoolRef) -> z3.CheckSatResult:
-        """One check within what is left of the time limit (``_check``). A satisfiable answer is trusted only if
-        its model satisfies everything asserted and assumed: Z3 interrupted while it took in constraints (Ctrl-C
-        between checks) answers "sat" with a model of part of them; that is an interrupt, never an answer."""
+        """One check within what is left of the time limit (``_check``); on "sat", ``self.model`` is its model,
+        trusted only if it satisfies everything asserted and assumed: Z3 interrupted while it took in constraints
+        (Ctrl-C between checks) answers "sat" with a model of part of them, and interrupted just after a check it
+        has no model to give ("there is no current model"). Either is an interrupt, never an answer."""
+        self.model = None
         verdict = _check(self.solver, limits, started, *assumptions)  # an exception drops the solver (_solver_for)
         if verdict == z3.unknown:
             self.gave_up = True
         elif verdict == z3.sat:
             if self._whole is None:
                 self._whole = z3.And(*self._asserted)
-            model = self.solver.model()
-            if not all(z3.is_true(model.eval(c)) for c in (self._whole, *assumptions)):
+            try:
+                model = self.solver.model()
+                whole = all(z3.is_true(model.eval(c)) for c in (self._whole, *assumptions))
+            except z3.Z3Exception as err:
+                raise KeyboardInterrupt(f"z3: interrupted after a check ({err})") from None
+            if not whole:
                 raise KeyboardInterrupt("z3: interrupted (a model of part of the constraints)")
+            self.model = model
         return verdict
+
+    def checked_model(self) -> z3.ModelRef:
+        """The model of the last check, which was satisfiable."""
+        if self.model is None:
+            raise RuntimeError("z3: no model: the last check was not satisfiable")
+        return self.model
 
     def literal(self, condition: z3.BoolRef) -> z3.BoolRef:
         """A literal that implies ``condition``, defined the first time it is asked for."""
@@ -367,7 +381,7 @@ def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
             verdict = kept.check(limits, started, *fixed, *not_before, reached)
             if verdict == z3.sat:
                 kept.last_bound = k
-                actions, states = kept.enc.decode(kept.solver.model(), k)
+                actions, states = kept.enc.decode(kept.checked_model(), k)
                 return SearchResult(Status.PLAN, actions, k + 1, f"shortest: bound {k} satisfiable", states)
             if verdict == z3.unknown:
                 return SearchResult(Status.INCOMPLETE, (), k, f"z3: {kept.solver.reason_unknown()} at bound {k}")
@@ -437,7 +451,7 @@ def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
             verdict, checks = kept.check(limits, started, *assumed, *kept.costing(guess)), 1
             if verdict == z3.unknown:
                 return _gave_up(solver, checks)
-            model = solver.model() if verdict == z3.sat else None
+            model = kept.checked_model() if verdict == z3.sat else None
         if model is None:
             verdict, checks = kept.check(limits, started, *assumed), checks + 1
             if verdict == z3.unsat:
@@ -445,7 +459,7 @@ def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
                                     f"proved: no plan of at most {problem.horizon} actions")
             if verdict == z3.unknown:
                 return _gave_up(solver, checks)
-            model = solver.model()
+            model = kept.checked_model()
         for index, name in enumerate(COST_TERMS):
             floor, best = 0, model.eval(terms[name], model_completion=True).as_long()
             tries = [] if guess is None else [guess[index], guess[index] - 1]  # the guess, then just below it
@@ -458,7 +472,7 @@ def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
                 if verdict == z3.unsat:
                     floor = middle + 1
                 else:
-                    model = solver.model()
+                    model = kept.checked_model()
                     best = model.eval(terms[name], model_completion=True).as_long()
             assumed.append(kept.equal(name, best))
         kept.last_cost = tuple(model.eval(terms[name], model_completion=True).as_long() for name in COST_TERMS)

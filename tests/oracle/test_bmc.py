@@ -184,3 +184,24 @@ def test_an_interrupt_between_checks_is_keyboard_interrupt_or_the_right_answer_n
         finally:
             bmc.z3.Solver().check()  # take the interrupt, if the solve left it
     assert got == expected
+
+
+@pytest.mark.parametrize("solve", [bmc.shortest, bmc.optimal], ids=["shortest", "optimal"])
+def test_an_interrupt_just_after_a_satisfiable_check_is_keyboard_interrupt(solve, monkeypatch: pytest.MonkeyPatch
+                                                                           ) -> None:
+    problem = problem_for(next(b for b in BUILTINS if b.name == "paper_example").load(), ModelKind.FINAL)
+    checked = bmc._check
+
+    def then_interrupted(solver, limits, started, *assumptions):  # Ctrl-C lands as the check returns "sat"
+        verdict = checked(solver, limits, started, *assumptions)
+        if verdict == bmc.z3.sat:
+            bmc.z3.main_ctx().interrupt()
+        return verdict
+
+    monkeypatch.setattr(bmc, "_check", then_interrupted)
+    with bmc.isolated():
+        try:
+            with pytest.raises(KeyboardInterrupt):  # Z3 has no model to give: never a Z3Exception, never an answer
+                solve(problem)
+        finally:
+            bmc.z3.Solver().check()  # take the interrupt, if it is still pending
