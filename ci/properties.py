@@ -6,6 +6,10 @@ planner pipeline, unchecked: ``oracle.planner.solve``) and gives a verdict: held
 the reason), or incomplete (a run hit a limit: nothing to compare). A run that raises an engine
 error is recorded as a failed ``validity``, never a reason to stop. A property applies when
 enough of its runs belong to the engines selected.
+
+Each property is registered with the *lies* it exists to catch (``LieKind``); ``ci.lies`` holds
+a stub engine for every kind, and the tests show each property failing on each of its lies and
+holding on the honest engines. A property without lies cannot be registered.
 """
 
 from __future__ import annotations
@@ -17,7 +21,7 @@ from dataclasses import dataclass
 
 from oracle.interpreter import validate
 from oracle.optimum import lexicographic_optimum, plan_cost
-from oracle.planner import solve
+from oracle.planner import combined_status, solve
 from spec.actions import plan_text
 from spec.answers import Answer, Limits, Status, Strategy
 from spec.errors import EngineError
@@ -39,6 +43,26 @@ class PropertyName(enum.Enum):
     TRACE_EQUALITY = "trace_equality"
     OPTIMALITY = "optimality"
     NO_PLAN_PROOF = "no_plan_proof"
+
+
+class LieKind(enum.Enum):
+    """The ways an engine can lie that some property exists to catch (``ci.lies`` has a stub engine for each)."""
+
+    UNSAFE_PLAN = "unsafe_plan"  # an action list that collides
+    WRONG_PLAN = "wrong_plan"  # an action list that does not reach the goal
+    FALSE_NO_PLAN = "false_no_plan"  # "no plan within the horizon" where there is one
+    FALSE_PLAN = "false_plan"  # a plan where none exists within the horizon
+    INCOMPLETE_AS_ANSWER = "incomplete_as_answer"  # a search that hit its limit, answered as "no plan"
+    ENGINE_ERROR = "engine_error"  # a crash or unreadable output, not an answer
+    MISSING_STATE = "missing_state"  # the plan's trace lacks its last state
+    EXTRA_STATE = "extra_state"  # the plan's trace has a state after its last
+    SHIFTED_STATE = "shifted_state"  # the trace is one step late
+    NO_STATES = "no_states"  # a plan with no trace
+    OTHER_SENSIBLE_PLAN = "other_sensible_plan"  # a valid plan, but not the depth-first search's first
+    LONGER_PLAN = "longer_plan"  # a valid plan, longer than the shortest
+    DEARER_PLAN = "dearer_plan"  # a valid plan, dearer than the least cost
+    NO_PLAN_ONE_BEYOND = "no_plan_one_beyond"  # "no plan of any length"; the shortest is one step past the horizon
+    NO_PLAN_BEYOND = "no_plan_beyond"  # "no plan of any length"; the shortest is several steps past the horizon
 
 
 class Verdict(enum.Enum):
@@ -127,6 +151,7 @@ class Property:
     runs: tuple[RunKey, ...]
     min_runs: int
     check: Check
+    lies: tuple[LieKind, ...]  # what it exists to catch: it must fail on each (``ci.lies``)
     subject: RunKey | None = None  # a run the property is about: it applies only when that engine is selected
 
     def applies(self, engines: Sequence[str]) -> bool:
@@ -144,6 +169,10 @@ PROPERTIES: dict[PropertyName, Property] = {}
 
 
 def register(prop: Property) -> Property:
+    """Add ``prop`` to the registry: once, and never without the lies it exists to catch."""
+    if not prop.lies:
+        raise ValueError(f"property {prop.name.value!r} registered without its lies (ci.lies): a property that no "
+                         f"lie is shown to fail cannot be trusted to catch one")
     if prop.name in PROPERTIES:
         raise ValueError(f"property {prop.name.value!r} registered twice")
     PROPERTIES[prop.name] = prop
@@ -179,8 +208,22 @@ def existence(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
     return _incomplete(runs) or HELD
 
 
+def _contradicts_stages(answer: Answer) -> str | None:
+    """How an answer's status contradicts the pipeline's own stages (a limit hit, answered as "no plan"), or None."""
+    if not answer.stages:
+        return None
+    expected = Status.PLAN if answer.stages[-1][1] is Status.PLAN else combined_status(list(answer.stages))
+    if answer.status is expected:
+        return None
+    return f"answers {answer.status.value}, but its stages say {expected.value} ({answer.detail or '-'})"
+
+
 def validity(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
     problems = [f"{r.key.label} raised an engine error: {r.error}" for r in runs if r.error is not None]
+    for r in runs:
+        contradiction = None if r.answer is None else _contradicts_stages(r.answer)
+        if contradiction is not None:
+            problems.append(f"{r.key.label} {contradiction}")
     for r in _plans(runs):
         assert r.answer is not None
         verdict = validate(_problem(scenario, r.answer), r.answer.actions)
@@ -274,19 +317,24 @@ def no_plan_proof(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
 
 for _prop in (
     Property(PropertyName.EXISTENCE, "every engine finds a plan within the horizon, or none does", PLAIN_RUNS, 2,
-             existence),
+             existence, (LieKind.FALSE_NO_PLAN, LieKind.FALSE_PLAN, LieKind.INCOMPLETE_AS_ANSWER)),
     Property(PropertyName.VALIDITY, "every plan of every engine replays through the interpreter, collision-free, "
-             "reaching the goal exactly at its last step; no engine raises an error", PLAIN_RUNS, 1, validity),
+             "reaching the goal exactly at its last step; no engine raises an error or answers against its own "
+             "stages", PLAIN_RUNS, 1, validity,
+             (LieKind.UNSAFE_PLAN, LieKind.WRONG_PLAN, LieKind.FALSE_PLAN, LieKind.ENGINE_ERROR,
+              LieKind.INCOMPLETE_AS_ANSWER)),
     Property(PropertyName.SENSIBLE_IDENTITY, "interpreter and Spin give identical sensible plans", SENSIBLE_RUNS, 2,
-             sensible_identity),
+             sensible_identity, (LieKind.OTHER_SENSIBLE_PLAN,)),
     Property(PropertyName.SHORTEST_LENGTH, "every engine's shortest plan has the same length, under the same model",
-             SHORTEST_RUNS, 2, shortest_length),
+             SHORTEST_RUNS, 2, shortest_length, (LieKind.LONGER_PLAN,)),
     Property(PropertyName.TRACE_EQUALITY, "the states each engine reports for its plan are the interpreter's, "
-             "step by step", PLAIN_RUNS, 1, trace_equality),
+             "step by step", PLAIN_RUNS, 1, trace_equality,
+             (LieKind.MISSING_STATE, LieKind.EXTRA_STATE, LieKind.SHIFTED_STATE, LieKind.NO_STATES)),
     Property(PropertyName.OPTIMALITY, "the Z3 optimal plan costs the least-cost plan an independent search finds, "
              "and no other engine's plan costs less; its plan is valid", (OPTIMAL_RUN, *PLAIN_RUNS), 1, optimality,
-             OPTIMAL_RUN),
+             (LieKind.DEARER_PLAN, LieKind.UNSAFE_PLAN), OPTIMAL_RUN),
     Property(PropertyName.NO_PLAN_PROOF, f"where an engine claims no plan of any length, a search {DEEPER} times "
-             "deeper than the horizon finds none", PLAIN_RUNS, 1, no_plan_proof),
+             "deeper than the horizon finds none", PLAIN_RUNS, 1, no_plan_proof,
+             (LieKind.NO_PLAN_ONE_BEYOND, LieKind.NO_PLAN_BEYOND)),
 ):
     register(_prop)

@@ -67,7 +67,7 @@ def solve(
                       result.detail, tuple(stages), result.extra)
     if result.status is not Status.INCOMPLETE:
         _prove_beyond(eng, scenario, horizon, stages)
-    status = _combined(stages)
+    status = combined_status(stages)
     return Answer(status, kind, eng.name, strategy, (), (), explored, elapsed_ms, _summary(stages), tuple(stages),
                   result.extra)
 
@@ -115,7 +115,7 @@ def _prove_beyond(engine: Engine, scenario: Scenario, horizon: int | None,
                 return
 
 
-def _combined(stages: list[tuple[ModelKind, Status, str]]) -> Status:
+def combined_status(stages: list[tuple[ModelKind, Status, str]]) -> Status:
     """No plan at all only when every model proved it; an incomplete stage makes the answer incomplete."""
     statuses = {status for _, status, _ in stages}
     if Status.INCOMPLETE in statuses:
