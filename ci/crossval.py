@@ -29,12 +29,12 @@ import numpy as np
 from ci.executors import ExecutorChoice, run_jobs
 from ci.properties import PROPERTIES, PropertyName, Runs, Verdict
 from ci.records import append, campaign_lock, open_for_append, read_records
-from oracle.coverage import ALL_RULES, rules_exercised
+from oracle.coverage import CoverageTarget, rules_exercised, rules_on
 from spec.answers import Limits, Status
 from spec.constants import DEFAULT_HORIZON
 from spec.errors import OptionError, ScenarioError
 from spec.files import scenario_from_dict, scenario_to_dict
-from spec.grid import PAPER_GRID, Grid
+from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
 from spec.library import BUILTINS
 from spec.scenario import Scenario, make_scenario
@@ -235,12 +235,14 @@ def _sweep(campaign: Campaign, scenarios: Iterable[Scenario], out: Path, executo
 # -- the summary -------------------------------------------------------------------------------------
 @dataclass(slots=True)
 class Summary:
-    """Per property: checked, held, failed, incomplete; per run: latency; per rule: scenarios that exercised it."""
+    """Per property: checked, held, failed, incomplete; per run: latency; per cell size and rule: scenarios that
+    exercised it, and the rules of the coverage target that none did."""
 
+    target: CoverageTarget = CoverageTarget.NONE
     scenarios: int = 0
     verdicts: dict[str, Counter[str]] = field(default_factory=dict)
     ms: dict[str, list[float]] = field(default_factory=dict)
-    rules: Counter[str] = field(default_factory=Counter)
+    rules: dict[float, Counter[str]] = field(default_factory=dict)  # cell size (m) -> rule -> scenarios
     failures: dict[str, list[dict[str, Any]]] = field(default_factory=dict)  # property -> failing results
 
     def add(self, result: dict[str, Any]) -> None:
@@ -251,11 +253,22 @@ class Summary:
                 self.failures.setdefault(name, []).append(result)
         for label, ms in result["ms"].items():
             self.ms.setdefault(label, []).append(ms)
-        self.rules.update(result["rules"])
+        cell_m = float(result["scenario"].get("cell_m", PAPER_GRID.cell))
+        self.rules.setdefault(cell_m, Counter()).update(result["rules"])
 
     @property
     def all_held(self) -> bool:
         return all(set(c) <= {Verdict.HELD.value} for c in self.verdicts.values())
+
+    def coverage(self) -> dict[str, dict[str, int]]:
+        """Per cell size ("21 m"), every rule that can occur there and how many scenarios exercised it."""
+        return {f"{cell_m:g} m": {rule: counts[rule] for rule in rules_on(grid_for(cell_m))}
+                for cell_m, counts in sorted(self.rules.items(), reverse=True)}
+
+    def missed(self) -> list[str]:
+        """The target's rules no scenario exercised, as "rule at N m" (empty: the target is met)."""
+        return [f"{rule} at {cell_m:g} m" for cell_m, counts in sorted(self.rules.items(), reverse=True)
+                for rule in self.target.rules(grid_for(cell_m)) if not counts[rule]]
 
     def latency(self) -> dict[str, dict[str, float]]:
         return {label: {"n": len(ms), "median_ms": round(float(np.median(ms)), 2),
@@ -267,7 +280,8 @@ class Summary:
                                       "failed": c[Verdict.FAILED.value], "incomplete": c[Verdict.INCOMPLETE.value]}
                                for name, c in self.verdicts.items()},
                 "latency": self.latency(),
-                "rule_coverage": {rule: self.rules[rule] for rule in ALL_RULES},
+                "rule_coverage": self.coverage(),
+                "coverage_target": {"target": self.target.value, "missed": self.missed()},
                 "reproducers": reproducers}
 
 
@@ -291,8 +305,15 @@ def markdown(data: dict[str, Any]) -> str:
               for name, v in data["properties"].items()]
     lines += ["", "| run | n | median ms | p99 ms |", "|---|---|---|---|"]
     lines += [f"| {label} | {v['n']} | {v['median_ms']} | {v['p99_ms']} |" for label, v in data["latency"].items()]
-    lines += ["", "## Rule coverage (scenarios that exercised each rule)", "", "| rule | scenarios |", "|---|---|"]
-    lines += [f"| {rule} | {n} |" for rule, n in data["rule_coverage"].items()]
+    for cell, rules in data["rule_coverage"].items():
+        lines += ["", f"## Rule coverage at {cell} (scenarios that exercised each rule)", "", "| rule | scenarios |",
+                  "|---|---|"]
+        lines += [f"| {rule} | {n} |" for rule, n in rules.items()]
+    target = data["coverage_target"]
+    if target["target"] != CoverageTarget.NONE.value:
+        lines += ["", f"Coverage target `{target['target']}`: "
+                  + ("met." if not target["missed"] else "**missed**: no scenario exercised "
+                     + "; ".join(target["missed"]) + ".")]
     if data["reproducers"]:
         lines += ["", "## Reproducers", ""]
         lines += [f"- {r['property']}: `{r['scenario_file']}` ({r['detail']}); test `{r['test_file']}`"
@@ -307,6 +328,12 @@ def junit(summary: Summary, campaign: Campaign) -> bytes:
                                 failures=str(sum(1 for c in summary.verdicts.values() if c[Verdict.FAILED.value])),
                                 errors=str(sum(1 for c in summary.verdicts.values()
                                                if c[Verdict.INCOMPLETE.value] and not c[Verdict.FAILED.value])))
+    if summary.target is not CoverageTarget.NONE:
+        suite.set("tests", str(len(summary.verdicts) + 1))
+        case = ElementTree.SubElement(suite, "testcase", classname="crossval", name=f"coverage-{summary.target.value}")
+        if summary.missed():
+            suite.set("failures", str(int(suite.get("failures", "0")) + 1))
+            ElementTree.SubElement(case, "failure", message="no scenario exercised " + "; ".join(summary.missed()))
     for name, counts in summary.verdicts.items():
         case = ElementTree.SubElement(suite, "testcase", classname="crossval", name=name)
         bad = summary.failures.get(name, [])

@@ -7,7 +7,11 @@ notes every rule that decided something there:
 
 - ``guard: lane`` / ``guard: lane-change limit``: an action disabled by that guard;
 - ``collision: left lane`` / ``collision: oncoming, at the effect`` / ``collision: oncoming, on a tick``:
-  a step that ended in that collision;
+  a step that ended in that collision; ``collision: left lane, in passing``: a left-lane vehicle
+  hit in a cell the action moves it *through*, not where it ends (``spec.rules.left_path``). Only
+  a grid whose actions move the left lane by more than one cell has it: there the left-lane rule
+  decides differently from the paper's 21 m grid, where every left-lane collision is where the
+  vehicle ends (``grid_rules``);
 - ``goal: <field>``: a state where that field alone kept the goal from holding (it decided);
   ``goal: reached``: a state meeting the goal;
 - ``model: <kind>``: a model the pipeline consults (the next model only after no plan in the first).
@@ -15,12 +19,14 @@ notes every rule that decided something there:
 
 from __future__ import annotations
 
+import enum
 from collections import deque
 from dataclasses import replace
 from typing import Any
 
 from oracle.interpreter import problem_collision, problem_goal, problem_step
 from spec.actions import Action
+from spec.grid import Grid
 from spec.lanes import Lane
 from spec.models import PIPELINE, GoalRule, models_for
 from spec.rules import Guard, disabled_guard, goal_holds
@@ -63,9 +69,16 @@ def _explore(problem: Problem, found: set[str]) -> None:
             after = problem_step(problem, state, action)
             if isinstance(after, Collision):
                 found.add(_collision_rule(after))
+                if _in_passing(after, state, problem.grid.left_shift(action)):
+                    found.add(IN_PASSING)
             elif after not in seen:
                 seen.add(after)
                 queue.append(after)
+
+
+def _in_passing(hit: Collision, before: State, shift: int) -> bool:
+    """Whether a left-lane vehicle was hit before the action's shift had moved it to where it ends."""
+    return hit.lane is Lane.LEFT and hit.tick == 0 and hit.cell != before.left_lane[hit.vehicle] + shift
 
 
 def _collision_rule(hit: Collision) -> str:
@@ -87,10 +100,35 @@ def _goal_fields(problem: Problem, state: State, found: set[str]) -> None:
             found.add(f"goal: {name}")
 
 
+IN_PASSING = "collision: left lane, in passing"
+
 #: Every rule a campaign can exercise, in report order.
 ALL_RULES = (
     *(f"guard: {guard.value}" for guard in Guard),
-    "collision: left lane", "collision: oncoming, at the effect", "collision: oncoming, on a tick",
+    "collision: left lane", IN_PASSING, "collision: oncoming, at the effect", "collision: oncoming, on a tick",
     *(f"goal: {name}" for name in GOAL_FIELDS), "goal: reached",
     *(f"model: {kind.value}" for kind in PIPELINE),
 )
+
+
+def grid_rules(grid: Grid) -> tuple[str, ...]:
+    """The rules that decide on ``grid`` where the paper's grid has no such decision: a left-lane vehicle passed
+    through, where some action moves the left lane by more than one cell."""
+    return (IN_PASSING,) if max(abs(grid.left_shift(a)) for a in Action) > 1 else ()
+
+
+def rules_on(grid: Grid) -> tuple[str, ...]:
+    """The rules a campaign on ``grid`` can exercise, in report order."""
+    return tuple(rule for rule in ALL_RULES if rule != IN_PASSING or IN_PASSING in grid_rules(grid))
+
+
+class CoverageTarget(enum.Enum):
+    """Which rules a campaign must exercise at least once, or fail (``overtake crossval --coverage-target``)."""
+
+    NONE = "none"
+    GRID = "grid"  # every rule that decides differently on the campaign's grid than on the paper's (``grid_rules``)
+    ALL = "all"  # every rule that can occur on the campaign's grid (``rules_on``)
+
+    def rules(self, grid: Grid) -> tuple[str, ...]:
+        return {CoverageTarget.NONE: (), CoverageTarget.GRID: grid_rules(grid),
+                CoverageTarget.ALL: rules_on(grid)}[self]

@@ -16,6 +16,7 @@ class ExitCode(enum.IntEnum):
     TOOL_MISSING = 4  # spin, gcc, dask.distributed, an unreachable scheduler
     ENGINE_FAILED = 5  # an engine crashed or answered nonsense: never "no plan"
     DISAGREE = 6  # engines disagree
+    COVERAGE_MISSED = 7  # every property held, but the campaign never exercised a rule it was asked to cover
     INTERRUPTED = 130  # Ctrl-C: what a campaign finished is kept
     TERMINATED = 143  # SIGTERM: likewise
 

@@ -240,6 +240,7 @@ CASES: list[Case] = [
     *whole("crossval", "--max-reproducers", REPRODUCERS), *whole("crossval", "--horizon", HORIZON),
     *choices("crossval", "--source"), *choices("crossval", "--properties", lists=True),
     *choices("crossval", "--engines", lists=True), *choices("crossval", "--executor"),
+    *choices("crossval", "--coverage-target"),
     *(_case("crossval", f"--space={value}", named="--space")
       for value in ("", "left=2", "left=9@0..50,right=0@0..0", "left=1@9..99,right=0@0..0",
                     "left=1@20..10,right=0@0..0", "left=5@0..50,right=5@0..50")),
