@@ -7,9 +7,20 @@ so a campaign pays for starting a process once per verifier, not twice per scena
 each run of the compile-every-time pipeline, works in its own temporary directory, so
 concurrent runs never share a ``pan.c`` or a trail; a server removes the last trail before
 every search, so no trail from an earlier run can be replayed by mistake.
-pan's own words decide the answer: an assertion violation with a trail is a plan;
-"errors: 0" with a complete search is "no plan within the horizon"; a depth or memory
-limit or a time-out is "incomplete"; anything else is an engine error.
+pan's own words decide the answer, and only after a clean exit (0) with pan's closing summary
+("errors: N"), for pan ends every search that way, plan or none, truncated or not:
+
+- "max search depth too small" or the memory bound ("reached -DMEMLIM bound", "out of memory"):
+  "incomplete", even with a trail (a truncated search claims nothing);
+- the goal's assertion violated ("assertion violated  !(reached)") and a trail written: a plan;
+- "errors: 0" and no "Search not completed": "no plan within the horizon", the only way to it;
+- the time limit (pan killed by the runner or the server): "incomplete";
+- anything else is an engine error naming pan's exit code or signal and its first line, never
+  "no plan": a signal (even after a trail or "errors: 0"), any other exit code, no output, no
+  summary, a line it does not know, another assertion (an array bound), a goal violation without
+  its trail, an interrupted search ("Interrupted": "Search not completed" with no limit named).
+
+A replay (``pan -r``, ``spin -t``) that times out or does not exit cleanly is an engine error too.
 """
 
 from __future__ import annotations
@@ -17,8 +28,10 @@ from __future__ import annotations
 import atexit
 import hashlib
 import os
+import re
 import select
 import shutil
+import signal
 import subprocess
 import tempfile
 import threading
@@ -50,6 +63,10 @@ CHECKSUM_FILE = "pan.sha256"  # written after a successful build; a verifier tha
 SERVER_SOURCE = Path(__file__).with_name("serve.c")  # pan's main renamed, and the --serve loop
 SERVER_GRACE_S = 30.0  # a server that has not answered this long after a run's own time limit is hung
 SERVER_START_S = 10.0  # a server that has not said "ready" by then will not start: the verifier is rebuilt
+REPLAY_TIMEOUT_S = 60.0  # replaying a trail of at most MAX_HORIZON steps takes milliseconds
+#: The goal's assertion (``assert(!reached)``, promela.render) as pan reports it violated: the one error that is a plan.
+GOAL_VIOLATED = re.compile(r"assertion violated\s+!\(reached\)")
+SUMMARY = re.compile(r"errors: (\d+)")  # pan's closing summary: it ran to its end
 INSTALL_HINT = {"spin": "apt-get install spin", "gcc": "apt-get install gcc"}
 
 
@@ -204,16 +221,17 @@ def _search_with(built: Verifier, problem: Problem, timeout_s: float, started: f
                        started)
         if outcome.status is not Status.PLAN:
             return _with_extra(outcome, built.cached, "compile-once, served")
-        _, printed = server.run(values, replay_args, 60.0)
-        return _with_extra(_plan_from(printed, problem, outcome.states_explored), built.cached, "compile-once, served")
+        found = _replay(lambda args, limit: server.run(values, args, limit), replay_args, problem,
+                        outcome.states_explored)
+        return _with_extra(found, built.cached, "compile-once, served")
     env = {**os.environ, ENV_VAR: values}
     with tempfile.TemporaryDirectory(prefix="overtake-spin-") as work:
         folder = Path(work)
-        outcome = _pan(folder, _executing(str(built.path), folder, env), problem, timeout_s, started)
+        pan = _executing(str(built.path), folder, env)
+        outcome = _pan(folder, pan, problem, timeout_s, started)
         if outcome.status is not Status.PLAN:
             return _with_extra(outcome, built.cached, "compile-once")
-        replay = _run([str(built.path), *replay_args], cwd=folder, env=env, timeout=60)
-        found = _plan_from(replay.stdout, problem, outcome.states_explored)
+        found = _replay(pan, replay_args, problem, outcome.states_explored)
         return _with_extra(found, built.cached, "compile-once")
 
 
@@ -227,8 +245,9 @@ def search_compiling(problem: Problem, strategy: Strategy, timeout_s: float | No
         outcome = _pan(folder, _executing("./pan", folder, dict(os.environ)), problem, timeout_s, started)
         if outcome.status is not Status.PLAN:
             return _with_extra(outcome, False, "compile-every-time")
-        replay = _run(["spin", "-t", MODEL_FILE], cwd=folder, timeout=60)
-        return _with_extra(_plan_from(replay.stdout, problem, outcome.states_explored), False, "compile-every-time")
+        found = _replay(_executing("spin", folder, dict(os.environ)), ["-t", MODEL_FILE], problem,
+                        outcome.states_explored)
+        return _with_extra(found, False, "compile-every-time")
 
 
 #: How a pan run is made: its arguments and time limit in, (exit code, stdout and stderr) out; TimeoutExpired at the
@@ -236,34 +255,48 @@ def search_compiling(problem: Problem, strategy: Strategy, timeout_s: float | No
 Execute = Callable[[list[str], "float | None"], tuple[int, str]]
 
 
-def _executing(pan: str, folder: Path, env: dict[str, str]) -> Execute:
-    """Runs of ``pan`` as processes of their own, in ``folder``."""
+def _executing(tool: str, folder: Path, env: dict[str, str]) -> Execute:
+    """Runs of ``tool`` (pan, or spin to replay) as processes of their own, in ``folder``."""
     def execute(args: list[str], limit: float | None) -> tuple[int, str]:
-        done = _run([pan, *args], cwd=folder, env=env, timeout=limit)
+        done = _run([tool, *args], cwd=folder, env=env, timeout=limit)
         return done.returncode, done.stdout + done.stderr
     return execute
 
 
 def _pan(folder: Path, execute: Execute, problem: Problem, timeout_s: float | None,
          started: float) -> SearchResult:
-    """Run pan: its answer, or (status PLAN, no actions yet, the states it stored) when it left a trail to replay."""
+    """Run pan and read its ending by the module's list: the answer (PLAN: the goal's trail, to replay), else
+    EngineError; no answer, not even "no plan", without a clean exit and pan's summary."""
     remaining = None if timeout_s is None else max(0.01, timeout_s - (time.perf_counter() - started))
     args = ["-E", "-n", f"-m{problem.horizon + DEPTH_MARGIN}", f"-w{HASH_BITS}"]
     try:
         returncode, text = execute(args, remaining)
     except subprocess.TimeoutExpired:
         return SearchResult(Status.INCOMPLETE, detail=f"pan: time limit {timeout_s} s reached")
-    explored = _explored(text)
-    if "max search depth too small" in text:
-        return SearchResult(Status.INCOMPLETE, (), explored, "pan: max search depth too small")
-    if "-DMEMLIM" in text or "out of memory" in text:
-        return SearchResult(Status.INCOMPLETE, (), explored, "pan: memory limit reached")
-    if "assertion violated" in text and (folder / f"{MODEL_FILE}.trail").exists():
-        return SearchResult(Status.PLAN, (), explored, "a trail to replay")
-    if returncode == 0 and "errors: 0" in text:
-        return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), explored,
-                            f"no plan within {problem.horizon} actions (search completed)")
-    raise EngineError(f"pan failed (exit {returncode}): {_last_line(text, returncode)}")
+    explored, summary = _explored(text), SUMMARY.search(text)
+    if returncode == 0 and summary is not None:  # pan ran to its end: a signal or an error exit never gets here
+        errors = int(summary.group(1))
+        if "max search depth too small" in text:
+            return SearchResult(Status.INCOMPLETE, (), explored, "pan: max search depth too small")
+        if "reached -DMEMLIM bound" in text or "out of memory" in text:
+            return SearchResult(Status.INCOMPLETE, (), explored, "pan: memory limit reached")
+        if errors > 0 and GOAL_VIOLATED.search(text) and (folder / f"{MODEL_FILE}.trail").exists():
+            return SearchResult(Status.PLAN, (), explored, "a trail to replay")
+        if errors == 0 and "Search not completed" not in text:
+            return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), explored,
+                                f"no plan within {problem.horizon} actions (search completed)")
+    raise EngineError(f"pan failed ({_ending(returncode)}): {_first_line(text)}")
+
+
+def _replay(execute: Execute, args: list[str], problem: Problem, explored: int) -> SearchResult:
+    """The plan a replay of pan's trail prints; a replay that times out or exits unclean is an engine error."""
+    try:
+        returncode, printed = execute(args, REPLAY_TIMEOUT_S)
+    except subprocess.TimeoutExpired:
+        raise EngineError(f"the replay of pan's trail took over {REPLAY_TIMEOUT_S:g} s") from None
+    if returncode != 0:
+        raise EngineError(f"the replay of pan's trail failed ({_ending(returncode)}): {_first_line(printed)}")
+    return _plan_from(printed, problem, explored)
 
 
 # -- servers: one per verifier, process and thread ---------------------------------------------------
@@ -295,10 +328,11 @@ class Server:
         reply = self._reply(limit + SERVER_GRACE_S)
         if reply == "timeout":
             raise subprocess.TimeoutExpired([str(self.pan), *args], limit)
-        words = reply.split()
-        if len(words) == 2 and words[0] in ("exit", "signal") and words[1].isdigit():
-            code = int(words[1])
-            return (code if words[0] == "exit" else -code), (self.folder / "out.txt").read_text(errors="replace")
+        kind, _, number = reply.partition(" ")
+        if number.isdigit() and (kind == "exit" or (kind == "signal" and int(number) > 0)):  # "signal 0" is nonsense
+            out = self.folder / "out.txt"  # missing when the run could not open it: no output
+            text = out.read_text(errors="replace") if out.exists() else ""
+            return (int(number) if kind == "exit" else -int(number)), text
         self.close()
         raise EngineError(f"the verifier's server answered {reply!r}")
 
@@ -395,9 +429,25 @@ def _run(args: list[str], cwd: Path | None = None, env: dict[str, str] | None = 
 
 
 def _last_line(text: str, returncode: int) -> str:
-    """The last line a tool printed, or its exit code when it printed nothing."""
+    """The last line a tool printed, or how it ended when it printed nothing."""
     lines = text.strip().splitlines()
-    return lines[-1] if lines else f"no output, exit code {returncode}"
+    return lines[-1] if lines else f"no output, {_ending(returncode)}"
+
+
+def _first_line(text: str) -> str:
+    """The first line a run printed (what ended pan: an error, "Interrupted", a violation), or "no output"."""
+    lines = text.strip().splitlines()
+    return lines[0].strip() if lines else "no output"
+
+
+def _ending(returncode: int) -> str:
+    """How a process ended, in words: "exit 2", or "signal 11 (SIGSEGV)" for subprocess's negative return codes."""
+    if returncode >= 0:
+        return f"exit {returncode}"
+    try:
+        return f"signal {-returncode} ({signal.Signals(-returncode).name})"
+    except ValueError:
+        return f"signal {-returncode}"
 
 
 def _said(done: subprocess.CompletedProcess[str]) -> str:
