@@ -70,11 +70,12 @@ class PaperTraffic:
         self.oncoming: list[KinematicCar] = []
         self.collisions = 0
         self.run = 0  # consecutive left-lane vehicles at the front
-        x = av_x_m + 2 * spec.cell_m
+        x, gap = av_x_m + 2 * spec.cell_m, 0
         for _ in range(spec.left_vehicles):
             self.left.append(self._spawn(KinematicCar(scene, x, scene.lane_y(Lane.LEFT), spec.speed_mps), Lane.LEFT))
+            self.run = self.run + 1 if gap == 1 else 1  # the vehicle just placed is the front-most
+            # the gap to the next one; after the last, drawn as well (and not placed): seeded drives keep their stream
             gap = left_gap_cells(rng, self.run, spec)
-            self.run = self.run + 1 if gap == 1 else 1
             x += self._spacing_m(gap)
         x = av_x_m + self._spacing_m(oncoming_gap_cells(rng, spec))
         for _ in range(spec.oncoming_vehicles):
