@@ -17,13 +17,16 @@ import pytest
 
 from ci.gen import random_scenarios
 from oracle import search
+from spec.actions import Action
 from spec.answers import Limits, SearchResult, Status, Strategy
 from spec.engines import Engine, load_engines
-from spec.grid import PAPER_GRID, Grid
+from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
 from spec.library import BUILTINS
 from spec.models import GOAL_RULES, MODEL_RULES, GoalKind, GoalRule, ModelKind, ModelRules
-from spec.scenario import Problem, Scenario, problem_for
+from spec.rules import goal_holds
+from spec.scenario import Problem, Scenario, make_scenario, problem_for
+from spec.state import State
 
 OFF = GoalRule(GoalKind.OVERTAKE, None, False, None, False)  # every goal field off: the goal always holds
 BASE_RULES = MODEL_RULES[ModelKind.FINAL]
@@ -67,7 +70,22 @@ def problems() -> list[tuple[str, Problem]]:
     return out
 
 
-PROBLEMS = problems()
+def passing_problems() -> list[tuple[str, Problem]]:
+    """The left-lane rule where it decides differently from the paper's grid: on each finer grid, the AV in the left
+    lane with its target 1 .. |shift| - 1 cells ahead, and one action to get the target behind. ``accelerate`` moves
+    the target through the AV's cell to behind it: a rule that checked only where a vehicle ends would call it a
+    plan; ``spec.rules.left_path`` hits it in passing."""
+    out = []
+    for grid in (Grid(c) for c in STANDARD_CELLS_M):
+        shift = grid.left_shift(Action.ACCELERATE)
+        for ahead in range(1, abs(shift)):
+            scenario = make_scenario(Lane.LEFT, [grid.av_cell + ahead], [], 1, horizon=1, grid=grid)
+            problem = dataclasses.replace(problem_for(scenario, ModelKind.FINAL), goal=GOAL_VARIANTS["targets_behind"])
+            out.append(("rule.left_path", problem))
+    return out
+
+
+PROBLEMS = problems() + passing_problems()
 CASES = [(engine, strategy) for engine in load_engines().values() for strategy in engine.strategies
          if strategy in (Strategy.SENSIBLE, Strategy.SHORTEST)]
 
@@ -105,3 +123,21 @@ def test_the_variants_matter() -> None:
             a, b = search.shortest_reference(problem), search.shortest_reference(base)
             changed |= (a.status, len(a.actions)) != (b.status, len(b.actions))
         assert changed, f"{field}: no problem where it changes the answer"
+
+
+def test_the_passing_problems_decide_by_the_left_path_alone() -> None:
+    """On each finer grid: the target would land behind the AV, clear of its cell (a landing-only rule accepts
+    ``accelerate``), yet the reference has no plan, and coverage names the rule."""
+    from oracle.coverage import IN_PASSING, rules_exercised
+
+    grids = set()
+    for name, problem in PROBLEMS:
+        if name != "rule.left_path":
+            continue
+        grid, (cell,) = problem.grid, problem.scenario.left_lane
+        landing = cell + grid.left_shift(Action.ACCELERATE)
+        assert landing < grid.av_cell and goal_holds(State(Lane.LEFT, (landing,), ()), problem.goal, (0,), grid)
+        assert search.shortest_reference(problem).status is not Status.PLAN
+        assert IN_PASSING in rules_exercised(problem.scenario)
+        grids.add(grid)
+    assert grids == {Grid(c) for c in STANDARD_CELLS_M} - {PAPER_GRID}
