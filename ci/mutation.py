@@ -4,8 +4,9 @@ Usage: python -m ci.mutation [--mutants a,b | --rotate K [--date YYYY-MM-DD]] [-
 
 Each mutant is applied to a scratch copy of the checkout (the files git tracks) and the
 detectors ``.ci/run`` runs are tried on it, cheapest first, until one fails: the tests of the
-mutated layer, ``crossval`` on the library, ``crossval`` on CI's exhaustive space, then the
-whole test suite. The report says which detector caught each mutant, after how many seconds,
+mutated layer, ``crossval`` on the library, ``crossval`` on CI's exhaustive space, CI's
+hypothesis campaign on the 10.5 m grid (with its coverage target; the day's seed, as CI picks
+it), then the whole test suite. The report says which detector caught each mutant, after how many seconds,
 and how small its reproducer is (vehicles and horizon of the shrunk scenario, or the first
 failing test). ``--rotate K`` checks K mutants chosen by the date (every mutant at least once
 in ``ceil(n / K)`` days: CI's daily share). Exit 0 when every mutant checked was caught, 6 when
@@ -33,6 +34,8 @@ from spec.errors import ExitCode, OptionError, SuiteError
 
 ROOT = Path(__file__).resolve().parents[1]
 CI_SPACE = "left=2@9..14,right=1@12..18,lanes=both"  # CI's exhaustive sweep (.ci/run), every property
+#: CI's 10.5 m hypothesis campaign's properties (.ci/run): every one but optimality
+CI_FINE_PROPERTIES = "existence,validity,sensible_identity,shortest_length,trace_equality,no_plan_proof"
 DETECTOR_TIMEOUT_S = 1800.0
 
 
@@ -54,15 +57,28 @@ def _crossval(work: Path, *args: str) -> list[str]:
             *args]
 
 
+def _ci_seed() -> str:
+    """The day's conformance seed, as ``.ci/run`` picks it (``SEED``, else today's date, UTC)."""
+    return os.environ.get("SEED") or datetime.datetime.now(datetime.UTC).strftime("%Y%m%d")
+
+
+#: The mutants' own self-check would "catch" every mutant (its text is gone): never a detector.
+SELF_CHECK = "--ignore=tests/ci/test_mutation.py"
+
 DETECTORS: tuple[Detector, ...] = (
-    Detector("tests of the mutated layer", lambda m, work: _pytest(f"tests/{m.path.split('/')[0]}"), (1,)),
+    Detector("tests of the mutated layer", lambda m, work: _pytest(f"tests/{m.path.split('/')[0]}", SELF_CHECK),
+             (1,)),
     Detector("crossval library", lambda m, work: _crossval(work / "library", "--source", "library"),
              (ExitCode.DISAGREE,)),
     Detector("crossval exhaustive (CI's space)",
              lambda m, work: _crossval(work / "exhaustive", "--source", "exhaustive", "--space", CI_SPACE),
              (ExitCode.DISAGREE,)),
-    # the mutants' own self-check would "catch" every mutant (its text is gone): not a detector
-    Detector("tests (all)", lambda m, work: _pytest("tests", "--ignore=tests/ci/test_mutation.py"), (1,)),
+    Detector("crossval hypothesis 10.5 m (CI's)",
+             lambda m, work: _crossval(work / "hypothesis-10.5m", "--source", "hypothesis", "--seed", _ci_seed(),
+                                       "--cell-m", "10.5", "--properties", CI_FINE_PROPERTIES,
+                                       "--coverage-target", "grid"),
+             (ExitCode.DISAGREE, ExitCode.COVERAGE_MISSED)),
+    Detector("tests (all)", lambda m, work: _pytest("tests", SELF_CHECK), (1,)),
 )
 
 

@@ -13,7 +13,7 @@ from ci.mutants import MUTANTS, Mutant, mutant
 from ci.mutation import ROOT, apply, main, rotation
 from spec.errors import OptionError
 
-LAYERS = {"spec", "oracle", "promela", "sim"}
+LAYERS = {"spec", "oracle", "promela", "sim", "ci"}
 
 
 @pytest.mark.parametrize("m", MUTANTS, ids=lambda m: m.name)
