@@ -1,7 +1,8 @@
 """Lying engines: for every way a conformance property exists to catch an engine out (``LieKind``), a stub that
 lies that way, so that the tests can show each property failing on each of its lies.
 
-A lie stands in for one run (an engine with a strategy); every other run answers honestly. It is
+A lie stands in for one run (an engine with a strategy); every other run answers honestly. The
+tests have each property hear each of its lies from every run it reads (``Lie.told_to``). It is
 told on a scenario chosen so that it *is* a lie, which ``is_a_lie`` checks independently of the
 properties (a "longer plan" is valid and longer than the shortest, a "no plan one step beyond"
 scenario's shortest plan is exactly one action longer than its horizon, and so on): a lie that
@@ -41,10 +42,11 @@ class Lie:
     tell: Tell
 
 
-    def told_by(self, prop: Property) -> Lie:
-        """The lie as told to ``prop``: by the run the property is about, when it has one (optimality judges z3's
-        optimal plan: its lies must come from there)."""
-        return self if prop.subject is None else replace(self, liar=prop.subject)
+    def told_to(self, prop: Property) -> list[Lie]:
+        """The lie as told to ``prop`` by each run it reads, or by the run it is about when it has one (optimality
+        judges z3's optimal plan: its lies must come from there). So a run added to a property is lied about too."""
+        liars = (prop.subject,) if prop.subject is not None else prop.runs
+        return [replace(self, liar=liar) for liar in liars]
 
 
 class LyingRuns(Runs):

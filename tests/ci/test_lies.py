@@ -9,7 +9,8 @@ from functools import cache
 import pytest
 
 from ci.lies import LIES, LyingRuns, is_a_lie, shortest_beyond
-from ci.properties import PROPERTIES, LieKind, PropertyName, Run, Runs, Verdict, register
+from ci.properties import PROPERTIES, RUNS, LieKind, PropertyName, Run, Runs, Verdict, register
+from spec.engines import load_engines
 from spec.scenario import Scenario
 
 ALL_ENGINES = ("interpreter", "spin", "z3")
@@ -44,16 +45,24 @@ def test_every_stub_tells_a_real_lie(kind: LieKind) -> None:
 def test_every_property_fails_on_each_of_its_lies_and_holds_on_the_honest_engines(name: PropertyName) -> None:
     prop = PROPERTIES[name]
     assert prop.lies, f"{name.value} is registered without the lies it exists to catch"
+    assert prop.applies(ALL_ENGINES)
     for kind in prop.lies:
-        lie = LIES[kind].told_by(prop)
-        assert prop.applies(ALL_ENGINES) and lie.liar in prop.runs, f"{kind.value}: {lie.liar.label} is not read"
-        scenario = lie.scenario()
+        scenario = LIES[kind].scenario()
         honest = prop.verdict(scenario, honest_runs(scenario), ALL_ENGINES)
         assert honest.verdict is Verdict.HELD, f"{name.value} on the honest engines ({kind.value}): {honest.detail}"
-        truth = honest_runs(scenario).get(lie.liar).answer
-        assert truth is not None and is_a_lie(lie, scenario, truth, lie.tell(scenario, truth)), kind.value
-        lying = prop.verdict(scenario, LyingRuns(honest_runs(scenario), lie), ALL_ENGINES)
-        assert lying.verdict is Verdict.FAILED, f"{name.value} did not catch {kind.value}: {lying}"
+        for lie in LIES[kind].told_to(prop):
+            truth = honest_runs(scenario).get(lie.liar).answer
+            told = f"{kind.value} told by {lie.liar.label}"
+            assert truth is not None and is_a_lie(lie, scenario, truth, lie.tell(scenario, truth)), f"no lie: {told}"
+            lying = prop.verdict(scenario, LyingRuns(honest_runs(scenario), lie), ALL_ENGINES)
+            assert lying.verdict is Verdict.FAILED, f"{name.value} did not catch {told}: {lying}"
+
+
+def test_every_registered_engine_is_read_by_the_properties_and_so_lied_about() -> None:
+    """A new engine has no place to hide: the properties read every registered engine (``RUNS``), and every lie is
+    told by every run its property reads."""
+    assert {key.engine for key in RUNS} == set(load_engines())
+    assert {key for prop in PROPERTIES.values() for key in prop.runs} == set(RUNS)
 
 
 @pytest.mark.requires_spin
