@@ -1,7 +1,7 @@
 """One controller per action: it follows the action's physical mapping from spec/ for its duration.
 
-Longitudinal: a position reference advancing along a speed profile (the action's speed, speed
-factor x the common speed, with feasible ramps to its neighbours' speeds); the speed command
+Longitudinal: a position reference advancing along a speed profile (``spec.motion``: the action's
+speed, speed factor x the common speed, with feasible ramps to its neighbours' speeds); the speed command
 adds a correction towards that reference, and the car's wheel motors limit acceleration and
 braking. Lateral: a reference that stays on the lane
 centre, or for a lane change moves one lane width (a smooth cosine profile) within the
@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 
 from sim.scene import Scene
 from sim.vehicle import WheeledCar
@@ -22,86 +21,12 @@ from spec.actions import ACTION_RULES, Action
 from spec.errors import EngineError
 from spec.grid import Grid
 from spec.lanes import Lane
-from spec.physical import CAR, LOOP, CarSpec
+from spec.motion import SpeedProfile, action_speed_mps
+from spec.physical import LOOP
 
 K_X = 0.8  # 1/s: speed correction per metre behind the position reference
 K_Y, K_VY = 3.0, 3.5  # lateral PD gains (1/s^2, 1/s)
 MAX_SPEED_FACTOR = 2.4
-RAMP_SHARE = 0.9  # reference ramps use this share of the car's limits, leaving some for the feedback
-
-
-def action_speed_mps(action: Action | None, grid: Grid) -> float:
-    """The AV's speed during an action by the physical mapping; None (no action): the common speed."""
-    return grid.speed if action is None else float(ACTION_RULES[action].speed_factor) * grid.speed
-
-
-def ramp_s(v_from_mps: float, v_to_mps: float, spec: CarSpec = CAR) -> float:
-    """How long a speed change takes at RAMP_SHARE of the car's acceleration or braking limit."""
-    rate = spec.max_accel_mps2 if v_to_mps > v_from_mps else spec.max_brake_mps2
-    return abs(v_to_mps - v_from_mps) / (RAMP_SHARE * rate)
-
-
-def ramp_gain_m(v_from_mps: float, v_to_mps: float) -> float:
-    """How far a car ramping from one speed to another gets ahead (negative: behind) of one at the second all along."""
-    return (v_from_mps - v_to_mps) * ramp_s(v_from_mps, v_to_mps) / 2
-
-
-@dataclass(frozen=True, slots=True)
-class Ramp:
-    """A linear speed change of ``dv_mps`` from ``start_s`` on, over ``duration_s`` (times on a plan's clock)."""
-
-    start_s: float
-    duration_s: float
-    dv_mps: float
-
-    def at(self, t_s: float) -> float:
-        if t_s <= self.start_s:
-            return 0.0
-        if t_s >= self.start_s + self.duration_s:
-            return self.dv_mps
-        return self.dv_mps * (t_s - self.start_s) / self.duration_s
-
-
-@dataclass(frozen=True, slots=True)
-class SpeedProfile:
-    """The speed reference through one action: a window onto its plan's reference, which is a starting
-    speed plus one ramp per boundary between speeds, superposed (so a long ramp may run on into the next
-    action, the speed stays continuous, and every ramp keeps its area)."""
-
-    start_mps: float
-    ramps: tuple[Ramp, ...]
-    offset_s: float = 0.0  # where this action starts on the plan's clock
-
-    def at(self, t_s: float) -> float:
-        """The reference speed ``t_s`` into the action."""
-        t = self.offset_s + t_s
-        return self.start_mps + sum(r.at(t) for r in self.ramps)
-
-
-def plan_profiles(actions: tuple[Action, ...], start_mps: float, grid: Grid) -> list[SpeedProfile]:
-    """One profile per action of a plan: a ramp from the car's speed into the first action, starting now;
-    between two actions a ramp centred on their boundary, so the distance lost on one side is made up on
-    the other and the car is where the model puts it at every boundary (to within half the ramp's area);
-    and a ramp towards the common speed centred on the plan's end (the next plan's frame starts there).
-    """
-    speeds = [action_speed_mps(a, grid) for a in actions]
-    starts, t = [], 0.0
-    for action in actions:
-        starts.append(t)
-        t += float(ACTION_RULES[action].duration_s)
-    edges = [(0.0, start_mps, speeds[0], False)]
-    edges += [(starts[k], speeds[k - 1], speeds[k], True) for k in range(1, len(speeds))]
-    edges += [(t, speeds[-1], grid.speed, True)]
-    ramps = tuple(Ramp(at - (ramp_s(v0, v1) / 2 if centred else 0.0), ramp_s(v0, v1), v1 - v0)
-                  for at, v0, v1, centred in edges if v1 != v0)
-    return [SpeedProfile(start_mps, ramps, start) for start in starts]
-
-
-def reference_offset_m(speed_mps: float, frame_mps: float, first_mps: float) -> float:
-    """Where a plan's position reference starts, ahead of the car: at the AV of the frame the plan was
-    made in (``ramp_gain_m`` to the frame's speed), less what the first ramp itself gains on the way to
-    the first action's speed (zero in the plan's own frame, where the two are the same)."""
-    return ramp_gain_m(speed_mps, frame_mps) - ramp_gain_m(speed_mps, first_mps)
 
 
 class Executor:

@@ -35,7 +35,7 @@ from dataclasses import asdict, dataclass, field
 from enum import Enum
 from typing import Any
 
-from sim.executor import Executor, SpeedProfile, plan_profiles
+from sim.executor import Executor
 from sim.safety import SafetyMonitor
 from sim.scene import Scene
 from sim.traffic import TrafficModel
@@ -43,6 +43,7 @@ from sim.vehicle import KinematicCar, WheeledCar, first_contact
 from spec.actions import Action
 from spec.grid import Grid
 from spec.lanes import Lane
+from spec.motion import SpeedProfile, plan_profiles
 from spec.physical import CAR, LOOP, SAFETY, SENSORS
 
 MAX_ACCELERATES = 6  # 18 s at twice the common speed: 126 m gained on a vehicle at 7 m/s

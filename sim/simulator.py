@@ -24,7 +24,7 @@ import numpy as np
 
 from sim import opportunity
 from sim.discretiser import in_window, reading_cell
-from sim.executor import Executor, action_speed_mps, plan_profiles, ramp_gain_m, reference_offset_m
+from sim.executor import Executor
 from sim.observers import StepEvent, TraceWriter
 from sim.parts import DriveConfig, Parts
 from sim.safety import SafetyMonitor
@@ -39,6 +39,7 @@ from spec.files import scenario_to_dict
 from spec.kinds import FailureKind
 from spec.lanes import Lane
 from spec.models import ModelKind
+from spec.motion import action_speed_mps, plan_profiles, ramp_gain_m, reference_offset_m
 from spec.physical import CAR, LOOP
 from spec.scenario import Scenario
 from spec.state import State

@@ -5,7 +5,6 @@ from __future__ import annotations
 import pytest
 
 import sim.parts as parts_module
-from sim.executor import ramp_gain_m
 from sim.parts import DriveConfig
 from sim.sensors import Reading
 from sim.simulator import Simulator
@@ -14,6 +13,7 @@ from spec.errors import ScenarioError
 from spec.grid import PAPER_GRID
 from spec.kinds import FailureKind, ViolationKind
 from spec.lanes import Lane
+from spec.motion import ramp_gain_m
 
 
 def paper_simulator(seed: int, **kw: object) -> Simulator:

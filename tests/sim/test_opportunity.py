@@ -8,7 +8,7 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from sim.executor import Executor, plan_profiles
+from sim.executor import Executor
 from sim.opportunity import MAX_ACCELERATES, Outcome, Refusal, Replay, WorldSave, _Attempt, overtake
 from sim.parts import DriveConfig
 from sim.scene import Scene
@@ -20,6 +20,7 @@ from spec.answers import Answer, Status, Strategy
 from spec.grid import PAPER_GRID
 from spec.lanes import Lane
 from spec.models import ModelKind
+from spec.motion import plan_profiles
 
 FAR_M = 5_000.0
 

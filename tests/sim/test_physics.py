@@ -7,21 +7,14 @@ import itertools
 import numpy as np
 import pytest
 
-from sim.executor import (
-    RAMP_SHARE,
-    Executor,
-    action_speed_mps,
-    plan_profiles,
-    ramp_gain_m,
-    ramp_s,
-    reference_offset_m,
-)
+from sim.executor import Executor
 from sim.scene import Scene
 from sim.vehicle import KinematicCar, WheeledCar
 from spec.actions import ACTION_RULES, Action
 from spec.errors import EngineError
 from spec.grid import PAPER_GRID
 from spec.lanes import Lane
+from spec.motion import RAMP_SHARE, action_speed_mps, plan_profiles, ramp_gain_m, ramp_s, reference_offset_m
 from spec.physical import CAR, LOOP
 
 COMMON_MPS = PAPER_GRID.speed  # the common speed of the paper's grid
