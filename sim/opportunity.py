@@ -12,7 +12,7 @@ on the same physics and the same traffic model: change to the right lane, accele
 times (``m`` = 1 .. ``MAX_ACCELERATES``), change back, then keep the lane for ``LOOP.wait_s``.
 A refused or outside-window decision is a *missed opportunity* when one of them succeeds (a
 delayed one, a *delayed overtake*: the planner did find one): no contact and no near miss
-(``spec.physical.SafetySpec``, the audit's own thresholds; a near miss already under way with
+(``spec.safety.SafetySpec``, the audit's own thresholds; a near miss already under way with
 the same vehicle when the decision was taken is not the overtake's) at any moment of the
 replay, the AV back in its own lane, and the target behind the AV by at least the near-miss
 gap. The world is then put back exactly as it was (PyBullet's state, the traffic model's
@@ -44,7 +44,8 @@ from spec.actions import Action
 from spec.grid import Grid
 from spec.lanes import Lane
 from spec.motion import SpeedProfile, plan_profiles
-from spec.physical import CAR, LOOP, SAFETY, SENSORS
+from spec.physical import CAR, LOOP, SENSORS
+from spec.safety import SAFETY
 
 MAX_ACCELERATES = 6  # 18 s at twice the common speed: 126 m gained on a vehicle at 7 m/s
 SAMPLE = 0.25  # the share of qualifying decisions replayed (a quarter: about +10% on a drive's wall time)
@@ -236,7 +237,7 @@ class _Attempt:
         if not back_in_lane or not self.executor.hold(LOOP.wait_s, self.executor.grid.speed, self.tick):
             return self.failed[0], True
         pose = self.car.pose()
-        behind_m = pose.x_m - CAR.length_m - SAFETY.near_gap_m
+        behind_m = pose.x_m - CAR.length_m - SAFETY.min_gap_m
         passed = self.target.respawns != self.respawns or self.target.x_m < behind_m
         back = Executor.lane_of(pose.y_m) is Lane.LEFT
         return (Outcome.MISSED, False) if passed and back else (Outcome.NOT_PASSED, True)

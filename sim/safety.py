@@ -4,8 +4,9 @@ model's cells implied at each of them beside the true one (the abstraction's err
 On every control step the monitor looks at the vehicle ahead of the AV in the lane the AV is in:
 in the left lane the nearest same-direction vehicle ahead, in the right lane the nearest oncoming
 one. Gaps are bumper to bumper; the time to collision is the gap over the closing speed (infinite
-when not closing). A near miss is a gap below ``near_gap_m`` or a time to collision below
-``near_ttc_s`` (``spec.physical.SafetySpec``); one event lasts while the condition holds for one
+when not closing). A near miss is a gap that breaks the one safety specification
+(``spec.safety``: below ``max(min_gap_m, time_gap_s x closing speed)``, which is a gap below 2 m or
+a time to collision below 1.5 s); one event lasts while the condition holds for one
 vehicle and keeps its worst values. The implied gap is where the plan under way puts that vehicle
 at the end of the current action (its predicted cell's centre), or None outside a plan or for a
 vehicle the plan does not track.
@@ -20,7 +21,8 @@ from typing import Any
 
 from sim.vehicle import KinematicCar, Pose
 from spec.lanes import Lane
-from spec.physical import CAR, SAFETY, SafetySpec
+from spec.physical import CAR
+from spec.safety import SAFETY, SafetySpec
 
 #: Near-miss and contact records kept per run (the counts are exact beyond it).
 MAX_RECORDS = 100
@@ -116,7 +118,7 @@ class SafetyMonitor:
             r.min_gap_left_m, r.min_ttc_left_s = min(r.min_gap_left_m, gap), min(r.min_ttc_left_s, ttc)
         else:
             r.min_gap_oncoming_m, r.min_ttc_oncoming_s = min(r.min_gap_oncoming_m, gap), min(r.min_ttc_oncoming_s, ttc)
-        near = car is not None and (gap < self.spec.near_gap_m or ttc < self.spec.near_ttc_s)
+        near = car is not None and self.spec.violated(gap, closing)
         for body in [b for b in self._open if car is None or b != car.body or not near]:
             del self._open[body]
         if not near or car is None:

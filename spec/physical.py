@@ -119,14 +119,6 @@ class NoiseSpec:
 
 
 @dataclass(frozen=True, slots=True)
-class SafetySpec:
-    """What counts as a near miss (gap bumper to bumper, time to collision with the vehicle ahead in the AV's lane)."""
-
-    near_gap_m: float = 2.0
-    near_ttc_s: float = 1.5
-
-
-@dataclass(frozen=True, slots=True)
 class LoopSpec:
     """Closed-loop driving: when to re-plan, how finely to simulate, how much to tolerate."""
 
@@ -143,7 +135,7 @@ class LoopSpec:
 
 
 ROAD, CAR, SENSORS, TRAFFIC, LOOP = RoadSpec(), CarSpec(), SensorSpec(), TrafficSpec(), LoopSpec()
-SPEEDS, IDM, EVENTS, NOISE, SAFETY = SpeedSpec(), IdmSpec(), EventSpec(), NoiseSpec(), SafetySpec()
+SPEEDS, IDM, EVENTS, NOISE = SpeedSpec(), IdmSpec(), EventSpec(), NoiseSpec()
 
 #: The highest stop rate that means anything: a stop starts at most once per vehicle per control step (a chance of 1).
 MAX_STOP_RATE_PER_H = 3600 / (LOOP.physics_dt_s * LOOP.control_every_steps)

@@ -10,7 +10,8 @@ import pytest
 from sim.safety import SafetyMonitor, SafetyReport
 from sim.vehicle import Pose
 from spec.lanes import Lane
-from spec.physical import CAR, SafetySpec
+from spec.physical import CAR
+from spec.safety import SafetySpec
 
 
 def car(body: int, x_m: float, velocity_mps: float) -> SimpleNamespace:
@@ -18,7 +19,7 @@ def car(body: int, x_m: float, velocity_mps: float) -> SimpleNamespace:
 
 
 def test_a_closing_vehicle_ahead_is_one_near_miss_with_its_worst_values_and_implied_gap() -> None:
-    monitor = SafetyMonitor(SafetySpec(near_gap_m=2.0, near_ttc_s=1.5))
+    monitor = SafetyMonitor(SafetySpec(min_gap_m=2.0, time_gap_s=1.5))
     implied = {7: 16.5}.get
     for x_m in (30.0, 12.0, 10.0, 8.0, 30.0, 9.0):  # closes in, drops back, closes in again
         pose = Pose(0.0, 1.8, 0.0, 10.0)

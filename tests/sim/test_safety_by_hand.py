@@ -15,7 +15,8 @@ import pytest
 from sim.safety import RULE, SafetyMonitor, ahead_in_lane
 from sim.vehicle import Pose
 from spec.lanes import Lane
-from spec.physical import CAR, SAFETY
+from spec.physical import CAR
+from spec.safety import SAFETY
 
 LENGTH_M = 4.5
 NEAR_GAP_M, NEAR_TTC_S = 2.0, 1.5  # the stated near-miss thresholds (SafetySpec)
@@ -35,7 +36,7 @@ def watch(lane: Lane, av_mps: float, left: list[SimpleNamespace], oncoming: list
 
 
 def test_the_stated_thresholds_and_car_length_are_the_ones_these_cases_assume() -> None:
-    assert (SAFETY.near_gap_m, SAFETY.near_ttc_s) == (NEAR_GAP_M, NEAR_TTC_S)
+    assert (SAFETY.min_gap_m, SAFETY.time_gap_s) == (NEAR_GAP_M, NEAR_TTC_S)
     assert CAR.length_m == LENGTH_M
 
 
