@@ -239,6 +239,7 @@ class Summary:
     exercised it, and the rules of the coverage target that none did."""
 
     target: CoverageTarget = CoverageTarget.NONE
+    cell_m: float = float(PAPER_GRID.cell_m)  # the campaign's: its target is judged there even with no scenario
     scenarios: int = 0
     verdicts: dict[str, Counter[str]] = field(default_factory=dict)
     ms: dict[str, list[float]] = field(default_factory=dict)
@@ -253,8 +254,11 @@ class Summary:
                 self.failures.setdefault(name, []).append(result)
         for label, ms in result["ms"].items():
             self.ms.setdefault(label, []).append(ms)
-        cell_m = float(result["scenario"].get("cell_m", PAPER_GRID.cell))
+        cell_m = float(result["scenario"].get("cell_m", self.cell_m))
         self.rules.setdefault(cell_m, Counter()).update(result["rules"])
+
+    def __post_init__(self) -> None:
+        self.rules.setdefault(self.cell_m, Counter())
 
     @property
     def all_held(self) -> bool:

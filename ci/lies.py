@@ -200,7 +200,8 @@ def is_a_lie(lie: Lie, scenario: Scenario, honest: Answer, told: Answer | Engine
         LieKind.WRONG_PLAN: lambda: verdict is not None and "goal not reached" in verdict.reason,
         LieKind.FALSE_NO_PLAN: lambda: honest_plan and told.status is Status.NO_PLAN_WITHIN_HORIZON,
         LieKind.FALSE_PLAN: lambda: not honest_plan and verdict is not None and not verdict.valid,
-        LieKind.INCOMPLETE_AS_ANSWER: lambda: honest_plan and told.status is not Status.INCOMPLETE,
+        LieKind.INCOMPLETE_AS_ANSWER: lambda: honest_plan and told.status is not Status.INCOMPLETE
+        and any(status is Status.INCOMPLETE for _, status, _ in told.stages),
         LieKind.MISSING_STATE: lambda: len(told.states) == len(honest.states) - 1,
         LieKind.EXTRA_STATE: lambda: len(told.states) == len(honest.states) + 1,
         LieKind.SHIFTED_STATE: lambda: len(told.states) == len(honest.states) and told.states != honest.states,

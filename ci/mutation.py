@@ -46,6 +46,7 @@ class Detector:
     name: str
     command: Callable[[Mutant, Path], list[str]]
     caught_codes: tuple[int, ...]  # exit codes that mean "found a fault"; 0 means it did not
+    env: tuple[tuple[str, str], ...] = ()  # set for this detector only (as .ci/run sets them)
 
 
 def _pytest(*targets: str) -> list[str]:
@@ -77,7 +78,7 @@ DETECTORS: tuple[Detector, ...] = (
              lambda m, work: _crossval(work / "hypothesis-10.5m", "--source", "hypothesis", "--seed", _ci_seed(),
                                        "--cell-m", "10.5", "--properties", CI_FINE_PROPERTIES,
                                        "--coverage-target", "grid"),
-             (ExitCode.DISAGREE, ExitCode.COVERAGE_MISSED)),
+             (ExitCode.DISAGREE, ExitCode.COVERAGE_MISSED), (("HYPOTHESIS_PROFILE", "ci"),)),
     Detector("tests (all)", lambda m, work: _pytest("tests", SELF_CHECK), (1,)),
 )
 
@@ -131,8 +132,8 @@ def check(m: Mutant, cache: Path, on_detector: Callable[[str], None] | None = No
             if on_detector:
                 on_detector(detector.name)
             try:
-                done = subprocess.run(detector.command(m, work), cwd=tree, env=env, capture_output=True, text=True,
-                                      timeout=DETECTOR_TIMEOUT_S)
+                done = subprocess.run(detector.command(m, work), cwd=tree, env={**env, **dict(detector.env)},
+                                      capture_output=True, text=True, timeout=DETECTOR_TIMEOUT_S)
             except subprocess.TimeoutExpired:
                 errors.append(f"{detector.name}: no answer within {DETECTOR_TIMEOUT_S:.0f} s")
                 continue

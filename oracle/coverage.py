@@ -69,16 +69,20 @@ def _explore(problem: Problem, found: set[str]) -> None:
             after = problem_step(problem, state, action)
             if isinstance(after, Collision):
                 found.add(_collision_rule(after))
-                if _in_passing(after, state, problem.grid.left_shift(action)):
+                if _in_passing(after, state, problem, problem.grid.left_shift(action)):
                     found.add(IN_PASSING)
             elif after not in seen:
                 seen.add(after)
                 queue.append(after)
 
 
-def _in_passing(hit: Collision, before: State, shift: int) -> bool:
-    """Whether a left-lane vehicle was hit before the action's shift had moved it to where it ends."""
-    return hit.lane is Lane.LEFT and hit.tick == 0 and hit.cell != before.left_lane[hit.vehicle] + shift
+def _in_passing(hit: Collision, before: State, problem: Problem, shift: int) -> bool:
+    """Whether the left-lane rule decided the step in passing: a vehicle hit before the action's shift had moved it
+    to where it ends, where a rule that checked only where vehicles end would have let the step through."""
+    if hit.lane is not Lane.LEFT or hit.tick != 0 or hit.cell == before.left_lane[hit.vehicle] + shift:
+        return False
+    landed = replace(hit.state, left_lane=tuple(cell + shift for cell in before.left_lane))
+    return problem_collision(problem, landed) is None
 
 
 def _collision_rule(hit: Collision) -> str:

@@ -13,12 +13,15 @@ pan's own words decide the answer, and only after a clean exit (0) with pan's cl
 - "max search depth too small" or the memory bound ("reached -DMEMLIM bound", "out of memory"):
   "incomplete", even with a trail (a truncated search claims nothing);
 - the goal's assertion violated ("assertion violated  !(reached)") and a trail written: a plan;
-- "errors: 0" and no "Search not completed": "no plan within the horizon", the only way to it;
+- "errors: 0" in pan's clean report of a complete search (its banner first, a full state-space
+  search, no warning, no line of pan's own but its timing): "no plan within the horizon", the
+  only way to it;
 - the time limit (pan killed by the runner or the server): "incomplete";
 - anything else is an engine error naming pan's exit code or signal and its first line, never
   "no plan": a signal (even after a trail or "errors: 0"), any other exit code, no output, no
-  summary, a line it does not know, another assertion (an array bound), a goal violation without
-  its trail, an interrupted search ("Interrupted": "Search not completed" with no limit named).
+  summary, a line it does not know (before, inside or after the report), another assertion (an
+  array bound), a goal violation without its trail, an interrupted search ("Interrupted":
+  "Search not completed" with no limit named).
 
 A replay (``pan -r``, ``spin -t``) that times out or does not exit cleanly is an engine error too.
 """
@@ -282,10 +285,27 @@ def _pan(folder: Path, execute: Execute, problem: Problem, timeout_s: float | No
             return SearchResult(Status.INCOMPLETE, (), explored, "pan: memory limit reached")
         if errors > 0 and GOAL_VIOLATED.search(text) and (folder / f"{MODEL_FILE}.trail").exists():
             return SearchResult(Status.PLAN, (), explored, "a trail to replay")
-        if errors == 0 and "Search not completed" not in text:
+        if errors == 0 and _clean_report(text):
             return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), explored,
                                 f"no plan within {problem.horizon} actions (search completed)")
     raise EngineError(f"pan failed ({_ending(returncode)}): {_first_line(text)}")
+
+
+#: The only lines of pan's own (``pan...``) a clean report of a complete search may hold: its timing.
+TIMING_LINES = ("pan: elapsed time", "pan: rate")
+#: pan's progress line (``snapshot()`` in pan.c: every million states, and at each breadth-first level), anywhere.
+PROGRESS = re.compile(r"Depth=\s*\d+\s+States=\s*\S+\s+Transitions=")
+
+
+def _clean_report(text: str) -> bool:
+    """Whether ``text`` is pan's report of a complete search and nothing else: its banner first (after any progress
+    lines), a full state-space search, no warning ("Search not completed", an interrupt), and no line of pan's own
+    but its timing."""
+    lines = [line for line in (raw.strip() for raw in text.splitlines()) if line and not PROGRESS.match(line)]
+    return (bool(lines) and lines[0].startswith("(Spin Version") and "Full statespace search for:" in lines
+            and not any(line.startswith(("Warning", "Interrupted")) or (line.startswith("pan")
+                                                                         and not line.startswith(TIMING_LINES))
+                        for line in lines))
 
 
 def _replay(execute: Execute, args: list[str], problem: Problem, explored: int) -> SearchResult:

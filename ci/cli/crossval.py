@@ -107,7 +107,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
               + (f" (not applicable to these engines: {', '.join(skipped)})" if skipped else "")
               + f"; engines {', '.join(engines)}; on {executor.describe()}; results in {out_dir}"
               + (f"; seed {seed}" if source == "hypothesis" else ""))
-    summary = Summary(CoverageTarget(coverage_text))
+    summary = Summary(CoverageTarget(coverage_text), float(grid.cell_m))
     started = time.perf_counter()
     if source == "hypothesis":
         from ci.hypo import run_hypothesis

@@ -189,3 +189,12 @@ def test_rule_coverage_at_21_m_has_no_passing_rule_and_no_target_by_default(tmp_
     data = json.loads(done.stdout)
     assert list(data["rule_coverage"]) == ["21 m"] and data["coverage_target"] == {"target": "none", "missed": []}
     assert "collision: left lane, in passing" not in data["rule_coverage"]["21 m"]
+
+
+def test_a_campaign_with_no_scenario_misses_its_coverage_target_at_its_own_cell_size() -> None:
+    from ci.crossval import Summary
+    from oracle.coverage import CoverageTarget
+
+    summary = Summary(CoverageTarget.GRID, 10.5)
+    assert summary.missed() == ["collision: left lane, in passing at 10.5 m"]
+    assert Summary(CoverageTarget.GRID, 21.0).missed() == [] and list(summary.coverage()) == ["10.5 m"]

@@ -47,3 +47,13 @@ def test_coverage_targets_name_the_rules_per_grid() -> None:
     assert CoverageTarget.NONE.rules(Grid(10.5)) == ()
     assert CoverageTarget.GRID.rules(PAPER_GRID) == () and CoverageTarget.GRID.rules(Grid(10.5)) == (IN_PASSING,)
     assert CoverageTarget.ALL.rules(PAPER_GRID) == rules_on(PAPER_GRID)
+
+
+def test_a_hit_in_passing_that_a_landing_only_rule_rejects_anyway_is_not_counted() -> None:
+    """Two vehicles at av+1 and av+2 on the 10.5 m grid: accelerating hits the first in passing, but the second lands
+    in the AV's cell, so a rule that checked only where vehicles end rejects the step too: nothing is decided
+    differently from the paper's grid."""
+    grid = Grid(10.5)
+    scenario = make_scenario("left", [grid.av_cell + 1, grid.av_cell + 2], [], 1, horizon=1, grid=grid)
+    found = rules_exercised(scenario)
+    assert "collision: left lane" in found and IN_PASSING not in found

@@ -11,7 +11,9 @@ depth_with_trail: three targets and one oncoming (horizon 30) with -m24. memory:
 -DMEMLIM=2048 (pan's real bound, hit at the table instead of mid-search). interrupted: SIGINT 0.2 s into -w27 (pan
 catches it: "Interrupted", "errors: 0", exit 0). malformed_scenario: OVERTAKE_SCENARIO="0 3 12" (the model exits 2).
 other_assertion: three left vehicles in the model rendered for two slots, compiled with the runner's CFLAGS (an
-array bound, not the goal). Signals, other exit codes, no output and unknown lines are synthesised from these.
+array bound, not the goal). no_plan_with_progress: prep_case_a under the final model, breadth first (pan prints
+its progress lines before its banner). Signals, other exit codes, no output and unknown lines are synthesised
+from these.
 """
 
 from __future__ import annotations
@@ -46,11 +48,15 @@ def answer(folder: Path, returncode: int, text: str, trail: bool) -> SearchResul
 
 
 # -- _pan on recorded and synthesised endings -------------------------------------------------------------------
+STORED_WITH_PROGRESS = 6600  # its "states, stored"
 RECORDED_ANSWERS = [  # recording, trail written, answer: status, detail, states stored
     ("plan-dfs", True, Status.PLAN, "a trail to replay", 441),
     ("plan-bfs", True, Status.PLAN, "a trail to replay", 53),
     ("no_plan-dfs", False, Status.NO_PLAN_WITHIN_HORIZON, "no plan within 30 actions (search completed)", 30),
     ("no_plan-bfs", False, Status.NO_PLAN_WITHIN_HORIZON, "no plan within 30 actions (search completed)", 30),
+    # prep_case_a under the final model alone (breadth first): pan's progress lines come before its banner
+    ("no_plan_with_progress-bfs", False, Status.NO_PLAN_WITHIN_HORIZON,
+     "no plan within 30 actions (search completed)", STORED_WITH_PROGRESS),
     ("depth-dfs", False, Status.INCOMPLETE, "pan: max search depth too small", 3),
     ("depth-bfs", False, Status.INCOMPLETE, "pan: max search depth too small", 7),
     ("depth_with_trail-dfs", True, Status.INCOMPLETE, "pan: max search depth too small", 893),  # nothing claimed
@@ -86,8 +92,16 @@ def test_a_time_out_is_incomplete_never_no_plan(tmp_path: Path) -> None:
     (0, "pan: a line the runner does not know\n", False, "exit 0): pan: a line the runner does not know"),
     (0, recorded("plan-dfs").split("\n\n")[0], True, "exit 0): pan:1:"),  # cut before its summary
     (0, recorded("no_plan-dfs").replace("errors: 0", "errors: ?"), False, "exit 0)"),
+    (0, "pan: a line the runner does not know\n" + recorded("no_plan-dfs"), False,
+     "exit 0): pan: a line the runner does not know"),
+    (0, recorded("no_plan-dfs").replace("hash conflicts:", "pan: hash table full\nhash conflicts:"), False,
+     "exit 0): (Spin Version"),
+    (0, recorded("no_plan-dfs") + "pan: something after the report\n", False, "exit 0): (Spin Version"),
+    (0, recorded("no_plan-dfs").replace("Full statespace search for:", "Partial search for:"), False,
+     "exit 0): (Spin Version"),
 ], ids=["goal-without-trail", "other-assertion", "interrupted", "malformed-scenario", "exit-1-after-errors-0",
-        "exit-3-after-a-trail", "no-output", "unknown-line", "no-summary", "unreadable-summary"])
+        "exit-3-after-a-trail", "no-output", "unknown-line", "no-summary", "unreadable-summary",
+        "unknown-line-before-a-clean-report", "unknown-line-inside-it", "unknown-line-after-it", "not-a-full-search"])
 def test_an_unknown_ending_is_an_engine_error_with_its_exit_code_never_no_plan(
         tmp_path: Path, returncode: int, text: str, trail: bool, said: str) -> None:
     with pytest.raises(EngineError) as caught:
