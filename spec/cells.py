@@ -49,3 +49,26 @@ def first_platoon(left: list[int], av_lane: Lane, grid: Grid) -> int:
     while count < min(len(ahead), MAX_TARGETS) and ahead[count] - ahead[count - 1] <= gap:
         count += 1
     return count
+
+
+def left_extent_m(cell: int, av_lane: Lane, grid: Grid) -> tuple[float, float]:
+    """Where a same-direction vehicle in ``cell`` can be, metres ahead of the AV: every distance ``left_cell`` puts
+    there (the nearest cell; in the AV's own lane the cells beside the AV's also take what would round to it)."""
+    offset = cell - grid.av_cell
+    lo, hi = (offset - 0.5) * grid.cell, (offset + 0.5) * grid.cell
+    if av_lane is Lane.LEFT and offset == 1:
+        lo = 0.0
+    if av_lane is Lane.LEFT and offset == -1:
+        hi = 0.0
+    return lo, hi
+
+
+def oncoming_extent_m(cell: int, grid: Grid) -> tuple[float, float]:
+    """Where an oncoming vehicle in ``cell`` can be, metres ahead of the AV: every distance ``oncoming_cell`` puts
+    there (rounded towards the AV, so a cell ahead stands for up to one cell farther away)."""
+    offset = cell - grid.av_cell
+    if offset > 0:
+        return offset * grid.cell, (offset + 1) * grid.cell
+    if offset < 0:
+        return (offset - 1) * grid.cell, offset * grid.cell
+    return -grid.cell, grid.cell
