@@ -1,0 +1,109 @@
+"""What the sound model assumes of the world, stated: each lane's speed interval, the sensing error, and phantoms
+where the sensors cannot see. Every number of a named profile says where it comes from.
+
+A safety claim of the sound model holds for every motion inside these bounds (``oracle.reach``
+checks it); outside them an event is an assumption violation, counted as such. Same-direction
+speeds are along the AV's direction; oncoming speeds are magnitudes towards the AV. The sensing
+error widens every sensed position by that much either way, on top of the cell it was put in
+(a cell means anywhere within it, ``spec.cells``). A phantom is a vehicle assumed at the edge of
+a sensor's range in each lane, moving within that lane's bounds, so that a vehicle arriving from
+beyond the range is inside the assumptions.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from spec.errors import OptionError
+from spec.grid import WINDOW_M
+from spec.lanes import Lane
+from spec.physical import NOISE, SENSORS, SPEEDS, TRAFFIC
+
+
+@dataclass(frozen=True, slots=True)
+class SpeedBounds:
+    """A closed interval of speeds, m/s."""
+
+    low_mps: float
+    high_mps: float
+
+
+@dataclass(frozen=True, slots=True)
+class Phantom:
+    """A vehicle assumed where a sensor's range ends: in ``lane``, ``dx_m`` ahead of the AV (negative: behind)."""
+
+    lane: Lane
+    dx_m: float
+    why: str
+
+
+@dataclass(frozen=True, slots=True)
+class Bounds:
+    """The sound model's assumptions: speeds per lane, sensing error, phantoms; ``source`` says where they come from."""
+
+    name: str
+    same_mps: SpeedBounds
+    oncoming_mps: SpeedBounds
+    sensing_error_m: float
+    phantoms: bool
+    source: str
+
+    def speeds(self, lane: Lane) -> SpeedBounds:
+        """The bounds of the vehicles of ``lane`` (the left lane carries same-direction traffic, the right oncoming)."""
+        return self.same_mps if lane is Lane.LEFT else self.oncoming_mps
+
+    def phantom_vehicles(self) -> tuple[Phantom, ...]:
+        """The phantoms: a same-direction vehicle at each end of the left-lane sensor's range, an oncoming one at the
+        end of the front-right sensor's (``spec.physical.SENSORS``); none when the profile has no phantoms."""
+        if not self.phantoms:
+            return ()
+        return (Phantom(Lane.LEFT, SENSORS.left_range_m, "left-lane sensor's range, ahead"),
+                Phantom(Lane.LEFT, -SENSORS.left_range_m, "left-lane sensor's range, behind"),
+                Phantom(Lane.RIGHT, SENSORS.right_range_m, "front-right sensor's range"))
+
+
+def check_bounds(bounds: Bounds, where: str = "--bounds") -> Bounds:
+    """``bounds`` if every number is usable; else bad input naming the option (or file key), the value and why."""
+    for key, interval in (("same-speed", bounds.same_mps), ("oncoming-speed", bounds.oncoming_mps)):
+        for end in (interval.low_mps, interval.high_mps):
+            if not isinstance(end, (int, float)) or isinstance(end, bool) or not math.isfinite(end):
+                raise OptionError(f"{where} {key}", end, "must be a finite number of m/s")
+            if end < 0:
+                raise OptionError(f"{where} {key}", end, "must not be negative (speeds are along the lane's "
+                                                          "direction of travel)")
+        if interval.low_mps > interval.high_mps:
+            raise OptionError(f"{where} {key}", f"{interval.low_mps:g}..{interval.high_mps:g}",
+                              "the lower end is above the upper end")
+    error = bounds.sensing_error_m
+    if not isinstance(error, (int, float)) or isinstance(error, bool) or not math.isfinite(error) or error < 0:
+        raise OptionError(f"{where} sensing-error-m", error, "must be a finite number of metres, at least 0")
+    if error > float(WINDOW_M):
+        raise OptionError(f"{where} sensing-error-m", error, f"larger than the sensed window ({float(WINDOW_M):g} m)")
+    return bounds
+
+
+_COMMON_MPS = TRAFFIC.speed_mps
+_SPREAD = SpeedBounds(SPEEDS.mean_mps - SPEEDS.cut_sd * SPEEDS.sd_mps, SPEEDS.mean_mps + SPEEDS.cut_sd * SPEEDS.sd_mps)
+#: How many standard deviations of the noisy sensor's range noise the default sensing error covers.
+SENSING_SDS = 3.0
+
+PROFILES: dict[str, Bounds] = {b.name: check_bounds(b) for b in (
+    Bounds("paper", SpeedBounds(_COMMON_MPS, _COMMON_MPS), SpeedBounds(_COMMON_MPS, _COMMON_MPS), 0.0, True,
+           "the paper's world: every vehicle at the common speed (spec.physical.TRAFFIC.speed_mps), sensing exact "
+           "(a cell still means anywhere within it), phantoms at the sensors' ranges (traffic enters from beyond)"),
+    Bounds("default", _SPREAD, _SPREAD, SENSING_SDS * NOISE.range_sd_m, True,
+           f"speeds: the spread traffic's distribution (spec.physical.SPEEDS) cut where it is cut, mean +- "
+           f"{SPEEDS.cut_sd:g} sd = {_SPREAD.low_mps:g}..{_SPREAD.high_mps:g} m/s, both lanes; sensing error: "
+           f"{SENSING_SDS:g} x the noisy sensor's range sd (spec.physical.NOISE) = "
+           f"{SENSING_SDS * NOISE.range_sd_m:g} m; phantoms at the sensors' ranges"),
+)}
+DEFAULT_PROFILE = "default"
+
+
+def profile(name: str, where: str = "--bounds") -> Bounds:
+    """The named profile; an unknown name is bad input listing the known ones."""
+    found = PROFILES.get(name)
+    if found is None:
+        raise OptionError(where, name, f"unknown bounds profile (known: {', '.join(PROFILES)})")
+    return found
