@@ -24,7 +24,7 @@ from spec.actions import Action
 from spec.answers import Answer, Status, Strategy
 from spec.errors import EngineError
 from spec.library import builtin
-from spec.models import ModelChoice, models_for
+from spec.models import ModelChoice, ModelKind, models_for
 from spec.scenario import Problem, Scenario, problem_for
 from spec.state import Collision, State
 
@@ -40,7 +40,6 @@ class Lie:
     liar: RunKey
     scenario: Callable[[], Scenario]
     tell: Tell
-
 
     def told_to(self, prop: Property) -> list[Lie]:
         """The lie as told to ``prop`` by each run it reads, or by the run it is about when it has one (optimality
@@ -97,8 +96,13 @@ def several_beyond() -> Scenario:
 
 
 # -- the tells ----------------------------------------------------------------------------------------------------
+def _model_of(scenario: Scenario, answer: Answer) -> ModelKind:
+    """The model an answer names, or the first its scenario's pipeline tries."""
+    return answer.model or models_for(scenario.model)[0]
+
+
 def _problem(scenario: Scenario, answer: Answer) -> Problem:
-    return problem_for(scenario, answer.model or models_for(scenario.model)[0])
+    return problem_for(scenario, _model_of(scenario, answer))
 
 
 def colliding_actions(problem: Problem) -> tuple[Action, ...]:
@@ -124,23 +128,17 @@ def _plan(answer: Answer, scenario: Scenario, actions: tuple[Action, ...]) -> An
     return replace(answer, status=Status.PLAN, actions=actions, states=states)
 
 
-def _no_plan(status: Status, detail: str) -> Tell:
+def _no_plan(status: Status, detail: str, stage: Status | None = None) -> Tell:
+    """Answer ``status`` with no plan; its one stage says ``stage`` (default: the same status)."""
     def tell(scenario: Scenario, answer: Answer) -> Answer:
-        kind = answer.model or models_for(scenario.model)[0]
         return replace(answer, status=status, actions=(), states=(), detail=detail,
-                       stages=((kind, status, detail),))
+                       stages=((_model_of(scenario, answer), stage or status, detail),))
     return tell
-
-
-def _incomplete_as_answer(scenario: Scenario, answer: Answer) -> Answer:
-    kind = answer.model or models_for(scenario.model)[0]
-    return replace(answer, status=Status.NO_PLAN_WITHIN_HORIZON, actions=(), states=(), detail="time limit reached",
-                   stages=((kind, Status.INCOMPLETE, "time limit reached"),))
 
 
 def _false_plan(scenario: Scenario, answer: Answer) -> Answer:
     """A plan beyond the horizon, passed off as one within it."""
-    kind = answer.model or models_for(scenario.model)[0]
+    kind = _model_of(scenario, answer)
     found = lexicographic_optimum(problem_for(scenario, kind, 60))
     return replace(answer, status=Status.PLAN, model=kind, actions=found.actions,
                    states=validate(problem_for(scenario, kind, 60), found.actions).states)
@@ -165,7 +163,7 @@ LIES: dict[LieKind, Lie] = {lie.kind: lie for lie in (
     Lie(LieKind.FALSE_PLAN, RunKey("spin", Strategy.SENSIBLE), lambda: _library("no_plan_within_horizon"),
         _false_plan),
     Lie(LieKind.INCOMPLETE_AS_ANSWER, RunKey("spin", Strategy.SHORTEST), lambda: _library("one_target"),
-        _incomplete_as_answer),
+        _no_plan(Status.NO_PLAN_WITHIN_HORIZON, "time limit reached", Status.INCOMPLETE)),
     Lie(LieKind.ENGINE_ERROR, RunKey("spin", Strategy.SHORTEST), lambda: _library("one_target"),
         lambda s, a: EngineError("pan failed (exit 1): a line the runner does not know")),
     Lie(LieKind.MISSING_STATE, RunKey("spin", Strategy.SENSIBLE), lambda: _library("one_target"),
@@ -191,8 +189,7 @@ def is_a_lie(lie: Lie, scenario: Scenario, honest: Answer, told: Answer | Engine
     """Why ``told`` is false on ``scenario``, judged without the properties (None: it is no lie, the stub is wrong)."""
     if isinstance(told, EngineError):
         return "an engine error is not an answer" if lie.kind is LieKind.ENGINE_ERROR else None
-    kind = told.model or models_for(scenario.model)[0]
-    problem = problem_for(scenario, kind)
+    problem = problem_for(scenario, _model_of(scenario, told))
     verdict = validate(problem, told.actions) if told.status is Status.PLAN else None
     honest_plan = honest.status is Status.PLAN
     checks: dict[LieKind, Callable[[], bool]] = {
