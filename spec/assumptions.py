@@ -12,10 +12,9 @@ beyond the range is inside the assumptions.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
-from spec.errors import OptionError
+from spec.errors import OptionError, check_number
 from spec.grid import WINDOW_M
 from spec.lanes import Lane
 from spec.physical import NOISE, SENSORS, SPEEDS, TRAFFIC
@@ -67,17 +66,11 @@ def check_bounds(bounds: Bounds, where: str = "--bounds") -> Bounds:
     """``bounds`` if every number is usable; else bad input naming the option (or file key), the value and why."""
     for key, interval in (("same-speed", bounds.same_mps), ("oncoming-speed", bounds.oncoming_mps)):
         for end in (interval.low_mps, interval.high_mps):
-            if not isinstance(end, (int, float)) or isinstance(end, bool) or not math.isfinite(end):
-                raise OptionError(f"{where} {key}", end, "must be a finite number of m/s")
-            if end < 0:
-                raise OptionError(f"{where} {key}", end, "must not be negative (speeds are along the lane's "
-                                                          "direction of travel)")
+            check_number(f"{where} {key}", end)  # finite, at least 0: speeds are along the lane's direction
         if interval.low_mps > interval.high_mps:
             raise OptionError(f"{where} {key}", f"{interval.low_mps:g}..{interval.high_mps:g}",
                               "the lower end is above the upper end")
-    error = bounds.sensing_error_m
-    if not isinstance(error, (int, float)) or isinstance(error, bool) or not math.isfinite(error) or error < 0:
-        raise OptionError(f"{where} sensing-error-m", error, "must be a finite number of metres, at least 0")
+    error = check_number(f"{where} sensing-error-m", bounds.sensing_error_m)
     if error > float(WINDOW_M):
         raise OptionError(f"{where} sensing-error-m", error, f"larger than the sensed window ({float(WINDOW_M):g} m)")
     return bounds

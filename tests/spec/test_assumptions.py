@@ -39,7 +39,7 @@ GOOD = PROFILES["default"]
 
 
 @pytest.mark.parametrize(("bounds", "words"), [
-    (replace(GOOD, same_mps=SpeedBounds(-1.0, 9.0)), ["same-speed", "-1.0", "negative"]),
+    (replace(GOOD, same_mps=SpeedBounds(-1.0, 9.0)), ["same-speed", "-1.0", "at least 0"]),
     (replace(GOOD, oncoming_mps=SpeedBounds(5.0, float("nan"))), ["oncoming-speed", "nan", "finite"]),
     (replace(GOOD, same_mps=SpeedBounds(9.0, 5.0)), ["same-speed", "9..5", "lower end is above"]),
     (replace(GOOD, sensing_error_m=float("inf")), ["sensing-error-m", "inf", "finite"]),
