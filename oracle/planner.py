@@ -6,10 +6,11 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
+from oracle import sound
 from oracle.interpreter import Validation, validate
 from spec.actions import Action, plan_text
 from spec.answers import Answer, Limits, SearchResult, Status, Strategy
-from spec.engines import Engine, check_strategy, get_engine, parse_strategy
+from spec.engines import Engine, check_model, check_strategy, get_engine, parse_strategy
 from spec.errors import EngineError
 from spec.models import ModelChoice, ModelKind, models_for
 from spec.scenario import Problem, Scenario, problem_for
@@ -48,6 +49,7 @@ def solve(
     eng = engine if isinstance(engine, Engine) else get_engine(engine)
     strategy = parse_strategy(strategy)
     check_strategy(eng, strategy)
+    check_model(eng, scenario)
     choice = model or scenario.model
     started = time.perf_counter()
     stages: list[tuple[ModelKind, Status, str]] = []
@@ -88,7 +90,9 @@ def _check_no_plan(answer: Answer, scenario: Scenario, model: ModelChoice | None
 
 def _checked_states(engine: Engine, problem: Problem, result: SearchResult | Answer) -> tuple[State, ...]:
     """The states of a plan, after checking it with the interpreter: an invalid plan is an engine error."""
-    verdict = validate(problem, result.actions)
+    actions = result.actions
+    verdict: Validation | sound.SoundValidation = (
+        validate(problem, actions) if problem.scenario.sound is None else sound.validate(problem, actions))
     if not verdict.valid:
         raise EngineError(f"engine {engine.name} returned an invalid plan: {verdict.reason}")
     if result.states and result.states != verdict.states:

@@ -15,7 +15,7 @@ from importlib.metadata import entry_points
 
 from spec.answers import Limits, SearchResult, Strategy
 from spec.errors import OptionError, ToolMissing
-from spec.scenario import Problem
+from spec.scenario import Problem, Scenario
 
 Solver = Callable[[Problem, Strategy, Limits], SearchResult]
 ENTRY_POINTS = "overtake_mc.engines"
@@ -33,6 +33,8 @@ class Engine:
     prove_beyond: Callable[[Problem], SearchResult] | None = None
     #: Raises ToolMissing (with what to install) when an outside tool the engine runs is missing.
     check_tools: Callable[[], None] | None = None
+    #: Whether it answers the sound model (a scenario with ``sound`` set); the others answer the paper's rules only.
+    sound: bool = False
 
     def ready(self) -> None:
         """Check, before any work, that the engine can run here (exit 4 with the install command if not)."""
@@ -93,6 +95,14 @@ def parse_strategy(text: str | Strategy) -> Strategy:
     except ValueError:
         raise OptionError("--strategy", text, f"unknown strategy (known: {', '.join(s.value for s in Strategy)})") \
             from None
+
+
+def check_model(engine: Engine, scenario: Scenario) -> None:
+    """Raise bad input when ``scenario`` asks for the sound model and ``engine`` answers the paper's rules only."""
+    if scenario.sound is not None and not engine.sound:
+        able = ", ".join(e.name for e in ENGINES.values() if e.sound) or "none loaded"
+        raise OptionError("--bounds", scenario.sound.bounds.name, f"engine {engine.name} answers the paper model "
+                          f"only; the sound model is answered by: {able}")
 
 
 def check_strategy(engine: Engine, strategy: Strategy) -> None:

@@ -21,6 +21,7 @@ from spec.models import (
     models_for,
 )
 from spec.rules import collision_in, collision_span
+from spec.sound import Sound
 from spec.state import State
 
 E = TypeVar("E", bound=enum.Enum)
@@ -37,6 +38,7 @@ class Scenario:
     model: ModelChoice = ModelChoice.AUTO
     horizon: int = DEFAULT_HORIZON
     grid: Grid = PAPER_GRID
+    sound: Sound | None = None  # None: the paper's rules; else the sound model under these assumptions
 
     @property
     def target_indices(self) -> tuple[int, ...]:

@@ -1,0 +1,394 @@
+"""Soundness against continuous motion: the sound model's plans checked by sampling time, not by its own algebra.
+
+Two checks, both pure kinematics (no PyBullet), both built from the declarations alone (the bounds,
+the safety specification, the AV's envelope, the discretiser, the executor's speed ramps) and
+never from ``spec.sound``'s thresholds:
+
+- ``exact_check``: every vehicle's reachable interval (its start interval, widened by its speed
+  interval times the time) against the AV's envelope, at samples at most ``MAX_DT_S`` apart, each
+  sample's margin reduced by how much it could change before the next (the largest relative speed
+  plus the time gap times the largest change of the AV's speed, times the step);
+- ``sampled_motions``: motions that keep to the bounds: each vehicle's true start anywhere the
+  discretiser would have put into its cell, its reading off by at most the sensing error, its
+  speed anywhere in its interval and changing at random instants; the AV off its reference by at
+  most the tracking error and moving sideways for the whole stated time; with the corner motions
+  always included (constant extremes, readings at the ends of the error, one switch).
+
+A violation names the conflict, the vehicle, the time and the gaps. Under the same bounds both
+checks find violations in plans of the paper's rules: they bite.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from spec.actions import ACTION_RULES, Action
+from spec.cells import left_cell, oncoming_cell
+from spec.grid import Grid
+from spec.lanes import Lane
+from spec.models import GoalRule
+from spec.motion import Ramp, action_speed_mps, ramp_s
+from spec.physical import LOOP
+from spec.safety import Conflict
+from spec.scenario import Scenario
+from spec.sound import Sound, Vehicle, vehicles
+
+#: The longest step between two samples of the exact check (the issue's 10 ms).
+MAX_DT_S = 0.01
+#: The step of a sampled motion: the executor's control step (the simulator moves the AV no more often).
+MOTION_DT_S = LOOP.physics_dt_s * LOOP.control_every_steps
+#: How long after a plan the minimal-risk manoeuvre is followed (it reaches its hold speed well within this).
+CONTINUATION_S = 10.0
+
+
+@dataclass(frozen=True, slots=True)
+class Breach:
+    """A motion within the bounds that breaks the specification (or a goal field) of a plan."""
+
+    conflict: Conflict | None  # None: a goal field, not a conflict
+    vehicle: str
+    time_s: float
+    gap_m: float
+    required_m: float
+    motion: str  # which motion: "exact", "corner: ...", "sampled #k"
+
+    def describe(self) -> str:
+        what = self.conflict.value if self.conflict else "goal"
+        return (f"{self.motion}: {what} with {self.vehicle} at t = {self.time_s:.2f} s: gap {self.gap_m:.2f} m, "
+                f"required {self.required_m:.2f} m")
+
+
+class Path:
+    """The AV's reference through a plan and the minimal-risk manoeuvre after it: speed, position, lanes."""
+
+    def __init__(self, actions: Sequence[Action], sound: Sound, grid: Grid, lane: Lane) -> None:
+        self.sound, self.grid = sound, grid
+        start_mps = grid.speed if sound.start_mps is None else sound.start_mps
+        speeds = [action_speed_mps(a, grid) for a in actions]
+        self.bounds_s, t = [0.0], 0.0
+        for a in actions:
+            t += float(ACTION_RULES[a].duration_s)
+            self.bounds_s.append(t)
+        self.end_s = t
+        ramps = []
+        first = speeds[0] if speeds else start_mps
+        if first != start_mps:
+            ramps.append(Ramp(0.0, ramp_s(start_mps, first), first - start_mps))
+        for k in range(1, len(speeds)):
+            if speeds[k] != speeds[k - 1]:
+                r = ramp_s(speeds[k - 1], speeds[k])
+                ramps.append(Ramp(self.bounds_s[k] - r / 2, r, speeds[k] - speeds[k - 1]))
+        last = speeds[-1] if speeds else start_mps
+        hold = max(0.0, min(last, sound.bounds.same_mps.low_mps - sound.tracking.speed_mps))
+        if hold < last:
+            ramps.append(Ramp(t, (last - hold) / sound.minimal_risk.decel_mps2, hold - last))
+        self.start_mps, self.ramps = start_mps, tuple(ramps)
+        self.lanes: list[tuple[float, float, frozenset[Lane], bool]] = []  # (from, to, lanes, entering the left)
+        current = lane
+        for k, a in enumerate(actions):
+            rule = ACTION_RULES[a]
+            t0, t1 = self.bounds_s[k], self.bounds_s[k + 1]
+            if rule.to_lane is None:
+                self.lanes.append((t0, t1, frozenset({current}), False))
+                continue
+            move = t0 + min(sound.tracking.lateral_s, t1 - t0)
+            self.lanes.append((t0, move, frozenset(Lane), rule.to_lane is Lane.LEFT))
+            self.lanes.append((move, t1, frozenset({rule.to_lane}), False))
+            current = rule.to_lane
+        self.final_lane = current
+        self.max_accel = max((abs(r.dv_mps) / r.duration_s for r in self.ramps if r.duration_s > 0), default=0.0)
+
+    def speed(self, t_s: float) -> float:
+        return self.start_mps + sum(r.at(t_s) for r in self.ramps)
+
+    def position(self, t_s: float) -> float:
+        return self.start_mps * t_s + sum(r.integral_m(t_s) - r.integral_m(0.0) for r in self.ramps)
+
+    def occupancy(self, t_s: float) -> tuple[frozenset[Lane], bool]:
+        """The lanes the AV is in at ``t_s`` and whether it is moving into the left one (after the plan: its lane)."""
+        for t0, t1, lanes, entering in self.lanes:
+            if t0 <= t_s <= t1:
+                return lanes, entering
+        return frozenset({self.final_lane}), False
+
+    def times(self, dt_s: float) -> list[float]:
+        """Samples at most ``dt_s`` apart over the plan and the continuation, every boundary among them."""
+        horizon = self.end_s + CONTINUATION_S
+        n = max(1, math.ceil(horizon / dt_s))
+        out = {horizon * k / n for k in range(n + 1)}
+        out.update(self.bounds_s)
+        for t0, t1, _, _ in self.lanes:
+            out.update((t0, t1))
+        return sorted(out)
+
+
+@dataclass(slots=True)
+class _Judge:
+    """Holds one motion's facts at one instant to the specification; keeps which vehicles were behind at entry."""
+
+    sound: Sound
+    motion: str
+
+    def gap_ok(self, conflict: Conflict, name: str, t_s: float, gap_m: float, closing_mps: float,
+               slack_m: float) -> Breach | None:
+        required = self.sound.safety.required_gap_m(closing_mps)
+        if gap_m - slack_m < required:
+            return Breach(conflict, name, t_s, gap_m - slack_m, required, self.motion)
+        return None
+
+
+#: A gap this close to the required one (metres) is taken as meeting it: the model's own slack is far smaller.
+TOLERANCE_M = 1e-6
+
+
+def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX_DT_S) -> Breach | None:
+    """The first instant at which some motion within the bounds breaks the specification, or None.
+
+    Conflicts as the specification states them: a same-direction vehicle ahead in the left lane while the AV
+    occupies it (one behind since the AV entered, or started, follows it); an oncoming vehicle not yet past while
+    the AV occupies the right lane; while the AV moves into the left lane, every same-direction vehicle certainly
+    ahead, or certainly behind with the cut-in gap. Between two samples the margin (gap less required gap) changes
+    at most at the largest relative speed plus the time gap times the AV's largest acceleration: an interval whose
+    samples leave less margin than that could lose is cut in two, down to a microsecond."""
+    sound = _sound(scenario)
+    path = Path(actions, sound, scenario.grid, scenario.lane)
+    tr, b, length = sound.tracking, sound.bounds, sound.safety.vehicle_length_m
+    cars = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid, sound)
+    fastest_av = max(path.speed(t) for t in path.times(0.1)) + tr.speed_mps
+    rate = fastest_av + max(b.same_mps.high_mps, b.oncoming_mps.high_mps) + sound.safety.time_gap_s * path.max_accel
+
+    def worst(t: float, lanes: frozenset[Lane], entering: bool, behind: set[int]) -> tuple[float, Breach | None]:
+        """The least margin over the conflicts at ``t`` and the breach it would be."""
+        x, v = path.position(t), path.speed(t)
+        least: tuple[float, Breach | None] = (math.inf, None)
+        for i, c in enumerate(cars):
+            options = []
+            if c.lane is Lane.LEFT and Lane.LEFT in lanes and i not in behind:
+                low = c.lo_m + b.same_mps.low_mps * t
+                options.append((Conflict.AHEAD, low - (x + tr.position_m) - length,
+                                v + tr.speed_mps - b.same_mps.low_mps))
+                if entering:
+                    high = c.hi_m + b.same_mps.high_mps * t
+                    options.append((Conflict.CUT_IN, (x - tr.position_m) - high - length,
+                                    b.same_mps.high_mps - v + tr.speed_mps))
+            if c.lane is Lane.RIGHT and Lane.RIGHT in lanes and c.hi_m - b.oncoming_mps.low_mps * t + length > \
+                    x - tr.position_m:
+                low = c.lo_m - b.oncoming_mps.high_mps * t
+                options.append((Conflict.ONCOMING, low - (x + tr.position_m) - length,
+                                v + tr.speed_mps + b.oncoming_mps.high_mps))
+            if not options:
+                continue
+            margins = [(gap - sound.safety.required_gap_m(closing), conflict, gap, closing)
+                       for conflict, gap, closing in options]
+            best = max(margins, key=lambda m: m[0])  # one safe way out (ahead, or behind) is enough
+            if best[0] < least[0]:
+                required = sound.safety.required_gap_m(best[3])
+                least = (best[0], Breach(best[1], c.name, t, best[2], required, "exact"))
+        return least
+
+    def interval_ok(t0: float, t1: float, m0: float, m1: float, lanes: frozenset[Lane], entering: bool,
+                    behind: set[int]) -> Breach | None:
+        """Whether the margin stays non-negative over ``[t0, t1]``, cutting the interval while the bound is unsure."""
+        if (m0 + m1) / 2 - rate * (t1 - t0) / 2 >= -TOLERANCE_M or t1 - t0 < 1e-6:
+            return None
+        mid = (t0 + t1) / 2
+        m_mid, found = worst(mid, lanes, entering, behind)
+        if m_mid < -TOLERANCE_M:
+            return found
+        return interval_ok(t0, mid, m0, m_mid, lanes, entering, behind) or \
+            interval_ok(mid, t1, m_mid, m1, lanes, entering, behind)
+
+    behind: set[int] = set()
+    previous: tuple[float, float] | None = None
+    for t in path.times(dt_s):
+        lanes, entering = path.occupancy(t)
+        if Lane.LEFT not in lanes or entering:
+            behind = set()  # out of the lane, or moving into it: every vehicle is held to one gap or the other
+        else:  # in the lane: a vehicle certainly behind follows the AV from now on
+            x = path.position(t)
+            behind |= {i for i, c in enumerate(cars) if c.lane is Lane.LEFT
+                       and c.hi_m + b.same_mps.high_mps * t + length <= x - tr.position_m}
+        margin, found = worst(t, lanes, entering, behind)
+        if margin < -TOLERANCE_M:
+            return found
+        if previous is not None:
+            mid_lanes, mid_entering = path.occupancy((previous[0] + t) / 2)
+            found = interval_ok(previous[0], t, previous[1], margin, mid_lanes, mid_entering, behind)
+            if found is not None:
+                return found
+        previous = (t, margin)
+    return None
+
+
+def _sound(scenario: Scenario) -> Sound:
+    if scenario.sound is None:
+        raise ValueError("the scenario has no sound model to check against")
+    return scenario.sound
+
+
+@dataclass(frozen=True, slots=True)
+class Motion:
+    """One motion within the bounds: each vehicle's true start and speed schedule, the AV's deviation schedule."""
+
+    name: str
+    starts_m: tuple[float, ...]  # true start of each vehicle, metres ahead of the AV (phantoms: at their edge)
+    speeds: tuple[tuple[tuple[float, float], ...], ...]  # per vehicle: (from time, speed) steps, first from 0
+    av_offset: tuple[tuple[float, float], ...]  # (from time, deviation rate m/s); the deviation stays within e_x
+
+
+def _sensed_start(rng: random.Random, v: Vehicle, cell: int, lane: Lane, av_lane: Lane, grid: Grid) -> float:
+    """A reading the discretiser puts into ``cell`` (by its own rule, not by the cell's extent), drawn uniformly."""
+    width = grid.cell
+    offset = (cell - grid.av_cell) * width
+    for _ in range(1000):
+        dx = offset + rng.uniform(-1.5, 1.5) * width
+        got = left_cell(dx, av_lane, grid) if lane is Lane.LEFT else oncoming_cell(dx, grid)
+        if got == cell:
+            return dx
+    raise ValueError(f"no reading falls into cell {cell}")
+
+
+def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, count: int) -> list[Motion]:
+    """The corner motions, then ``count`` random ones, all within the scenario's bounds."""
+    sound = _sound(scenario)
+    cars = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid, sound)
+    end_s = sum(float(ACTION_RULES[a].duration_s) for a in actions) + CONTINUATION_S
+    b, e = sound.bounds, sound.bounds.sensing_error_m
+    ev = sound.tracking.speed_mps
+
+    def interval(c: Vehicle) -> tuple[float, float]:
+        sp = b.same_mps if c.lane is Lane.LEFT else b.oncoming_mps
+        return sp.low_mps, sp.high_mps
+
+    def starts(pick: str) -> tuple[float, ...]:
+        out = []
+        for c in cars:
+            if c.index is None:
+                edge = c.lo_m if math.isfinite(c.lo_m) else c.hi_m
+                out.append(edge)
+                continue
+            cells = scenario.left_lane if c.lane is Lane.LEFT else scenario.right_lane
+            sensed = _sensed_start(rng, c, cells[c.index], c.lane, scenario.lane, scenario.grid)
+            err = {"low": -e, "high": e}.get(pick, rng.uniform(-e, e))
+            out.append(sensed + err)
+        return tuple(out)
+
+    def constant(which: int) -> tuple[tuple[tuple[float, float], ...], ...]:
+        return tuple(((0.0, interval(c)[which]),) for c in cars)
+
+    def switched(first: int, at_s: float) -> tuple[tuple[tuple[float, float], ...], ...]:
+        return tuple(((0.0, interval(c)[first]), (at_s, interval(c)[1 - first])) for c in cars)
+
+    ahead, behind = ((0.0, ev),), ((0.0, -ev),)
+    mid = (end_s - CONTINUATION_S) / 2
+    out = [Motion("corner: slowest, readings low, AV ahead", starts("low"), constant(0), ahead),
+           Motion("corner: fastest, readings high, AV behind", starts("high"), constant(1), behind),
+           Motion("corner: fastest, readings high, AV ahead", starts("high"), constant(1), ahead),
+           Motion("corner: slowest, readings low, AV behind", starts("low"), constant(0), behind),
+           Motion(f"corner: slowest then fastest at {mid:.1f} s", starts("low"), switched(0, mid), ahead),
+           Motion(f"corner: fastest then slowest at {mid:.1f} s", starts("high"), switched(1, mid), ahead)]
+    for k in range(count):
+        schedules = []
+        for c in cars:
+            lo, hi = interval(c)
+            steps, t = [(0.0, rng.uniform(lo, hi))], 0.0
+            while True:
+                t += rng.expovariate(1 / 4.0)
+                if t >= end_s:
+                    break
+                steps.append((t, rng.choice((lo, hi, rng.uniform(lo, hi)))))
+            schedules.append(tuple(steps))
+        offs, t = [(0.0, rng.uniform(-ev, ev))], 0.0
+        while True:
+            t += rng.expovariate(1 / 2.0)
+            if t >= end_s:
+                break
+            offs.append((t, rng.uniform(-ev, ev)))
+        out.append(Motion(f"sampled #{k}", starts("any"), tuple(schedules), tuple(offs)))
+    return out
+
+
+def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, goal: GoalRule | None = None,
+               dt_s: float = MOTION_DT_S) -> Breach | None:
+    """Drive one motion through the plan and the continuation; the first breach of the specification, or of
+    ``goal`` when the plan ends.
+
+    A same-direction vehicle behind the AV when it starts in, or finishes moving into, the left lane follows it
+    (a lane keeps its order): it is no conflict, and it is held at the specification's least gap behind. The AV's
+    deviation from its reference changes at its scheduled rate (at most the speed error) and stays within the
+    position error."""
+    sound = _sound(scenario)
+    path = Path(actions, sound, scenario.grid, scenario.lane)
+    cars = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid, sound)
+    judge = _Judge(sound, motion.name)
+    length, ex, g_min = sound.safety.vehicle_length_m, sound.tracking.position_m, sound.safety.min_gap_m
+    pos, idx = list(motion.starts_m), [0] * len(cars)
+    dev, dev_k = 0.0, 0
+    times = path.times(dt_s)
+    followers = {i for i, c in enumerate(cars) if c.lane is Lane.LEFT and scenario.lane is Lane.LEFT and pos[i] < 0}
+    goal_checked, was_entering = goal is None, False
+    for k, t in enumerate(times):
+        while dev_k + 1 < len(motion.av_offset) and motion.av_offset[dev_k + 1][0] <= t:
+            dev_k += 1
+        rate = motion.av_offset[dev_k][1]
+        if (dev >= ex and rate > 0) or (dev <= -ex and rate < 0):
+            rate = 0.0
+        x, v = path.position(t) + dev, path.speed(t) + rate
+        lanes, entering = path.occupancy(t)
+        if was_entering and not entering:
+            followers = {i for i, c in enumerate(cars) if c.lane is Lane.LEFT and pos[i] < x}
+        was_entering = entering
+        if Lane.LEFT not in lanes:
+            followers = set()
+        speeds = []
+        for i in range(len(cars)):
+            sched = motion.speeds[i]
+            while idx[i] + 1 < len(sched) and sched[idx[i] + 1][0] <= t:
+                idx[i] += 1
+            speeds.append(sched[idx[i]][1])
+        if not goal_checked and t >= path.end_s:
+            goal_checked = True
+            found = _goal_breach(scenario, goal, cars, pos, x, motion.name, t)
+            if found is not None:
+                return found
+        for i, c in enumerate(cars):
+            y, s = pos[i], speeds[i]
+            if c.lane is Lane.LEFT and Lane.LEFT in lanes and i not in followers:
+                if entering and y < x:
+                    found = judge.gap_ok(Conflict.CUT_IN, c.name, t, x - y - length, s - v, 0.0)
+                else:
+                    found = judge.gap_ok(Conflict.AHEAD, c.name, t, y - x - length, v - s, 0.0)
+                if found is not None:
+                    return found
+            if c.lane is Lane.RIGHT and Lane.RIGHT in lanes and y + length > x:
+                found = judge.gap_ok(Conflict.ONCOMING, c.name, t, y - x - length, v + s, 0.0)
+                if found is not None:
+                    return found
+        step = (times[k + 1] - t) if k + 1 < len(times) else 0.0
+        dev = max(-ex, min(ex, dev + rate * step))
+        for i, c in enumerate(cars):
+            move = speeds[i] * step
+            pos[i] = pos[i] + move if c.lane is Lane.LEFT else pos[i] - move
+            if i in followers:
+                pos[i] = min(pos[i], path.position(t + step) + dev - length - g_min)
+    return None
+
+
+def _goal_breach(scenario: Scenario, goal: GoalRule | None, cars: tuple[Vehicle, ...], pos: list[float], x: float,
+                 name: str, t: float) -> Breach | None:
+    """The goal's fields for this motion when the plan ends: targets behind the AV, oncoming vehicles past it."""
+    if goal is None:
+        return None
+    length = _sound(scenario).safety.vehicle_length_m
+    for i, c in enumerate(cars):
+        if c.index is None:
+            continue
+        target = c.lane is Lane.LEFT and c.index in scenario.target_indices
+        if goal.targets_behind and target and pos[i] + length > x:
+            return Breach(None, c.name, t, x - pos[i] - length, 0.0, f"{name} (a target not behind at the end)")
+        if goal.oncoming_passed and c.lane is Lane.RIGHT and pos[i] + length > x:
+            return Breach(None, c.name, t, x - pos[i] - length, 0.0, f"{name} (an oncoming vehicle not past)")
+    return None

@@ -1,0 +1,139 @@
+"""The AV's envelope: where the AV can be, and how fast, at every instant of a plan of the sound model.
+
+The AV follows the executor's speed reference (``spec.motion``: a ramp from its measured speed into
+the first action, starting at once; between two actions a ramp centred on their boundary), and the
+car stays within ``Tracking`` of it: its position within ``position_m`` of the reference's integral,
+its speed within ``speed_mps`` of the reference. A lane change's sideways move takes at most
+``lateral_s``; during it the AV occupies both lanes. After a plan, the stated minimal-risk
+manoeuvre (``MinimalRisk``) keeps the AV safe for ever under the bounds, or the plan is refused.
+
+``Reference`` is the reference from one decision boundary on, which is all a step needs: the
+plan's start (its first ramp may still run), the nominal position at the boundary (the paper's
+instant speed changes), the speed before it, and the one ramp centred on (or, for the
+minimal-risk manoeuvre, starting at) the boundary. Centred ramps of neighbouring boundaries never
+overlap for the declared actions (a test holds every triple of actions to it), so no other ramp
+runs inside a step's window.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from spec.motion import RAMP_SHARE, Ramp, ramp_s
+from spec.physical import CAR, LOOP
+
+
+@dataclass(frozen=True, slots=True)
+class Tracking:
+    """How closely the car follows its reference (the executor's stated tracking error) and how long a sideways
+    move may take; ``source`` says where the numbers come from."""
+
+    position_m: float
+    speed_mps: float
+    lateral_s: float
+    source: str
+
+
+#: The executor's envelope, measured (``docs/sound.md``, "The AV's envelope"). Rule: the largest deviation over
+#: 10 x 25 km of paper and 10 x 25 km of spread traffic (exact sensing, seeds 1-10), leaving out the 4 s start-up
+#: from standstill, contact instants and plans whose reference starts ahead of the car (frame fallbacks: the sound
+#: model's plans start their reference at the car), rounded up to 0.5: measured 1.27 m and 1.19 m/s (2026-11-25).
+#: The sideways move: the executor is told to make it within ``LOOP.lane_change_lateral_s``; the car's body was
+#: measured clear of the old lane within 1.87 s.
+TRACKING = Tracking(1.5, 1.5, LOOP.lane_change_lateral_s,
+                    "executor measured 2026-11-25: max |x - x_ref| 1.27 m, |v - v_ref| 1.19 m/s over 2 x 250 km "
+                    "(paper, spread; start-up, contacts and frame fallbacks left out), rounded up to 0.5; sideways "
+                    "move LOOP.lane_change_lateral_s = 2 s (body clear of the old lane within 1.87 s measured)")
+#: No envelope at all: the AV exactly on its reference, lane changes instant (the paper's AV).
+EXACT_AV = Tracking(0.0, 0.0, 0.0, "the paper's AV: exactly on its reference, lane changes instant")
+
+
+@dataclass(frozen=True, slots=True)
+class MinimalRisk:
+    """The minimal-risk manoeuvre after a plan (and the fallback's): stay in lane and brake, at the share of the
+    car's braking limit the executor's ramps use, down to a hold speed no vehicle ahead can be slower than."""
+
+    decel_mps2: float = RAMP_SHARE * CAR.max_brake_mps2
+
+    def hold_mps(self, speed_mps: float, slowest_ahead_mps: float, tracking: Tracking) -> float:
+        """The speed the manoeuvre brakes to: at most the slowest speed a vehicle ahead may keep, less the car's
+        speed error (so the AV never closes in), never below a standstill, never faster than it already is."""
+        return max(0.0, min(speed_mps, slowest_ahead_mps - tracking.speed_mps))
+
+    def ramp(self, at_s: float, speed_mps: float, hold_mps: float) -> Ramp | None:
+        """The braking ramp, starting at ``at_s`` (none when the AV already drives at the hold speed)."""
+        if hold_mps >= speed_mps:
+            return None
+        return Ramp(at_s, (speed_mps - hold_mps) / self.decel_mps2, hold_mps - speed_mps)
+
+
+MINIMAL_RISK = MinimalRisk()
+
+
+@dataclass(frozen=True, slots=True)
+class Piece:
+    """The reference on ``[t0_s, t1_s]``: position ``x0_m + v0_mps s + acc_mps2 s^2 / 2``, speed ``v0_mps + acc_mps2
+    s``, with ``s = t - t0_s`` (times on the plan's clock, positions from the AV's place at the plan's start)."""
+
+    t0_s: float
+    t1_s: float
+    x0_m: float
+    v0_mps: float
+    acc_mps2: float
+
+    @property
+    def span_s(self) -> float:
+        return self.t1_s - self.t0_s
+
+    def x(self, t_s: float) -> float:
+        s = t_s - self.t0_s
+        return self.x0_m + self.v0_mps * s + self.acc_mps2 * s * s / 2
+
+    def v(self, t_s: float) -> float:
+        return self.v0_mps + self.acc_mps2 * (t_s - self.t0_s)
+
+
+@dataclass(frozen=True, slots=True)
+class Reference:
+    """The speed reference from one decision boundary on (see the module's docstring)."""
+
+    start_mps: float  # the car's measured speed at the plan's start
+    first_mps: float  # the first action's speed
+    boundary_s: float  # the boundary, on the plan's clock
+    nominal_m: float  # where the paper's AV (instant speed changes, the first action from t = 0) is at it
+    before_mps: float  # the nominal speed before the boundary (the first action's at the plan's start)
+    ramp: Ramp | None  # the ramp at the boundary: centred on it, or the minimal-risk manoeuvre's from it
+
+    @property
+    def first(self) -> Ramp | None:
+        """The ramp into the first action: from the measured speed, starting at once."""
+        if self.first_mps == self.start_mps:
+            return None
+        return Ramp(0.0, ramp_s(self.start_mps, self.first_mps), self.first_mps - self.start_mps)
+
+    def _ramps(self) -> tuple[Ramp, ...]:
+        return tuple(r for r in (self.first, self.ramp) if r is not None)
+
+    def position_m(self, t_s: float) -> float:
+        """The reference's position at ``t_s`` (the nominal position plus what each ramp has gained on it)."""
+        ramps = sum(r.integral_m(t_s) for r in self._ramps())
+        return (self.start_mps - self.first_mps) * t_s + self.nominal_m + self.before_mps * (t_s - self.boundary_s) \
+            + ramps
+
+    def speed_mps(self, t_s: float) -> float:
+        """The reference speed at ``t_s``."""
+        return self.start_mps - self.first_mps + self.before_mps + sum(r.at(t_s) for r in self._ramps())
+
+    def pieces(self, t0_s: float, t1_s: float) -> list[Piece]:
+        """The reference on ``[t0_s, t1_s]`` cut where a ramp starts or ends: constant acceleration on each piece."""
+        cuts = {t0_s, t1_s}
+        for r in self._ramps():
+            cuts.update(t for t in (r.start_s, r.start_s + r.duration_s) if t0_s < t < t1_s)
+        times = sorted(cuts)
+        out = []
+        for a, b in zip(times, times[1:] or times):
+            mid = (a + b) / 2
+            acc = sum(r.dv_mps / r.duration_s for r in self._ramps()
+                      if r.duration_s > 0 and r.start_s <= mid < r.start_s + r.duration_s)
+            out.append(Piece(a, b, self.position_m(a), self.speed_mps(a), acc))
+        return out

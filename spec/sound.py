@@ -1,0 +1,478 @@
+"""The sound model's rules, each written once: what the AV may do so that the safety specification holds for every
+motion inside the stated assumptions, at every instant, not only at ticks.
+
+Sets, not cells. Every vehicle is an interval of positions at the plan's start (its cell's extent,
+``spec.cells``, widened by the sensing error; a phantom at each sensor's range, ``spec.assumptions``)
+that grows with its lane's speed interval: a same-direction vehicle is within ``[lo + v_low t,
+hi + v_high t]``, an oncoming one within ``[lo - v_high t, hi - v_low t]``. The AV is its reference
+(``spec.envelope``) plus the tracking error. A step is safe when, over its whole window (from the
+start of the ramp into it to its end), every vehicle in conflict keeps the gap of
+``spec.safety.SAFETY`` at the worst closing speed its bounds and the AV's envelope allow:
+
+- ``AHEAD``: a same-direction vehicle that may be ahead of the AV, while the AV occupies the left
+  lane: ``lo + v_low t - (x + e_x) - L >= max(g_min, tau (v + e_v - v_low))``;
+- ``ONCOMING``: an oncoming vehicle not yet certainly past the AV, while any part of the AV is in
+  the right lane: ``lo - v_high t - (x + e_x) - L >= max(g_min, tau (v + e_v + v_high))``;
+- ``CUT_IN``: while the AV moves sideways into the left lane, each same-direction vehicle must be
+  certainly ahead as above, or certainly behind with ``(x - e_x) - (hi + v_high t) - L >=
+  max(g_min, tau (v_high - v + e_v))``.
+
+A same-direction vehicle behind the AV in its own lane follows it (a lane keeps its order; a
+rear-end collision is the follower's to avoid) and is no conflict. Each condition is a threshold on
+the vehicle's start interval, the extreme over the window of a function of the reference alone;
+the reference is piecewise quadratic, so the extreme is exact (the ends of each piece and a
+vertex inside it). Goal fields hold only for every position; a plan's last state must admit the
+minimal-risk manoeuvre for ever (``continuation_violation``). Phantoms are in every safety
+condition and in no goal field (a goal speaks of the vehicles sensed).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from spec.actions import ACTION_RULES, Action
+from spec.assumptions import Bounds, check_bounds
+from spec.cells import left_extent_m, oncoming_extent_m
+from spec.envelope import MINIMAL_RISK, TRACKING, MinimalRisk, Piece, Reference, Tracking
+from spec.errors import check_number
+from spec.grid import Grid
+from spec.lanes import Lane
+from spec.models import GoalRule
+from spec.motion import Ramp, action_speed_mps, ramp_s
+from spec.safety import SAFETY, Conflict, SafetySpec
+
+#: Conditions are held to this much slack on the safe side, so that float rounding never makes a gap look large.
+EPS_M = 1e-9
+
+
+@dataclass(frozen=True, slots=True)
+class Sound:
+    """The sound model's parameters: the assumptions of the world, the specification, the AV's envelope."""
+
+    bounds: Bounds
+    safety: SafetySpec = SAFETY
+    tracking: Tracking = TRACKING
+    start_mps: float | None = None  # the AV's measured speed at the snapshot; None: the common speed
+    minimal_risk: MinimalRisk = MINIMAL_RISK
+
+    def describe(self) -> str:
+        b = self.bounds
+        return (f"sound model, bounds {b.name}: same-direction {b.same_mps.low_mps:g}..{b.same_mps.high_mps:g} m/s, "
+                f"oncoming {b.oncoming_mps.low_mps:g}..{b.oncoming_mps.high_mps:g} m/s, sensing error "
+                f"{b.sensing_error_m:g} m, phantoms {'on' if b.phantoms else 'off'}")
+
+
+def check_sound(sound: Sound, where: str = "--bounds") -> Sound:
+    """``sound`` if every number is usable; else bad input naming the option, the value and why."""
+    check_bounds(sound.bounds, where)
+    if sound.start_mps is not None:
+        check_number("--av-speed-mps", sound.start_mps, high=100.0)
+    return sound
+
+
+@dataclass(frozen=True, slots=True)
+class Vehicle:
+    """A vehicle of the sound model: where its centre can be at the plan's start, metres ahead of the AV's."""
+
+    lane: Lane  # its lane: left (same direction) or right (oncoming)
+    index: int | None  # into the scenario's tuple of that lane; None: a phantom
+    lo_m: float
+    hi_m: float
+    name: str
+
+
+@dataclass(frozen=True, slots=True)
+class Violation:
+    """Why a step (or a start, or a continuation) breaks the specification: the worst case found."""
+
+    conflict: Conflict
+    vehicle: Vehicle
+    time_s: float  # when, on the plan's clock
+    gap_m: float  # the smallest bumper-to-bumper gap a motion within the bounds reaches
+    required_m: float  # the gap the specification requires at that instant's worst closing speed
+
+    def describe(self) -> str:
+        return (f"{self.conflict.value} conflict with {self.vehicle.name} at t = {self.time_s:.2f} s: the gap can "
+                f"be {self.gap_m:.2f} m where {self.required_m:.2f} m is required")
+
+
+def vehicles(lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Grid, sound: Sound) -> tuple[
+        Vehicle, ...]:
+    """Every vehicle of a scenario (the AV starting in ``lane``) as an interval, then the phantoms."""
+    e = sound.bounds.sensing_error_m
+    out = []
+    for i, cell in enumerate(left):
+        lo, hi = left_extent_m(cell, lane, grid)
+        out.append(Vehicle(Lane.LEFT, i, lo - e, hi + e, f"left_lane[{i}] (cell {cell})"))
+    for i, cell in enumerate(right):
+        lo, hi = oncoming_extent_m(cell, grid)
+        out.append(Vehicle(Lane.RIGHT, i, lo - e, hi + e, f"right_lane[{i}] (cell {cell})"))
+    for p in sound.bounds.phantom_vehicles():  # the whole unseen stretch: from the range's edge outwards
+        lo, hi = (p.dx_m, math.inf) if p.dx_m > 0 else (-math.inf, p.dx_m)
+        out.append(Vehicle(p.lane, None, lo, hi, f"phantom ({p.why}, {p.dx_m:+g} m)"))
+    return tuple(out)
+
+
+@dataclass(frozen=True, slots=True)
+class SoundState:
+    """A state of the sound model: the AV's lane, its lane changes and steps so far, the time elapsed and its nominal
+    advance (both whole grid units: time units, cells), and the speeds its envelope depends on."""
+
+    lane: Lane
+    lane_changes: int
+    steps: int
+    t_units: int  # time since the plan's start, in the grid's time units
+    d_cells: int  # the paper's AV's advance (instant speed changes), in cells
+    first_mps: float | None  # the plan's first action's speed (its ramp starts at once), None before it
+    last_mps: float | None  # the speed of the action just finished, None at the start
+    moved: Lane | None = None  # the lane the action just finished moved into (a ramp after it may meet its move)
+
+    def key(self) -> tuple[object, ...]:
+        """What the future depends on: everything but the step count (a search at the least depth keeps it)."""
+        return (self.lane, self.lane_changes, self.t_units, self.d_cells, self.first_mps, self.last_mps, self.moved)
+
+
+@dataclass(frozen=True, slots=True)
+class Bounded:
+    """A piece of the reference with its three thresholds (value, time reached): the least start ``lo`` of a
+    same-direction vehicle held to AHEAD, the least ``lo`` of an oncoming one not yet past, the most ``hi`` of a
+    same-direction one that the AV cuts in ahead of."""
+
+    piece: Piece
+    ahead: tuple[float, float]
+    oncoming: tuple[float, float]
+    behind: tuple[float, float]
+
+    def shifted(self, dt_s: float, dx_m: float, bounds: Bounds) -> Bounded:
+        """The same piece ``dt_s`` later and ``dx_m`` farther (every threshold is a reference position less or more
+        a vehicle's speed times the time: it moves with both)."""
+        p, same, onc = self.piece, bounds.same_mps, bounds.oncoming_mps
+        return Bounded(Piece(p.t0_s + dt_s, p.t1_s + dt_s, p.x0_m + dx_m, p.v0_mps, p.acc_mps2),
+                       (self.ahead[0] + dx_m - same.low_mps * dt_s, self.ahead[1] + dt_s),
+                       (self.oncoming[0] + dx_m + onc.high_mps * dt_s, self.oncoming[1] + dt_s),
+                       (self.behind[0] + dx_m - same.high_mps * dt_s, self.behind[1] + dt_s))
+
+
+@dataclass(frozen=True, slots=True)
+class Segment:
+    """A stretch of a window with one occupancy: the lanes the AV is in, and whether it is entering the left one."""
+
+    t0_s: float
+    t1_s: float
+    lanes: frozenset[Lane]
+    entering_left: bool  # vehicles of the left lane are classified: certainly ahead, or certainly behind
+    at_start: bool = False  # the plan's start: one behind is a follower (bumpers clear), not a cut-in
+
+
+class SoundRules:
+    """The sound model on one scenario: its vehicles and every rule over sound states."""
+
+    def __init__(self, sound: Sound, lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Grid,
+                 targets: tuple[int, ...]) -> None:
+        self.sound, self.grid, self.targets = sound, grid, targets
+        self.vehicles = vehicles(lane, left, right, grid, sound)
+        self.same = tuple(v for v in self.vehicles if v.lane is Lane.LEFT)
+        self.oncoming = tuple(v for v in self.vehicles if v.lane is Lane.RIGHT)
+        self.sensed_same = {v.index: v for v in self.same if v.index is not None}
+        self.unit_s, self.cell_m = float(grid.time_unit_s), grid.cell
+        self.speeds = {a: action_speed_mps(a, grid) for a in Action}
+        self.start_mps = grid.speed if sound.start_mps is None else sound.start_mps
+        #: The most a ramp centred on a boundary can put the AV behind its nominal position there (the ramp into a
+        #: slower action starts half a ramp early): a lower bound on where the AV is at a boundary, whatever follows.
+        self.dip_m = max((v1 - v2) * ramp_s(v1, v2) / 8 for v1 in self.speeds.values() for v2 in self.speeds.values()
+                         if v1 > v2)
+        self._relative: dict[tuple[float, Action | None, Lane, Lane | None], list[tuple[Segment, list[Bounded]]]] = {}
+
+    # -- the AV's reference over a window ---------------------------------------------------------------------
+    def reference(self, state: SoundState, action: Action | None) -> Reference:
+        """The reference from ``state``'s boundary on, into ``action`` (None: the minimal-risk manoeuvre)."""
+        return self._reference(state.t_units * self.unit_s, state.d_cells * self.cell_m, state.first_mps,
+                               state.last_mps, action, self.start_mps)
+
+    def _reference(self, t_s: float, nominal_m: float, first_mps: float | None, last_mps: float | None,
+                   action: Action | None, start_mps: float) -> Reference:
+        if first_mps is None:
+            first_mps = self.speeds[action] if action is not None else start_mps
+        before = last_mps if last_mps is not None else first_mps
+        if action is None:
+            hold = self.sound.minimal_risk.hold_mps(before, self.sound.bounds.same_mps.low_mps, self.sound.tracking)
+            ramp = self.sound.minimal_risk.ramp(t_s, before, hold)
+        elif last_mps is None or self.speeds[action] == before:
+            ramp = None
+        else:
+            r = ramp_s(before, self.speeds[action])
+            ramp = Ramp(t_s - r / 2, r, self.speeds[action] - before)
+        return Reference(start_mps, first_mps, t_s, nominal_m, before, ramp)
+
+    def _segments(self, lane: Lane, ref: Reference, action: Action | None, moved: Lane | None) -> list[Segment]:
+        """The window of ``action`` (None: the minimal-risk manoeuvre, in lane) from the boundary ``ref`` starts
+        at: the ramp into it (in the lane the AV is in, or in both while the sideways move of the action before it,
+        ``moved`` into a lane, still runs), the sideways move (both lanes), the rest (the lane it ends in)."""
+        t_s = ref.boundary_s
+        if action is None:
+            end_s = t_s + (ref.ramp.duration_s if ref.ramp is not None else 0.0)
+            return [Segment(t_s, end_s, frozenset({lane}), False)]
+        rule = ACTION_RULES[action]
+        end_s = t_s + float(rule.duration_s)
+        out = []
+        if ref.ramp is not None and ref.ramp.start_s < t_s:
+            ramp_from = ref.ramp.start_s
+            if moved is not None:
+                change = Action.LEFT_LANE_CHANGE if moved is Lane.LEFT else Action.RIGHT_LANE_CHANGE
+                duration = float(ACTION_RULES[change].duration_s)
+                move_end = t_s - duration + min(self.sound.tracking.lateral_s, duration)
+                if ramp_from < move_end:
+                    out.append(Segment(ramp_from, move_end, frozenset(Lane), moved is Lane.LEFT))
+                    ramp_from = move_end
+            out.append(Segment(ramp_from, t_s, frozenset({lane}), False))
+        if rule.to_lane is None:
+            out.append(Segment(t_s, end_s, frozenset({lane}), False))
+            return out
+        move_end = t_s + min(self.sound.tracking.lateral_s, float(rule.duration_s))
+        out.append(Segment(t_s, move_end, frozenset(Lane), rule.to_lane is Lane.LEFT))
+        if move_end < end_s:
+            out.append(Segment(move_end, end_s, frozenset({rule.to_lane}), False))
+        return out
+
+    def window(self, state: SoundState, action: Action | None) -> list[tuple[Segment, list[Bounded]]]:
+        """The window of ``action`` from ``state``, cut into segments of one occupancy and pieces with thresholds.
+
+        Once the first ramp has run out, a window is the same shape wherever it starts (the reference is the
+        nominal position plus the first ramp's constant gain, plus the ramp at the boundary): it is computed
+        once per (speed before, action) and moved in time and place."""
+        ref = self.reference(state, action)
+        first = ref.first
+        window_start = min([ref.boundary_s] + ([ref.ramp.start_s] if ref.ramp is not None else []))
+        if first is not None and first.start_s + first.duration_s > window_start:
+            return [(seg, [self._bounded(p) for p in ref.pieces(seg.t0_s, seg.t1_s)])
+                    for seg in self._segments(state.lane, ref, action, state.moved)]
+        key = (ref.before_mps, action, state.lane, state.moved)
+        shape = self._relative.get(key)
+        if shape is None:
+            rel = self._reference(0.0, 0.0, ref.before_mps, ref.before_mps, action, ref.before_mps)
+            shape = self._relative[key] = [
+                (seg, [self._bounded(p) for p in rel.pieces(seg.t0_s, seg.t1_s)])
+                for seg in self._segments(state.lane, rel, action, state.moved)]
+        gain = (first.dv_mps * -first.duration_s / 2) if first is not None else 0.0
+        dt, dx = ref.boundary_s, ref.nominal_m + gain
+        bounds = self.sound.bounds
+        return [(Segment(seg.t0_s + dt, seg.t1_s + dt, seg.lanes, seg.entering_left),
+                 [b.shifted(dt, dx, bounds) for b in pieces]) for seg, pieces in shape]
+
+    def _bounded(self, p: Piece) -> Bounded:
+        return Bounded(p, self._ahead_need(p), self._oncoming_need(p), self._behind_allow(p))
+
+    # -- the conditions, as thresholds on a vehicle's start interval -----------------------------------------
+    def _ahead_need(self, p: Piece) -> tuple[float, float]:
+        """The least ``lo`` a same-direction vehicle may have to keep AHEAD safe over ``p``, and when it binds."""
+        s, tr, low = self.sound.safety, self.sound.tracking, self.sound.bounds.same_mps.low_mps
+        base = p.x0_m - low * p.t0_s + tr.position_m + s.vehicle_length_m
+        return _max_of(p, base + s.min_gap_m, p.v0_mps - low, base + s.time_gap_s * (p.v0_mps + tr.speed_mps - low),
+                       p.v0_mps - low + s.time_gap_s * p.acc_mps2)
+
+    def _oncoming_need(self, p: Piece) -> tuple[float, float]:
+        """The least ``lo`` an oncoming vehicle may have to keep ONCOMING safe over ``p``, and when it binds."""
+        s, tr, high = self.sound.safety, self.sound.tracking, self.sound.bounds.oncoming_mps.high_mps
+        base = p.x0_m + high * p.t0_s + tr.position_m + s.vehicle_length_m
+        return _max_of(p, base + s.min_gap_m, p.v0_mps + high, base + s.time_gap_s * (p.v0_mps + tr.speed_mps + high),
+                       p.v0_mps + high + s.time_gap_s * p.acc_mps2)
+
+    def _behind_allow(self, p: Piece) -> tuple[float, float]:
+        """The most ``hi`` a same-direction vehicle may have to be CUT_IN safe behind the AV over ``p``, and when."""
+        s, tr, high = self.sound.safety, self.sound.tracking, self.sound.bounds.same_mps.high_mps
+        base = p.x0_m - high * p.t0_s - tr.position_m - s.vehicle_length_m
+        value, at = _max_of(p, -(base - s.min_gap_m), -(p.v0_mps - high),
+                            -(base - s.time_gap_s * (high - p.v0_mps + tr.speed_mps)),
+                            -(p.v0_mps - high + s.time_gap_s * p.acc_mps2), flip=True)
+        return -value, at
+
+    # -- positions -------------------------------------------------------------------------------------------
+    def same_low(self, v: Vehicle, t_s: float) -> float:
+        return v.lo_m + self.sound.bounds.same_mps.low_mps * t_s
+
+    def same_high(self, v: Vehicle, t_s: float) -> float:
+        return v.hi_m + self.sound.bounds.same_mps.high_mps * t_s
+
+    def oncoming_low(self, v: Vehicle, t_s: float) -> float:
+        return v.lo_m - self.sound.bounds.oncoming_mps.high_mps * t_s
+
+    def oncoming_high(self, v: Vehicle, t_s: float) -> float:
+        return v.hi_m - self.sound.bounds.oncoming_mps.low_mps * t_s
+
+    def held_ahead(self, v: Vehicle, ref_x: float, t_s: float) -> bool:
+        """Whether a same-direction vehicle is held to AHEAD at ``t_s``: when every position of it is clear ahead of
+        the AV. Where the AV entered the left lane (or started in it) every vehicle was certainly ahead with its gap,
+        held so ever since, or certainly behind; one behind follows the AV (a lane keeps its order) and is no
+        conflict, so a vehicle not clear ahead now is one of those."""
+        return self.same_low(v, t_s) - self.sound.safety.vehicle_length_m >= ref_x + self.sound.tracking.position_m
+
+    def passed(self, v: Vehicle, ref_x: float, t_s: float) -> bool:
+        """Whether an oncoming vehicle is certainly past the AV at ``t_s`` (bumpers clear for every position)."""
+        return self.oncoming_high(v, t_s) + self.sound.safety.vehicle_length_m \
+            <= ref_x - self.sound.tracking.position_m - EPS_M
+
+    # -- checks ---------------------------------------------------------------------------------------------
+    def _required(self, conflict: Conflict, p: Piece, t_s: float) -> float:
+        s, tr, b = self.sound.safety, self.sound.tracking, self.sound.bounds
+        v = p.v(t_s)
+        closing = {Conflict.AHEAD: v + tr.speed_mps - b.same_mps.low_mps,
+                   Conflict.ONCOMING: v + tr.speed_mps + b.oncoming_mps.high_mps,
+                   Conflict.CUT_IN: b.same_mps.high_mps - v + tr.speed_mps}[conflict]
+        return s.required_gap_m(closing)
+
+    def _violation(self, conflict: Conflict, v: Vehicle, p: Piece, need: tuple[float, float], lo: bool) -> Violation:
+        """A violation: the vehicle's start interval misses the threshold ``need`` (at its lower or upper end)."""
+        short = (need[0] - v.lo_m) if lo else (v.hi_m - need[0])
+        required = self._required(conflict, p, need[1])
+        return Violation(conflict, v, need[1], required - short, required)
+
+    def check_segment(self, seg: Segment, pieces: list[Bounded]) -> Violation | None:
+        """The first violation over one segment of a window (AV occupancy fixed), or None."""
+        if Lane.LEFT in seg.lanes:
+            found = self._check_entering(pieces, not seg.at_start) if seg.entering_left else self._check_ahead(pieces)
+            if found is not None:
+                return found
+        if Lane.RIGHT in seg.lanes:
+            return self._check_oncoming(pieces)
+        return None
+
+    def _check_ahead(self, pieces: list[Bounded]) -> Violation | None:
+        for b in pieces:
+            for v in self.same:
+                if v.lo_m < b.ahead[0] + EPS_M and self.held_ahead(v, b.piece.x0_m, b.piece.t0_s):
+                    return self._violation(Conflict.AHEAD, v, b.piece, b.ahead, True)
+        return None
+
+    def _check_oncoming(self, pieces: list[Bounded]) -> Violation | None:
+        for b in pieces:
+            for v in self.oncoming:
+                if v.lo_m < b.oncoming[0] + EPS_M and not self.passed(v, b.piece.x0_m, b.piece.t0_s):
+                    return self._violation(Conflict.ONCOMING, v, b.piece, b.oncoming, True)
+        return None
+
+    def _check_entering(self, pieces: list[Bounded], margin: bool) -> Violation | None:
+        """Entering the left lane: each same-direction vehicle certainly ahead (AHEAD) or certainly behind (CUT_IN)
+        over the whole sideways move. At the plan's start (``margin`` False) the AV is already in the lane: one
+        behind need only be certainly behind (bumpers clear); it is a follower, not a cut-in."""
+        ahead = max(pieces, key=lambda b: b.ahead[0])
+        if margin:
+            behind = min(pieces, key=lambda b: b.behind[0])
+            allow = behind.behind
+        else:
+            behind = pieces[0]
+            p = behind.piece
+            allow = (p.x0_m - self.sound.tracking.position_m - self.sound.safety.vehicle_length_m, p.t0_s)
+        for v in self.same:
+            if v.lo_m >= ahead.ahead[0] + EPS_M or v.hi_m <= allow[0] - EPS_M:
+                continue
+            if not margin or v.lo_m - ahead.ahead[0] > allow[0] - v.hi_m:  # nearer to being ahead: that conflict
+                return self._violation(Conflict.AHEAD, v, ahead.piece, ahead.ahead, True)
+            return self._violation(Conflict.CUT_IN, v, behind.piece, allow, False)
+        return None
+
+    # -- the model's questions -------------------------------------------------------------------------------
+    def start_violation(self, state: SoundState) -> Violation | None:
+        """The start, an instant: the AV in its lane, every vehicle in conflict keeping its gap (one in the AV's
+        lane certainly ahead, or certainly behind it)."""
+        ref = self.reference(state, None)
+        seg = Segment(0.0, 0.0, frozenset({state.lane}), state.lane is Lane.LEFT, at_start=True)
+        return self.check_segment(seg, [self._bounded(p) for p in ref.pieces(0.0, 0.0)])
+
+    def step_violation(self, state: SoundState, action: Action) -> Violation | None:
+        """Whether ``action`` from ``state`` keeps the specification at every instant of its window."""
+        for seg, pieces in self.window(state, action):
+            found = self.check_segment(seg, pieces)
+            if found is not None:
+                return found
+        return None
+
+    def after(self, state: SoundState, action: Action) -> SoundState:
+        """The state after ``action`` (its effect: lane, counts, time and nominal advance in whole grid units)."""
+        rule, grid, speed = ACTION_RULES[action], self.grid, self.speeds[action]
+        units = grid.units(action)
+        return SoundState(rule.to_lane or state.lane, state.lane_changes + int(rule.changes_lane), state.steps + 1,
+                          state.t_units + units, state.d_cells + units - grid.left_shift(action),
+                          speed if state.first_mps is None else state.first_mps, speed, rule.to_lane)
+
+    def continuation_violation(self, state: SoundState) -> Violation | None:
+        """A plan's last state must be safe for ever: the minimal-risk manoeuvre (brake in lane to the hold speed)
+        over its ramp, and after it no conflict may close in (an oncoming vehicle not yet past an AV in the right
+        lane always does)."""
+        ((seg, pieces),) = self.window(state, None)
+        found = self.check_segment(seg, pieces)
+        if found is not None:
+            return found
+        tail = pieces[-1].piece
+        end_s, end_x, end_v = tail.t1_s, tail.x(tail.t1_s), tail.v(tail.t1_s)
+        if state.lane is Lane.RIGHT:
+            for v in self.oncoming:
+                if not self.passed(v, end_x, end_s):
+                    return Violation(Conflict.ONCOMING, v, end_s, -math.inf, self._required(
+                        Conflict.ONCOMING, tail, end_s))
+            return None
+        if end_v + self.sound.tracking.speed_mps > self.sound.bounds.same_mps.low_mps:
+            for v in self.same:
+                if self.held_ahead(v, end_x, end_s):
+                    return Violation(Conflict.AHEAD, v, end_s, -math.inf, self._required(Conflict.AHEAD, tail, end_s))
+        return None
+
+    def goal_holds(self, state: SoundState, goal: GoalRule) -> bool:
+        """Every field of ``goal`` for every position of the vehicles it names (sensed ones, never phantoms)."""
+        if goal.av_lane is not None and state.lane is not goal.av_lane:
+            return False
+        t_s = state.t_units * self.unit_s
+        x_m = self.reference(state, None).position_m(t_s)
+        ex, length = self.sound.tracking.position_m, self.sound.safety.vehicle_length_m
+        if goal.targets_behind and any(self.same_high(self.sensed_same[i], t_s) > x_m - ex - length
+                                       for i in self.targets):
+            return False
+        if goal.nearest_target_m is not None:
+            if not self.targets:
+                return False
+            v = self.sensed_same[self.targets[0]]
+            gap_low = self.same_low(v, t_s) - (x_m + ex) - length
+            gap_high = self.same_high(v, t_s) - (x_m - ex) - length
+            if gap_low < 0 or gap_high > float(goal.nearest_target_m):
+                return False
+        return not (goal.oncoming_passed and any(
+            not self.passed(v, x_m, t_s) for v in self.oncoming if v.index is not None))
+
+
+    def hopeless(self, state: SoundState, goal: GoalRule) -> bool:
+        """Whether ``goal`` can hold neither in ``state`` nor in any state after it (a search need not go on): the
+        nearest target's interval already wider than the goal's gap (it only grows), or a target held ahead of an AV
+        in the left lane that can never again enter the right lane (to pass it; an oncoming phantom covers the
+        unseen stretch beyond the range, so the right lane closes for good once the phantom's nearest end is nearer
+        than the least oncoming gap, and the AV never moves back)."""
+        t_s = state.t_units * self.unit_s
+        ex, length = self.sound.tracking.position_m, self.sound.safety.vehicle_length_m
+        if goal.nearest_target_m is not None and self.targets:
+            v = self.sensed_same[self.targets[0]]
+            if self.same_high(v, t_s) - self.same_low(v, t_s) - 2 * ex > float(goal.nearest_target_m) + EPS_M:
+                return True
+        if not (goal.targets_behind and self.targets and state.lane is Lane.LEFT):
+            return False
+        x_m = self.reference(state, None).position_m(t_s) - self.dip_m
+        least_m = self.sound.safety.required_gap_m(self.sound.tracking.speed_mps
+                                                   + self.sound.bounds.oncoming_mps.high_mps)
+        closed = any(math.isinf(v.hi_m) and self.oncoming_low(v, t_s) - (x_m + ex) - length < least_m
+                     for v in self.oncoming)
+        return closed and any(self.held_ahead(self.sensed_same[i], x_m, t_s) for i in self.targets)
+
+
+def _max_of(p: Piece, c1: float, b1: float, c2: float, b2: float, flip: bool = False) -> tuple[float, float]:
+    """The largest value over ``p`` of the larger of two quadratics in ``s = t - t0`` with the piece's curvature
+    (``+-acc/2 s^2 + b s + c``; ``flip``: the curvature negated, for a negated function), and the time it is reached."""
+    a = (-p.acc_mps2 if flip else p.acc_mps2) / 2
+    return max(_quad_max(a, b1, c1, p.span_s, p.t0_s), _quad_max(a, b2, c2, p.span_s, p.t0_s))
+
+
+def _quad_max(a: float, b: float, c: float, span: float, t0: float) -> tuple[float, float]:
+    """The maximum of ``a s^2 + b s + c`` over ``s`` in ``[0, span]`` and the time ``t0 + s`` it is reached at."""
+    best = max((c, t0), (a * span * span + b * span + c, t0 + span))
+    if a < 0:
+        s = -b / (2 * a)
+        if 0 < s < span:
+            best = max(best, (a * s * s + b * s + c, t0 + s))
+    return best

@@ -1,0 +1,87 @@
+"""The AV's envelope: its reference is the executor's (``spec.motion``), and centred ramps never overlap."""
+
+from __future__ import annotations
+
+import itertools
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from spec.actions import ACTION_RULES, Action
+from spec.assumptions import profile
+from spec.envelope import MINIMAL_RISK, TRACKING, Reference
+from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
+from spec.lanes import Lane
+from spec.motion import action_speed_mps, plan_profiles, ramp_s
+from spec.sound import Sound, SoundRules, SoundState
+
+SPEEDS = sorted({action_speed_mps(a, PAPER_GRID) for a in Action})
+
+
+def _half(v_from: float, v_to: float) -> float:
+    return ramp_s(v_from, v_to) / 2 if v_from != v_to else 0.0
+
+
+@pytest.mark.parametrize("before,middle,after", list(itertools.product(Action, repeat=3)))
+def test_centred_ramps_never_overlap_within_an_action(before: Action, middle: Action, after: Action) -> None:
+    """The ramp into an action ends before the ramp out of it starts: a step's window has one centred ramp."""
+    v0, v1, v2 = (action_speed_mps(a, PAPER_GRID) for a in (before, middle, after))
+    assert _half(v0, v1) + _half(v1, v2) <= float(ACTION_RULES[middle].duration_s)
+
+
+@pytest.mark.parametrize("before,after", list(itertools.product(Action, repeat=2)))
+def test_a_ramp_after_a_lane_change_is_checked_in_both_lanes_while_the_move_runs(before: Action, after: Action) -> None:
+    """The half ramp before a boundary can start while the previous action's sideways move still runs (a lane change
+    then accelerate: 1.30 s of ramp, 1 s left of the action after its 2 s move): that stretch is a both-lanes
+    segment of the step's window, entering the left lane when the move does."""
+    grid = PAPER_GRID
+    rules = SoundRules(Sound(profile("default")), Lane.RIGHT, (), (), grid, ())
+    state = rules.after(rules.after(SoundState(Lane.RIGHT, 0, 0, 0, 0, None, None), Action.DRIVE), before)
+    segments = rules._segments(state.lane, rules.reference(state, after), after, state.moved)
+    v0, v1 = action_speed_mps(before, grid), action_speed_mps(after, grid)
+    boundary = state.t_units * float(grid.time_unit_s)
+    move_end = boundary - float(ACTION_RULES[before].duration_s) + TRACKING.lateral_s
+    early = [s for s in segments if s.t1_s <= boundary]
+    assert sum(s.t1_s - s.t0_s for s in early) == pytest.approx(_half(v0, v1))
+    both = [s for s in early if len(s.lanes) == 2]
+    if ACTION_RULES[before].changes_lane and boundary - _half(v0, v1) < move_end:
+        assert both and both[0].t1_s == pytest.approx(move_end)
+        assert both[0].entering_left is (ACTION_RULES[before].to_lane is Lane.LEFT)
+    else:
+        assert not both
+
+
+@given(st.lists(st.sampled_from(list(Action)), min_size=1, max_size=8), st.sampled_from(STANDARD_CELLS_M),
+       st.floats(0.0, 20.0))
+def test_reference_is_the_executors_speed_profile(actions: list[Action], cell_m: object, start_mps: float) -> None:
+    """From every boundary, the envelope's reference is where ``spec.motion.plan_profiles`` (the executor's rule)
+    puts the AV, up to where the ramp out of the action starts (the next step's window covers the rest)."""
+    grid = Grid(cell_m)  # type: ignore[arg-type]
+    rules = SoundRules(Sound(profile("default"), start_mps=start_mps), Lane.LEFT, (), (), grid, ())
+    profiles = plan_profiles(tuple(actions), start_mps, grid)
+    state = SoundState(Lane.LEFT, 0, 0, 0, 0, None, None)
+    for k, action in enumerate(actions):
+        ref: Reference = rules.reference(state, action)
+        duration = float(ACTION_RULES[action].duration_s)
+        nxt = actions[k + 1] if k + 1 < len(actions) else None
+        v_here = action_speed_mps(action, grid)
+        stop = duration - (_half(v_here, action_speed_mps(nxt, grid)) if nxt is not None else duration / 2)
+        for i in range(21):
+            s = stop * i / 20
+            t = ref.boundary_s + s
+            assert ref.position_m(t) == pytest.approx(profiles[k].distance_m(s), abs=1e-6)
+            assert ref.speed_mps(t) == pytest.approx(profiles[k].at(s), abs=1e-9)
+        state = rules.after(state, action)  # guards are not the envelope's business
+
+
+def test_minimal_risk_brakes_to_below_the_slowest_vehicle_ahead() -> None:
+    """The hold speed leaves room for the car's speed error below the slowest same-direction speed, never above the
+    speed the AV has, never below a standstill; the ramp brakes at the stated deceleration."""
+    assert MINIMAL_RISK.hold_mps(14.0, 4.9, TRACKING) == pytest.approx(4.9 - TRACKING.speed_mps)
+    assert MINIMAL_RISK.hold_mps(3.0, 4.9, TRACKING) == 3.0
+    assert MINIMAL_RISK.hold_mps(7.0, 1.0, TRACKING) == 0.0
+    ramp = MINIMAL_RISK.ramp(10.0, 14.0, 3.4)
+    assert ramp is not None and ramp.start_s == 10.0
+    assert ramp.dv_mps / ramp.duration_s == pytest.approx(-MINIMAL_RISK.decel_mps2)
+    assert MINIMAL_RISK.ramp(0.0, 3.0, 3.0) is None

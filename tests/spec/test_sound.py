@@ -1,0 +1,130 @@
+"""The sound model's rules: exact extremes, windows that move with time and place, vehicles as intervals, input."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from spec.actions import Action
+from spec.assumptions import Bounds, SpeedBounds, profile
+from spec.envelope import Piece
+from spec.errors import OptionError
+from spec.grid import PAPER_GRID
+from spec.lanes import Lane
+from spec.safety import Conflict
+from spec.sound import Sound, SoundRules, SoundState, check_sound, vehicles
+
+DEFAULT = Sound(profile("default"))
+finite = st.floats(-50.0, 50.0)
+
+
+def _rules(sound: Sound = DEFAULT, lane: Lane = Lane.LEFT, left: tuple[int, ...] = (), right: tuple[int, ...] = ()
+           ) -> SoundRules:
+    return SoundRules(sound, lane, left, right, PAPER_GRID, ())
+
+
+@given(st.floats(0.0, 200.0), st.floats(0.0, 6.0), st.floats(-200.0, 400.0), st.floats(0.0, 20.0),
+       st.floats(-6.0, 6.0))
+def test_thresholds_are_the_extremes_of_their_conditions_over_a_piece(t0: float, span: float, x0: float, v0: float,
+                                                                      acc: float) -> None:
+    """Each threshold is the exact extreme over the piece: no sample beats it, and it is reached (to 1e-6 m)."""
+    v0 = max(0.0, v0)
+    if v0 + acc * span < 0:
+        acc = -v0 / span if span > 0 else 0.0
+    rules, p = _rules(), Piece(t0, t0 + span, x0, v0, acc)
+    s, tr, b = DEFAULT.safety, DEFAULT.tracking, DEFAULT.bounds
+    times = [t0 + span * i / 400 for i in range(401)]
+    ahead = [p.x(t) - b.same_mps.low_mps * t + tr.position_m + s.vehicle_length_m
+             + s.required_gap_m(p.v(t) + tr.speed_mps - b.same_mps.low_mps) for t in times]
+    oncoming = [p.x(t) + b.oncoming_mps.high_mps * t + tr.position_m + s.vehicle_length_m
+                + s.required_gap_m(p.v(t) + tr.speed_mps + b.oncoming_mps.high_mps) for t in times]
+    behind = [p.x(t) - b.same_mps.high_mps * t - tr.position_m - s.vehicle_length_m
+              - s.required_gap_m(b.same_mps.high_mps - p.v(t) + tr.speed_mps) for t in times]
+    for got, sampled, sign in ((rules._ahead_need(p), ahead, 1), (rules._oncoming_need(p), oncoming, 1),
+                               (rules._behind_allow(p), behind, -1)):
+        best = max(v * sign for v in sampled) * sign
+        assert got[0] * sign >= best * sign - 1e-6
+        assert got[0] * sign <= best * sign + 1e-3 * (1 + span)  # the sample grid may miss a vertex by a little
+        assert t0 - 1e-9 <= got[1] <= t0 + span + 1e-9
+
+
+@given(st.lists(st.sampled_from(list(Action)), min_size=1, max_size=6), st.sampled_from(list(Action)))
+def test_a_window_is_the_same_wherever_it_starts_once_the_first_ramp_is_over(actions: list[Action],
+                                                                            action: Action) -> None:
+    """The cached, moved window equals the one computed from the reference there."""
+    rules = _rules()
+    state = SoundState(Lane.LEFT, 0, 0, 0, 0, None, None)
+    for a in actions:
+        state = rules.after(state, a)
+    moved = rules.window(state, action)
+    rules._relative.clear()
+    ref = rules.reference(state, action)
+    direct = [(seg, [rules._bounded(p) for p in ref.pieces(seg.t0_s, seg.t1_s)])
+              for seg in rules._segments(state.lane, ref, action, state.moved)]
+    assert len(moved) == len(direct)
+    for (seg_a, pieces_a), (seg_b, pieces_b) in zip(moved, direct):
+        assert (seg_a.lanes, seg_a.entering_left) == (seg_b.lanes, seg_b.entering_left)
+        assert seg_a.t0_s == pytest.approx(seg_b.t0_s) and seg_a.t1_s == pytest.approx(seg_b.t1_s)
+        for got, want in zip(pieces_a, pieces_b):
+            for field in ("ahead", "oncoming", "behind"):
+                assert getattr(got, field)[0] == pytest.approx(getattr(want, field)[0], abs=1e-6)
+            assert got.piece.x0_m == pytest.approx(want.piece.x0_m, abs=1e-6)
+
+
+def test_a_cell_means_anywhere_within_it_widened_by_the_sensing_error() -> None:
+    """Vehicles are their cells' extents plus the sensing error either way; phantoms cover the unseen stretch."""
+    cars = vehicles(Lane.LEFT, (12,), (20,), PAPER_GRID, DEFAULT)
+    e = DEFAULT.bounds.sensing_error_m
+    assert (cars[0].lo_m, cars[0].hi_m) == (pytest.approx(31.5 - e), pytest.approx(52.5 + e))
+    assert (cars[1].lo_m, cars[1].hi_m) == (pytest.approx(210 - e), pytest.approx(231 + e))
+    phantoms = [c for c in cars if c.index is None]
+    assert len(phantoms) == 3
+    assert all(math.isinf(c.hi_m) if c.lo_m > 0 else math.isinf(c.lo_m) for c in phantoms)
+    assert not [c for c in vehicles(Lane.LEFT, (), (), PAPER_GRID, Sound(_bounds(phantoms=False))) if c.index is None]
+
+
+def _bounds(same: tuple[float, float] = (7.0, 7.0), oncoming: tuple[float, float] = (7.0, 7.0), error: float = 0.0,
+            phantoms: bool = True) -> Bounds:
+    return Bounds("test", SpeedBounds(*same), SpeedBounds(*oncoming), error, phantoms, "a test")
+
+
+def test_a_car_just_ahead_in_the_avs_lane_breaks_the_start() -> None:
+    """A left-lane vehicle in the cell ahead of an AV in the left lane may be touching it: the start is unsafe, and
+    the violation says which vehicle, which conflict and the gaps."""
+    rules = _rules(left=(11,))
+    found = rules.start_violation(SoundState(Lane.LEFT, 0, 0, 0, 0, None, None))
+    assert found is not None and found.conflict is Conflict.AHEAD and found.vehicle.index == 0
+    assert found.gap_m < found.required_m
+    assert "left_lane[0]" in found.describe()
+
+
+def test_a_follower_is_no_conflict_at_the_start_but_a_cut_in_is() -> None:
+    """A vehicle right behind an AV already in the left lane follows it; moving into the lane in front of it is a
+    cut-in (the AV starts in the right lane, the vehicle one cell behind and up to 12 m/s fast)."""
+    start_left = SoundState(Lane.LEFT, 0, 0, 0, 0, None, None)
+    assert _rules(Sound(_bounds(phantoms=False)), left=(8,)).start_violation(start_left) is None
+    at_common = _rules(Sound(_bounds(phantoms=False)), lane=Lane.RIGHT, left=(9,))
+    assert at_common.step_violation(SoundState(Lane.RIGHT, 0, 0, 0, 0, None, None), Action.LEFT_LANE_CHANGE) is None
+    rules = _rules(Sound(_bounds(same=(7.0, 12.0), phantoms=False)), lane=Lane.RIGHT, left=(9,))
+    found = rules.step_violation(SoundState(Lane.RIGHT, 0, 0, 0, 0, None, None), Action.LEFT_LANE_CHANGE)
+    assert found is not None and found.conflict is Conflict.CUT_IN
+
+
+@pytest.mark.parametrize("bounds,key", [
+    (_bounds(same=(-1.0, 7.0)), "same-speed"),
+    (_bounds(oncoming=(7.0, math.nan)), "oncoming-speed"),
+    (_bounds(same=(8.0, 7.0)), "same-speed"),
+    (_bounds(error=math.inf), "sensing-error-m"),
+    (_bounds(error=2000.0), "sensing-error-m"),
+])
+def test_bad_bounds_are_one_line_naming_the_key(bounds: Bounds, key: str) -> None:
+    with pytest.raises(OptionError, match=key):
+        check_sound(Sound(bounds))
+
+
+def test_bad_start_speed_is_bad_input() -> None:
+    with pytest.raises(OptionError, match="--av-speed-mps"):
+        check_sound(Sound(profile("default"), start_mps=-3.0))
