@@ -139,16 +139,18 @@ class PipelineValidation:
     """An action list checked against the pipeline's models: valid under which model, or why under none."""
 
     model: ModelKind  # the model it is a plan for, or the first model tried
-    verdict: Validation
+    verdict: Validation | sound.SoundValidation
     reason: str  # the valid model's reason, or every model's, joined
 
 
 def validate_pipeline(scenario: Scenario, actions: Sequence[Action], model: ModelChoice | None = None,
                       horizon: int | None = None) -> PipelineValidation:
-    """Whether ``actions`` is a plan under the first model of the choice (default: the scenario's) that accepts it."""
-    verdicts = []
+    """Whether ``actions`` is a plan under the first model of the choice (default: the scenario's) that accepts it
+    (under the sound model when the scenario has one)."""
+    verdicts: list[tuple[ModelKind, Validation | sound.SoundValidation]] = []
     for kind in models_for(model or scenario.model):
-        verdict = validate(problem_for(scenario, kind, horizon), actions)
+        problem = problem_for(scenario, kind, horizon)
+        verdict = validate(problem, actions) if scenario.sound is None else sound.validate(problem, actions)
         if verdict.valid:
             return PipelineValidation(kind, verdict, verdict.reason)
         verdicts.append((kind, verdict))

@@ -92,5 +92,9 @@ def engines_disagree(engines: list[Engine], strategy: Strategy, limits: Limits |
 def to_toml(scenario: Scenario, comment: str = "") -> str:
     """The scenario as a scenario file (TOML), readable and loadable by every command."""
     lines = [f"# {line}" for line in comment.splitlines()]
-    lines += [f"{key} = {json.dumps(value)}" for key, value in scenario_to_dict(scenario).items()]
+    data = scenario_to_dict(scenario)
+    lines += [f"{key} = {json.dumps(value)}" for key, value in data.items() if not isinstance(value, dict)]
+    for key, table in data.items():  # tables (the sound model's bounds) after the plain keys, as TOML requires
+        if isinstance(table, dict):
+            lines += ["", f"[{key}]", *(f"{k} = {json.dumps(v)}" for k, v in table.items())]
     return "\n".join(lines) + "\n"

@@ -12,7 +12,8 @@ beyond the range is inside the assumptions.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 from spec.errors import OptionError, check_number
 from spec.grid import WINDOW_M
@@ -41,12 +42,12 @@ class Phantom:
 class Bounds:
     """The sound model's assumptions: speeds per lane, sensing error, phantoms; ``source`` says where they come from."""
 
-    name: str
+    name: str = field(compare=False)  # two bounds with the same numbers are the same assumptions
     same_mps: SpeedBounds
     oncoming_mps: SpeedBounds
     sensing_error_m: float
     phantoms: bool
-    source: str
+    source: str = field(compare=False)
 
     def speeds(self, lane: Lane) -> SpeedBounds:
         """The bounds of the vehicles of ``lane`` (the left lane carries same-direction traffic, the right oncoming)."""
@@ -62,17 +63,18 @@ class Bounds:
                 Phantom(Lane.RIGHT, SENSORS.right_range_m, "front-right sensor's range"))
 
 
-def check_bounds(bounds: Bounds, where: str = "--bounds") -> Bounds:
-    """``bounds`` if every number is usable; else bad input naming the option (or file key), the value and why."""
-    for key, interval in (("same-speed", bounds.same_mps), ("oncoming-speed", bounds.oncoming_mps)):
+def check_bounds(bounds: Bounds, key: Callable[[str], str] = lambda name: f"--{name.replace('_', '-')}") -> Bounds:
+    """``bounds`` if every number is usable; else bad input naming the option (or file key: ``key`` of the field's
+    name), the value and why."""
+    for name, interval in (("same_mps", bounds.same_mps), ("oncoming_mps", bounds.oncoming_mps)):
         for end in (interval.low_mps, interval.high_mps):
-            check_number(f"{where} {key}", end)  # finite, at least 0: speeds are along the lane's direction
+            check_number(key(name), end)  # finite, at least 0: speeds are along the lane's direction
         if interval.low_mps > interval.high_mps:
-            raise OptionError(f"{where} {key}", f"{interval.low_mps:g}..{interval.high_mps:g}",
+            raise OptionError(key(name), f"{interval.low_mps:g}..{interval.high_mps:g}",
                               "the lower end is above the upper end")
-    error = check_number(f"{where} sensing-error-m", bounds.sensing_error_m)
+    error = check_number(key("sensing_error_m"), bounds.sensing_error_m)
     if error > float(WINDOW_M):
-        raise OptionError(f"{where} sensing-error-m", error, f"larger than the sensed window ({float(WINDOW_M):g} m)")
+        raise OptionError(key("sensing_error_m"), error, f"larger than the sensed window ({float(WINDOW_M):g} m)")
     return bounds
 
 
@@ -100,3 +102,31 @@ def profile(name: str, where: str = "--bounds") -> Bounds:
     if found is None:
         raise OptionError(where, name, f"unknown bounds profile (known: {', '.join(PROFILES)})")
     return found
+
+
+def parse_speeds(text: object, where: str) -> SpeedBounds:
+    """A speed interval as options and files write it: ``"LO..HI"`` (a single number: that speed exactly), or a
+    two-number list from a file; bad input names ``where``."""
+    if isinstance(text, (list, tuple)):
+        if len(text) != 2:
+            raise OptionError(where, text, "must be two speeds [low, high] in m/s")
+        low, high = text
+    else:
+        parts = str(text).split("..")
+        if len(parts) > 2 or not all(p.strip() for p in parts):
+            raise OptionError(where, text, "must be LOW..HIGH in m/s (or one speed)")
+        low, high = parts[0], parts[-1]
+    ends = []
+    for end in (low, high):
+        if isinstance(end, bool):
+            raise OptionError(where, text, "a speed must be a number of m/s")
+        try:
+            ends.append(float(end) if isinstance(end, str) else end)
+        except ValueError:
+            raise OptionError(where, text, "a speed must be a number of m/s") from None
+    for end in ends:
+        check_number(where, end)
+    bounds = SpeedBounds(float(ends[0]), float(ends[1]))
+    if bounds.low_mps > bounds.high_mps:
+        raise OptionError(where, text, "the lower end is above the upper end")
+    return bounds

@@ -100,7 +100,7 @@ def parse_strategy(text: str | Strategy) -> Strategy:
 def check_model(engine: Engine, scenario: Scenario) -> None:
     """Raise bad input when ``scenario`` asks for the sound model and ``engine`` answers the paper's rules only."""
     if scenario.sound is not None and not engine.sound:
-        able = ", ".join(e.name for e in ENGINES.values() if e.sound) or "none loaded"
+        able = ", ".join(e.name for e in load_engines().values() if e.sound) or "none"
         raise OptionError("--bounds", scenario.sound.bounds.name, f"engine {engine.name} answers the paper model "
                           f"only; the sound model is answered by: {able}")
 

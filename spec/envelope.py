@@ -17,7 +17,7 @@ runs inside a step's window.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from spec.motion import RAMP_SHARE, Ramp, ramp_s
 from spec.physical import CAR, LOOP
@@ -31,7 +31,7 @@ class Tracking:
     position_m: float
     speed_mps: float
     lateral_s: float
-    source: str
+    source: str = field(compare=False)
 
 
 #: The executor's envelope, measured (``docs/sound.md``, "The AV's envelope"). Rule: the largest deviation over

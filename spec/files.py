@@ -6,14 +6,16 @@ import json
 import stat
 import sys
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from spec.errors import OptionError, ScenarioError
+from spec.errors import BadInput, OptionError, ScenarioError
 from spec.scenario import Scenario, make_scenario
+from spec.sound import sound_from_table, sound_to_table
 
 REQUIRED_KEYS = ("lane", "left_lane", "right_lane")
-OPTIONAL_KEYS = ("targets", "model", "horizon", "cell_m")
+OPTIONAL_KEYS = ("targets", "model", "horizon", "cell_m", "bounds")
 SUFFIXES = (".json", ".toml")
 MAX_BYTES = 256 * 1024  # a scenario is a few hundred bytes: anything near this is not one
 
@@ -95,7 +97,15 @@ def scenario_from_dict(data: dict[str, Any]) -> Scenario:
     for key in REQUIRED_KEYS:
         if key not in data:
             raise ScenarioError(key, None, "missing required key")
-    return make_scenario(**data)
+    fields = {k: v for k, v in data.items() if k != "bounds"}
+    scenario = make_scenario(**fields)
+    if "bounds" not in data:
+        return scenario
+    try:
+        sound = sound_from_table(data["bounds"])
+    except BadInput as err:
+        raise ScenarioError(err.key, err.value, err.reason) from None
+    return replace(scenario, sound=sound)
 
 
 def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
@@ -108,4 +118,5 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
         "model": scenario.model.value,
         "horizon": scenario.horizon,
         "cell_m": scenario.grid.to_json(),
+        **({"bounds": sound_to_table(scenario.sound)} if scenario.sound is not None else {}),
     }

@@ -29,13 +29,13 @@ condition and in no goal field (a goal speaks of the vehicles sensed).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from spec.actions import ACTION_RULES, Action
-from spec.assumptions import Bounds, check_bounds
+from spec.assumptions import DEFAULT_PROFILE, Bounds, check_bounds, parse_speeds, profile
 from spec.cells import left_extent_m, oncoming_extent_m
 from spec.envelope import MINIMAL_RISK, TRACKING, MinimalRisk, Piece, Reference, Tracking
-from spec.errors import check_number
+from spec.errors import OptionError, check_number
 from spec.grid import Grid
 from spec.lanes import Lane
 from spec.models import GoalRule
@@ -63,12 +63,80 @@ class Sound:
                 f"{b.sensing_error_m:g} m, phantoms {'on' if b.phantoms else 'off'}")
 
 
-def check_sound(sound: Sound, where: str = "--bounds") -> Sound:
+def check_sound(sound: Sound) -> Sound:
     """``sound`` if every number is usable; else bad input naming the option, the value and why."""
-    check_bounds(sound.bounds, where)
+    check_bounds(sound.bounds)
     if sound.start_mps is not None:
         check_number("--av-speed-mps", sound.start_mps, high=100.0)
     return sound
+
+
+#: The keys of a scenario file's ``bounds`` table (and the command line's options of the same names).
+BOUNDS_KEYS = ("profile", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps")
+
+
+def sound_from(base: Sound | None, profile_name: str | None = None, same: object = None, oncoming: object = None,
+               sensing_error_m: object = None, phantoms: bool | None = None, av_speed_mps: object = None,
+               where: str = "--") -> Sound:
+    """The sound model from a base (a file's, or None: the default profile), a named profile and overrides of its
+    numbers; every value is checked, and bad input names the option or key (``where`` + its name)."""
+    def key(name: str) -> str:
+        return f"{where}{name.replace('_', '-')}" if where == "--" else f"{where}{name}"
+
+    if profile_name is not None:
+        bounds = profile(str(profile_name), key("bounds") if where == "--" else key("profile"))
+    else:
+        bounds = base.bounds if base is not None else profile(DEFAULT_PROFILE)
+    changed = []
+    if same is not None:
+        bounds = replace(bounds, same_mps=parse_speeds(same, key("same_mps")))
+        changed.append("same-direction speeds")
+    if oncoming is not None:
+        bounds = replace(bounds, oncoming_mps=parse_speeds(oncoming, key("oncoming_mps")))
+        changed.append("oncoming speeds")
+    if sensing_error_m is not None:
+        if isinstance(sensing_error_m, bool) or not isinstance(sensing_error_m, (int, float)):
+            raise OptionError(key("sensing_error_m"), sensing_error_m, "must be a number of metres")
+        bounds = replace(bounds, sensing_error_m=float(sensing_error_m))
+        changed.append("sensing error")
+    if phantoms is not None:
+        if not isinstance(phantoms, bool):
+            raise OptionError(key("phantoms"), phantoms, "must be true or false")
+        bounds = replace(bounds, phantoms=phantoms)
+        changed.append("phantoms")
+    if changed:
+        bounds = replace(bounds, name=f"{bounds.name} (changed: {', '.join(changed)})",
+                         source=f"{bounds.source}; changed by the user: {', '.join(changed)}")
+    check_bounds(bounds, key)
+    start = base.start_mps if base is not None else None
+    if av_speed_mps is not None:
+        if isinstance(av_speed_mps, bool) or not isinstance(av_speed_mps, (int, float)):
+            raise OptionError(key("av_speed_mps"), av_speed_mps, "must be a number of m/s")
+        start = check_number(key("av_speed_mps"), av_speed_mps, high=100.0)
+    return Sound(bounds, start_mps=start) if base is None else replace(base, bounds=bounds, start_mps=start)
+
+
+def sound_from_table(table: object, where: str = "bounds") -> Sound:
+    """The sound model a scenario file's ``bounds`` table states (every key optional; the profile defaults to
+    ``default``); an unknown key or a bad value names ``bounds.<key>``."""
+    if not isinstance(table, dict):
+        raise OptionError(where, table, f"must be a table of {', '.join(BOUNDS_KEYS)}")
+    for name in table:
+        if name not in BOUNDS_KEYS:
+            raise OptionError(f"{where}.{name}", table[name], f"unknown key (allowed: {', '.join(BOUNDS_KEYS)})")
+    return sound_from(None, table.get("profile"), table.get("same_mps"), table.get("oncoming_mps"),
+                      table.get("sensing_error_m"), table.get("phantoms"), table.get("av_speed_mps"), f"{where}.")
+
+
+def sound_to_table(sound: Sound) -> dict[str, object]:
+    """A sound model as a scenario file's ``bounds`` table (inverse of ``sound_from_table``)."""
+    b = sound.bounds
+    table: dict[str, object] = {"same_mps": [b.same_mps.low_mps, b.same_mps.high_mps],
+                                "oncoming_mps": [b.oncoming_mps.low_mps, b.oncoming_mps.high_mps],
+                                "sensing_error_m": b.sensing_error_m, "phantoms": b.phantoms}
+    if sound.start_mps is not None:
+        table["av_speed_mps"] = sound.start_mps
+    return table
 
 
 @dataclass(frozen=True, slots=True)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +21,7 @@ from spec.files import load_scenario
 from spec.library import builtin
 from spec.models import ModelChoice
 from spec.scenario import Scenario
+from spec.sound import sound_from
 from spec.state import State
 
 
@@ -92,3 +94,41 @@ def abbrev(answer: Answer) -> str:
     if answer.status is not Status.PLAN:
         return answer.status.value
     return " ".join(SHORT[a] for a in answer.actions) or "(empty)"
+
+
+SOUND_OPTIONS = ("bounds", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps")
+
+
+def sound_options(command: Any) -> Any:
+    """The sound model's options, handed to the command as one ``sound`` argument: a function that puts the chosen
+    model on a scenario (unchanged when none of them is given and the file has no ``bounds`` table)."""
+    from ci.cli.options import METRES, SPEED
+
+    def wrapper(**kwargs: Any) -> Any:
+        given = {k: kwargs.pop(k) for k in SOUND_OPTIONS}
+        kwargs["sound"] = lambda scenario: with_sound(scenario, **given)
+        return command(**kwargs)
+
+    wrapper.__name__, wrapper.__doc__ = command.__name__, command.__doc__
+    for decorate in reversed((
+        click.option("--bounds", default=None, help="Plan with the sound model under this bounds profile "
+                     "(paper, default; see docs/sound.md). Default: the paper's rules, or the file's bounds."),
+        click.option("--same-mps", default=None, help="Sound model: same-direction speeds LOW..HIGH, m/s."),
+        click.option("--oncoming-mps", default=None, help="Sound model: oncoming speeds LOW..HIGH, m/s."),
+        click.option("--sensing-error-m", type=METRES, default=None, help="Sound model: sensing error, metres."),
+        click.option("--phantoms/--no-phantoms", default=None, help="Sound model: vehicles assumed beyond the "
+                     "sensors' ranges (default: the profile's)."),
+        click.option("--av-speed-mps", type=SPEED, default=None, help="Sound model: the AV's measured speed at "
+                     "the snapshot (default: the common speed)."),
+    )):
+        wrapper = decorate(wrapper)
+    return wrapper
+
+
+def with_sound(scenario: Scenario, bounds: str | None, same_mps: str | None, oncoming_mps: str | None,
+               sensing_error_m: float | None, phantoms: bool | None, av_speed_mps: float | None) -> Scenario:
+    """``scenario`` under the sound model the options (over the file's ``bounds``) choose; unchanged without any."""
+    if all(v is None for v in (bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps)):
+        return scenario
+    sound = sound_from(scenario.sound, bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps)
+    return replace(scenario, sound=sound)

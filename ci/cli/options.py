@@ -130,6 +130,7 @@ CELL_M = Number(0.0, 1000.0, positive=True)
 PER_HOUR = Number(0.0, MAX_STOP_RATE_PER_H)  # events per vehicle-hour: at most one start per control step
 METRES = Number(0.0, 1000.0)  # a gap or a noise in metres: the sensed window is a kilometre
 FRACTION = Number(0.0, 1.0)  # a probability
+SPEED = Number(0.0, 100.0)  # m/s: no car on this road goes faster than 360 km/h
 
 
 def out_dir(option: str, path: str | Path) -> Path:

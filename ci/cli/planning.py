@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable
 
 import click
 from rich.table import Table
@@ -16,6 +17,7 @@ from ci.cli.common import (
     out,
     print_json,
     print_states,
+    sound_options,
     strategy_option,
 )
 from ci.cli.options import MAX_STATES, SECONDS, out_file
@@ -31,6 +33,7 @@ from spec.errors import ActionError, ExitCode, OptionError
 from spec.files import scenario_to_dict
 from spec.models import ModelChoice, ModelKind, models_for
 from spec.scenario import Scenario, problem_for
+from spec.sound import sound_to_table
 
 
 @click.command()
@@ -45,16 +48,17 @@ from spec.scenario import Scenario, problem_for
               help="Stored states before the search gives up (answer: incomplete).")
 @click.option("--timeout", type=SECONDS, default=None, help="Seconds before giving up (incomplete).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
+@sound_options
 def plan(file: str, strategy: Strategy, model: str | None, horizon: int | None, cell_m: float | None, engine: str,
-         max_states: int, timeout: float | None, as_json: bool) -> None:
+         max_states: int, timeout: float | None, as_json: bool, sound: Callable[[Scenario], Scenario]) -> None:
     """Plan an overtake for a scenario FILE (.json/.toml) or a built-in scenario name."""
-    scenario = load(file, cell_m)
+    scenario = sound(load(file, cell_m))
     choice, limits = ModelChoice(model) if model else None, Limits(max_states, timeout)
     if engine == "all":
         sys.exit(_plan_all(scenario, strategy, choice, horizon, limits, as_json))
     answer = run_plan(scenario, strategy, choice, horizon, engine, limits)
     if as_json:
-        print_json(answer.to_json())
+        print_json({**answer.to_json(), **_sound_json(scenario)})
     else:
         _print_answer(scenario, answer)
     sys.exit(answer.status.exit_code)
@@ -63,7 +67,7 @@ def plan(file: str, strategy: Strategy, model: str | None, horizon: int | None, 
 def _plan_all(scenario: Scenario, strategy: Strategy, model: ModelChoice | None, horizon: int | None, limits: Limits,
               as_json: bool) -> int:
     """Run every engine that answers ``strategy``, side by side, and say whether they agree."""
-    engines = [e for e in load_engines().values() if strategy in e.strategies]
+    engines = [e for e in load_engines().values() if strategy in e.strategies and (e.sound or scenario.sound is None)]
     answers = [run_plan(scenario, strategy, model, horizon, e, limits) for e in engines]
     problems = disagreements(answers)
     if as_json:
@@ -82,7 +86,17 @@ def _plan_all(scenario: Scenario, strategy: Strategy, model: ModelChoice | None,
     return ExitCode.DISAGREE if problems else answers[0].status.exit_code
 
 
+def _sound_json(scenario: Scenario) -> dict[str, object]:
+    """The sound model's bounds beside an answer (nothing under the paper's rules)."""
+    if scenario.sound is None:
+        return {}
+    return {"sound": {**sound_to_table(scenario.sound), "bounds": scenario.sound.bounds.name,
+                      "source": scenario.sound.bounds.source}}
+
+
 def _print_answer(scenario: Scenario, answer: Answer) -> None:
+    if scenario.sound is not None:
+        out.print(scenario.sound.describe())
     model = answer.model.value if answer.model else "-"
     out.print(f"{answer.status.value} ({answer.engine}, {answer.strategy.value}, model {model}, "
               f"{answer.states_explored} states, {answer.elapsed_ms:.2f} ms)")
@@ -100,10 +114,12 @@ def _print_answer(scenario: Scenario, answer: Answer) -> None:
 @horizon_option()
 @cell_option()
 @click.option("--json", "as_json", is_flag=True)
+@sound_options
 def validate_cmd(file: str, actions_text: str, model: str | None, horizon: int | None, cell_m: float | None,
-                 as_json: bool) -> None:
-    """Check that an action list is a plan for FILE: enabled, collision-free, goal first at the end."""
-    scenario = load(file, cell_m)
+                 as_json: bool, sound: Callable[[Scenario], Scenario]) -> None:
+    """Check that an action list is a plan for FILE: enabled, collision-free, goal first at the end (under the sound
+    model: safe at every instant for every motion within the bounds, and safe for ever after)."""
+    scenario = sound(load(file, cell_m))
     names = actions_text.split(",")
     if any(not name.strip() for name in names) and actions_text.strip():  # "" alone is the empty plan
         raise OptionError("--actions", actions_text, "an empty action between commas")

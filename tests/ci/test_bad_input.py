@@ -114,6 +114,26 @@ def choices(command: str, option: str, *, lists: bool = False) -> list[Case]:
     return [_case(command, f"{option}={value}", named=option) for value in bad]
 
 
+BAD_SPEEDS = ("9..5", "nan..9", "1..inf", "-1..3", "ten", "1..2..3", "..4", "")
+
+
+def sound(command: str) -> list[Case]:
+    """The sound model's options: an unknown profile, speed intervals that are not intervals of finite speeds,
+    numbers out of range (a sensing error beyond the window), and a scenario file's bounds table gone wrong."""
+    return [*choices(command, "--bounds"), *numbers(command, "--sensing-error-m", "--av-speed-mps"),
+            *(_case(command, f"{option}={value}", named=option) for option in ("--same-mps", "--oncoming-mps")
+              for value in BAD_SPEEDS),
+            _case(command, "--sensing-error-m=1001", named="--sensing-error-m"),
+            *(Case((BASE[command][0], name, *BASE[command][2:]), key, ceiling=True)
+              for name, key in BOUNDS_FILES.items())]
+
+
+#: Scenario files whose ``bounds`` table is wrong, and the key each one's line must name.
+BOUNDS_FILES = {"bounds_reversed.toml": "bounds.same_mps", "bounds_key.json": "bounds.speed",
+                "bounds_nan.json": "bounds.sensing_error_m", "bounds_profile.toml": "bounds.profile",
+                "bounds_list.json": "bounds", "bounds_phantoms.toml": "bounds.phantoms"}
+
+
 def out_dirs(command: str, option: str = "--out") -> list[Case]:
     """An output folder refuses a file, a folder that cannot be made, and places nobody may write."""
     return [_case(command, f"{option}={value}", named=option)
@@ -181,6 +201,12 @@ def _hostile_files(folder: Path) -> None:
         "digits.toml": 'lane = "left"\nleft_lane = [' + "9" * 5000 + "]\nright_lane = []\n",
         "long_string.json": '{"lane": "' + "x" * 200_000 + '", "left_lane": [], "right_lane": []}',
         "long_key.toml": "k" * 200_000 + ' = 1\nlane = "left"\nleft_lane = []\nright_lane = []\n',
+        "bounds_reversed.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nsame_mps = [9, 5]\n',
+        "bounds_key.json": "{" + good + ', "bounds": {"speed": 3}}',
+        "bounds_nan.json": "{" + good + ', "bounds": {"sensing_error_m": NaN}}',
+        "bounds_profile.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nprofile = "psychic"\n',
+        "bounds_list.json": "{" + good + ', "bounds": [1, 2]}',
+        "bounds_phantoms.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nphantoms = "yes"\n',
     }
     for name, text in files.items():
         (folder / name).write_text(text)
@@ -198,10 +224,11 @@ CASES: list[Case] = [
     _case("plan", "--engine=z3", "--strategy=sensible", named="--strategy"),
     no_spin("plan", "--engine=spin"), no_spin("plan", "--engine=all"),
     *unknown("plan"), *scenario_files("plan"),
+    *sound("plan"), _case("plan", "--bounds=default", "--engine=z3", "--strategy=shortest", named="--bounds"),
     # validate
     *numbers("validate", "--cell-m"), *whole("validate", "--horizon", HORIZON), *choices("validate", "--model"),
     *(_case("validate", f"--actions={value}", named="--actions") for value in ("fly", ",,", "drive,,drive", ",drive")),
-    *unknown("validate"), *scenario_files("validate"),
+    *unknown("validate"), *scenario_files("validate"), *sound("validate"),
     # promela
     *numbers("promela", "--cell-m"), *whole("promela", "--horizon", HORIZON), *choices("promela", "--model"),
     *out_files("promela"), *unknown("promela"), *scenario_files("promela"),

@@ -39,16 +39,16 @@ GOOD = PROFILES["default"]
 
 
 @pytest.mark.parametrize(("bounds", "words"), [
-    (replace(GOOD, same_mps=SpeedBounds(-1.0, 9.0)), ["same-speed", "-1.0", "at least 0"]),
-    (replace(GOOD, oncoming_mps=SpeedBounds(5.0, float("nan"))), ["oncoming-speed", "nan", "finite"]),
-    (replace(GOOD, same_mps=SpeedBounds(9.0, 5.0)), ["same-speed", "9..5", "lower end is above"]),
+    (replace(GOOD, same_mps=SpeedBounds(-1.0, 9.0)), ["--same-mps", "-1.0", "at least 0"]),
+    (replace(GOOD, oncoming_mps=SpeedBounds(5.0, float("nan"))), ["--oncoming-mps", "nan", "finite"]),
+    (replace(GOOD, same_mps=SpeedBounds(9.0, 5.0)), ["--same-mps", "9..5", "lower end is above"]),
     (replace(GOOD, sensing_error_m=float("inf")), ["sensing-error-m", "inf", "finite"]),
     (replace(GOOD, sensing_error_m=-0.5), ["sensing-error-m", "-0.5", "at least 0"]),
     (replace(GOOD, sensing_error_m=2000.0), ["sensing-error-m", "2000", "larger than the sensed window"]),
 ])
 def test_an_unusable_bound_is_bad_input_naming_the_key_the_value_and_why(bounds: Bounds, words: list[str]) -> None:
     with pytest.raises(OptionError) as caught:
-        check_bounds(bounds, "--bounds")
+        check_bounds(bounds)
     assert caught.value.exit_code == 2 and all(word in str(caught.value) for word in words), str(caught.value)
 
 

@@ -114,9 +114,9 @@ def test_a_follower_is_no_conflict_at_the_start_but_a_cut_in_is() -> None:
 
 
 @pytest.mark.parametrize("bounds,key", [
-    (_bounds(same=(-1.0, 7.0)), "same-speed"),
-    (_bounds(oncoming=(7.0, math.nan)), "oncoming-speed"),
-    (_bounds(same=(8.0, 7.0)), "same-speed"),
+    (_bounds(same=(-1.0, 7.0)), "--same-mps"),
+    (_bounds(oncoming=(7.0, math.nan)), "--oncoming-mps"),
+    (_bounds(same=(8.0, 7.0)), "--same-mps"),
     (_bounds(error=math.inf), "sensing-error-m"),
     (_bounds(error=2000.0), "sensing-error-m"),
 ])
