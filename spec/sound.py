@@ -508,25 +508,55 @@ class SoundRules:
 
 
     def hopeless(self, state: SoundState, goal: GoalRule) -> bool:
-        """Whether ``goal`` can hold neither in ``state`` nor in any state after it (a search need not go on): the
-        nearest target's interval already wider than the goal's gap (it only grows), or a target held ahead of an AV
-        in the left lane that can never again enter the right lane (to pass it; an oncoming phantom covers the
-        unseen stretch beyond the range, so the right lane closes for good once the phantom's nearest end is nearer
-        than the least oncoming gap, and the AV never moves back)."""
+        """Whether ``goal`` can hold neither in ``state`` nor in any state after it, so a search need not go on.
+
+        Two arguments, each sound under the model's own rules:
+
+        - the nearest target's interval is already wider than the goal's gap allows (it only grows), or its far
+          end already too far behind the phantom ahead (the AV must stay behind the phantom, and only gets more
+          room when the target is slower than the phantom may be);
+        - a target must still be passed, and it cannot be while the right lane is open. It must be passed
+          from the right lane: the AV is in it, or the target is held ahead of an AV in the left lane (the
+          AHEAD checks keep it there). Even at the fastest action's speed the AV is past the target (by the
+          least cut-in gap) only at ``t_pass``; an oncoming phantom (the unseen stretch beyond the range)
+          makes the right lane unusable from the time its nearest end is nearer than the least oncoming
+          gap, and that time only comes sooner the farther the AV is. Positions at a boundary are taken
+          with the most a ramp centred on it may add or take (``dip_m``)."""
         t_s = state.t_units * self.unit_s
         ex, length = self.sound.tracking.position_m, self.sound.safety.vehicle_length_m
         if goal.nearest_target_m is not None and self.targets:
             v = self.sensed_same[self.targets[0]]
-            if self.same_high(v, t_s) - self.same_low(v, t_s) - 2 * ex > float(goal.nearest_target_m) + EPS_M:
+            if self.same_high(v, t_s) - self.same_low(v, t_s) + 2 * ex > float(goal.nearest_target_m) + EPS_M:
                 return True
-        if not (goal.targets_behind and self.targets and state.lane is Lane.LEFT):
+            # A plan ends in the left lane (the right one is never safe for ever with phantoms), where the phantom
+            # ahead is held ahead by at least the least gap: the AV cannot be near enough the target's far end.
+            room = float(goal.nearest_target_m) - self.sound.safety.min_gap_m - 2 * ex
+            if any(math.isinf(p.hi_m) and self.same_high(v, t_s) - self.same_low(p, t_s) > room + EPS_M
+                   for p in self.same):
+                return True
+        phantoms = [v for v in self.oncoming if math.isinf(v.hi_m)]
+        if not (goal.targets_behind and self.targets and phantoms):
             return False
-        x_m = self.reference(state, None).position_m(t_s) - self.dip_m
-        least_m = self.sound.safety.required_gap_m(self.sound.tracking.speed_mps
-                                                   + self.sound.bounds.oncoming_mps.high_mps)
-        closed = any(math.isinf(v.hi_m) and self.oncoming_low(v, t_s) - (x_m + ex) - length < least_m
-                     for v in self.oncoming)
-        return closed and any(self.held_ahead(self.sensed_same[i], x_m, t_s) for i in self.targets)
+        x_m = self.reference(state, None).position_m(t_s)
+        b, g_min = self.sound.bounds, self.sound.safety.min_gap_m
+        least_m = self.sound.safety.required_gap_m(self.sound.tracking.speed_mps + b.oncoming_mps.high_mps)
+        nearest = max(v.lo_m for v in phantoms)
+        fastest = max(max(self.speeds.values()), self.start_mps)
+        for i in self.targets:
+            v = self.sensed_same[i]
+            if state.lane is Lane.LEFT and not self.held_ahead(v, x_m + self.dip_m, t_s):
+                continue  # the left lane's rules may let it fall behind there: no argument
+            if self.same_high(v, t_s) + length + g_min + ex <= x_m - self.dip_m - ex:
+                continue  # already passed
+            speed_gain = fastest - b.same_mps.high_mps
+            if speed_gain <= 0:
+                return True  # never passed for every position
+            passed_at = t_s + max(0.0, (self.same_high(v, t_s) + length + g_min + 2 * ex - x_m - self.dip_m)
+                                  / speed_gain)
+            av_at = self.same_high(v, passed_at) + length + g_min + ex  # the AV's reference there, at least
+            if nearest - b.oncoming_mps.high_mps * passed_at - (av_at + ex) - length < least_m - EPS_M:
+                return True
+        return False
 
 
 def _max_of(p: Piece, c1: float, b1: float, c2: float, b2: float, flip: bool = False) -> tuple[float, float]:
