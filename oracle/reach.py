@@ -239,6 +239,19 @@ class Motion:
     av_offset: tuple[tuple[float, float], ...]  # (from time, deviation rate m/s); the deviation stays within e_x
 
 
+def _drivers(scenario: Scenario) -> tuple[Vehicle, ...]:
+    """The vehicles a motion drives, from the declarations alone (not ``spec.sound.vehicles``, whose extents and
+    phantoms are what the motions check): the scenario's vehicles (their starts are drawn through the discretiser)
+    and a vehicle at each phantom's edge as the bounds declare them."""
+    cars = [Vehicle(Lane.LEFT, i, math.nan, math.nan, f"left_lane[{i}] (cell {c})")
+            for i, c in enumerate(scenario.left_lane)]
+    cars += [Vehicle(Lane.RIGHT, i, math.nan, math.nan, f"right_lane[{i}] (cell {c})")
+             for i, c in enumerate(scenario.right_lane)]
+    cars += [Vehicle(p.lane, None, p.dx_m, p.dx_m, f"phantom ({p.why}, {p.dx_m:+g} m)")
+             for p in _sound(scenario).bounds.phantom_vehicles()]
+    return tuple(cars)
+
+
 def _sensed_start(rng: random.Random, v: Vehicle, cell: int, lane: Lane, av_lane: Lane, grid: Grid) -> float:
     """A reading the discretiser puts into ``cell`` (by its own rule, not by the cell's extent), drawn uniformly."""
     width = grid.cell
@@ -254,7 +267,7 @@ def _sensed_start(rng: random.Random, v: Vehicle, cell: int, lane: Lane, av_lane
 def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, count: int) -> list[Motion]:
     """The corner motions, then ``count`` random ones, all within the scenario's bounds."""
     sound = _sound(scenario)
-    cars = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid, sound)
+    cars = _drivers(scenario)
     end_s = sum(float(ACTION_RULES[a].duration_s) for a in actions) + CONTINUATION_S
     b, e = sound.bounds, sound.bounds.sensing_error_m
     ev = sound.tracking.speed_mps
@@ -322,7 +335,7 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
     position error."""
     sound = _sound(scenario)
     path = Path(actions, sound, scenario.grid, scenario.lane)
-    cars = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid, sound)
+    cars = _drivers(scenario)
     judge = _Judge(sound, motion.name)
     length, ex, g_min = sound.safety.vehicle_length_m, sound.tracking.position_m, sound.safety.min_gap_m
     pos, idx = list(motion.starts_m), [0] * len(cars)
