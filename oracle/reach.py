@@ -82,9 +82,10 @@ class Path:
                 r = ramp_s(speeds[k - 1], speeds[k])
                 ramps.append(Ramp(self.bounds_s[k] - r / 2, r, speeds[k] - speeds[k - 1]))
         last = speeds[-1] if speeds else start_mps
-        hold = max(0.0, min(last, sound.bounds.same_mps.low_mps - sound.tracking.speed_mps))
-        if hold < last:
-            ramps.append(Ramp(t, (last - hold) / sound.minimal_risk.decel_mps2, hold - last))
+        hold = sound.minimal_risk.hold_mps(last, sound.bounds.same_mps.low_mps, sound.tracking)
+        brake = sound.minimal_risk.ramp(t, last, hold)  # the manoeuvre as spec.envelope declares it
+        if brake is not None:
+            ramps.append(brake)
         self.start_mps, self.ramps = start_mps, tuple(ramps)
         self.lanes: list[tuple[float, float, frozenset[Lane], bool]] = []  # (from, to, lanes, entering the left)
         current = lane
@@ -125,19 +126,11 @@ class Path:
         return sorted(out)
 
 
-@dataclass(slots=True)
-class _Judge:
-    """Holds one motion's facts at one instant to the specification; keeps which vehicles were behind at entry."""
-
-    sound: Sound
-    motion: str
-
-    def gap_ok(self, conflict: Conflict, name: str, t_s: float, gap_m: float, closing_mps: float,
-               slack_m: float) -> Breach | None:
-        required = self.sound.safety.required_gap_m(closing_mps)
-        if gap_m - slack_m < required:
-            return Breach(conflict, name, t_s, gap_m - slack_m, required, self.motion)
-        return None
+def _gap_breach(sound: Sound, motion: str, conflict: Conflict, name: str, t_s: float, gap_m: float,
+                closing_mps: float) -> Breach | None:
+    """The breach of one motion at one instant, if its gap to one vehicle is below the specification's."""
+    required = sound.safety.required_gap_m(closing_mps)
+    return Breach(conflict, name, t_s, gap_m, required, motion) if gap_m < required else None
 
 
 #: A gap this close to the required one (metres) is taken as meeting it: the model's own slack is far smaller.
@@ -252,7 +245,7 @@ def _drivers(scenario: Scenario) -> tuple[Vehicle, ...]:
     return tuple(cars)
 
 
-def _sensed_start(rng: random.Random, v: Vehicle, cell: int, lane: Lane, av_lane: Lane, grid: Grid) -> float:
+def _sensed_start(rng: random.Random, cell: int, lane: Lane, av_lane: Lane, grid: Grid) -> float:
     """A reading the discretiser puts into ``cell`` (by its own rule, not by the cell's extent), drawn uniformly."""
     width = grid.cell
     offset = (cell - grid.av_cell) * width
@@ -279,12 +272,11 @@ def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, c
     def starts(pick: str) -> tuple[float, ...]:
         out = []
         for c in cars:
-            if c.index is None:
-                edge = c.lo_m if math.isfinite(c.lo_m) else c.hi_m
-                out.append(edge)
+            if c.index is None:  # a phantom, at its edge
+                out.append(c.lo_m)
                 continue
             cells = scenario.left_lane if c.lane is Lane.LEFT else scenario.right_lane
-            sensed = _sensed_start(rng, c, cells[c.index], c.lane, scenario.lane, scenario.grid)
+            sensed = _sensed_start(rng, cells[c.index], c.lane, scenario.lane, scenario.grid)
             err = {"low": -e, "high": e}.get(pick, rng.uniform(-e, e))
             out.append(sensed + err)
         return tuple(out)
@@ -336,7 +328,6 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
     sound = _sound(scenario)
     path = Path(actions, sound, scenario.grid, scenario.lane)
     cars = _drivers(scenario)
-    judge = _Judge(sound, motion.name)
     length, ex, g_min = sound.safety.vehicle_length_m, sound.tracking.position_m, sound.safety.min_gap_m
     pos, idx = list(motion.starts_m), [0] * len(cars)
     dev, dev_k = 0.0, 0
@@ -371,13 +362,13 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
             y, s = pos[i], speeds[i]
             if c.lane is Lane.LEFT and Lane.LEFT in lanes and i not in followers:
                 if entering and y < x:
-                    found = judge.gap_ok(Conflict.CUT_IN, c.name, t, x - y - length, s - v, 0.0)
+                    found = _gap_breach(sound, motion.name, Conflict.CUT_IN, c.name, t, x - y - length, s - v)
                 else:
-                    found = judge.gap_ok(Conflict.AHEAD, c.name, t, y - x - length, v - s, 0.0)
+                    found = _gap_breach(sound, motion.name, Conflict.AHEAD, c.name, t, y - x - length, v - s)
                 if found is not None:
                     return found
             if c.lane is Lane.RIGHT and Lane.RIGHT in lanes and y + length > x:
-                found = judge.gap_ok(Conflict.ONCOMING, c.name, t, y - x - length, v + s, 0.0)
+                found = _gap_breach(sound, motion.name, Conflict.ONCOMING, c.name, t, y - x - length, v + s)
                 if found is not None:
                     return found
         step = (times[k + 1] - t) if k + 1 < len(times) else 0.0

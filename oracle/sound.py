@@ -14,7 +14,7 @@ import time
 from collections import deque
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from functools import cache
+from functools import lru_cache
 
 from oracle.search import depth_first
 from spec.actions import Action
@@ -25,7 +25,7 @@ from spec.sound import SoundRules, SoundState, Violation
 from spec.state import State
 
 
-@cache
+@lru_cache(maxsize=64)  # a few problems at a time (a pipeline's stages); a campaign must not keep every one
 def rules_for(problem: Problem) -> SoundRules:
     """The sound model's rules on ``problem``'s scenario (its vehicles as intervals, its phantoms)."""
     sc = problem.scenario

@@ -39,7 +39,7 @@ from spec.errors import OptionError, check_number
 from spec.grid import Grid
 from spec.lanes import Lane
 from spec.models import GoalRule
-from spec.motion import Ramp, action_speed_mps, ramp_s
+from spec.motion import Ramp, action_speed_mps, ramp_gain_m, ramp_s
 from spec.safety import SAFETY, Conflict, SafetySpec
 
 #: Conditions are held to this much slack on the safe side, so that float rounding never makes a gap look large.
@@ -61,14 +61,6 @@ class Sound:
         return (f"sound model, bounds {b.name}: same-direction {b.same_mps.low_mps:g}..{b.same_mps.high_mps:g} m/s, "
                 f"oncoming {b.oncoming_mps.low_mps:g}..{b.oncoming_mps.high_mps:g} m/s, sensing error "
                 f"{b.sensing_error_m:g} m, phantoms {'on' if b.phantoms else 'off'}")
-
-
-def check_sound(sound: Sound) -> Sound:
-    """``sound`` if every number is usable; else bad input naming the option, the value and why."""
-    check_bounds(sound.bounds)
-    if sound.start_mps is not None:
-        check_number("--av-speed-mps", sound.start_mps, high=100.0)
-    return sound
 
 
 #: The keys of a scenario file's ``bounds`` table (and the command line's options of the same names).
@@ -95,9 +87,7 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
         bounds = replace(bounds, oncoming_mps=parse_speeds(oncoming, key("oncoming_mps")))
         changed.append("oncoming speeds")
     if sensing_error_m is not None:
-        if isinstance(sensing_error_m, bool) or not isinstance(sensing_error_m, (int, float)):
-            raise OptionError(key("sensing_error_m"), sensing_error_m, "must be a number of metres")
-        bounds = replace(bounds, sensing_error_m=float(sensing_error_m))
+        bounds = replace(bounds, sensing_error_m=check_number(key("sensing_error_m"), sensing_error_m))
         changed.append("sensing error")
     if phantoms is not None:
         if not isinstance(phantoms, bool):
@@ -110,8 +100,6 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
     check_bounds(bounds, key)
     start = base.start_mps if base is not None else None
     if av_speed_mps is not None:
-        if isinstance(av_speed_mps, bool) or not isinstance(av_speed_mps, (int, float)):
-            raise OptionError(key("av_speed_mps"), av_speed_mps, "must be a number of m/s")
         start = check_number(key("av_speed_mps"), av_speed_mps, high=100.0)
     return Sound(bounds, start_mps=start) if base is None else replace(base, bounds=bounds, start_mps=start)
 
@@ -322,8 +310,7 @@ class SoundRules:
             shape = self._relative[key] = [
                 (seg, [self._bounded(p) for p in rel.pieces(seg.t0_s, seg.t1_s)])
                 for seg in self._segments(state.lane, rel, action, state.moved)]
-        gain = (first.dv_mps * -first.duration_s / 2) if first is not None else 0.0
-        dt, dx = ref.boundary_s, ref.nominal_m + gain
+        dt, dx = ref.boundary_s, ref.nominal_m + ramp_gain_m(ref.start_mps, ref.first_mps)
         bounds = self.sound.bounds
         return [(Segment(seg.t0_s + dt, seg.t1_s + dt, seg.lanes, seg.entering_left),
                  [b.shifted(dt, dx, bounds) for b in pieces]) for seg, pieces in shape]
@@ -505,7 +492,6 @@ class SoundRules:
                 return False
         return not (goal.oncoming_passed and any(
             not self.passed(v, x_m, t_s) for v in self.oncoming if v.index is not None))
-
 
     def hopeless(self, state: SoundState, goal: GoalRule) -> bool:
         """Whether ``goal`` can hold neither in ``state`` nor in any state after it, so a search need not go on.

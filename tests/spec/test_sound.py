@@ -9,13 +9,13 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from spec.actions import Action
-from spec.assumptions import Bounds, SpeedBounds, profile
+from spec.assumptions import Bounds, SpeedBounds, check_bounds, profile
 from spec.envelope import Piece
 from spec.errors import OptionError
 from spec.grid import PAPER_GRID
 from spec.lanes import Lane
 from spec.safety import Conflict
-from spec.sound import Sound, SoundRules, SoundState, check_sound, vehicles
+from spec.sound import Sound, SoundRules, SoundState, sound_from, vehicles
 
 DEFAULT = Sound(profile("default"))
 finite = st.floats(-50.0, 50.0)
@@ -122,9 +122,9 @@ def test_a_follower_is_no_conflict_at_the_start_but_a_cut_in_is() -> None:
 ])
 def test_bad_bounds_are_one_line_naming_the_key(bounds: Bounds, key: str) -> None:
     with pytest.raises(OptionError, match=key):
-        check_sound(Sound(bounds))
+        check_bounds(bounds)
 
 
 def test_bad_start_speed_is_bad_input() -> None:
     with pytest.raises(OptionError, match="--av-speed-mps"):
-        check_sound(Sound(profile("default"), start_mps=-3.0))
+        sound_from(None, "default", av_speed_mps=-3.0)
