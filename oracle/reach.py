@@ -101,6 +101,8 @@ class Path:
             current = rule.to_lane
         self.final_lane = current
         self.max_accel = max((abs(r.dv_mps) / r.duration_s for r in self.ramps if r.duration_s > 0), default=0.0)
+        #: The fastest the reference ever goes: ramps only move it between the speeds they join, so one of those.
+        self.max_speed = max([start_mps, *speeds])
 
     def speed(self, t_s: float) -> float:
         return self.start_mps + sum(r.at(t_s) for r in self.ramps)
@@ -150,8 +152,8 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
     path = Path(actions, sound, scenario.grid, scenario.lane)
     tr, b, length = sound.tracking, sound.bounds, sound.safety.vehicle_length_m
     cars = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid, sound)
-    fastest_av = max(path.speed(t) for t in path.times(0.1)) + tr.speed_mps
-    rate = fastest_av + max(b.same_mps.high_mps, b.oncoming_mps.high_mps) + sound.safety.time_gap_s * path.max_accel
+    fastest_vehicle = max(b.same_mps.high_mps, b.oncoming_mps.high_mps)
+    rate = path.max_speed + tr.speed_mps + fastest_vehicle + sound.safety.time_gap_s * path.max_accel
 
     def worst(t: float, lanes: frozenset[Lane], entering: bool, behind: set[int]) -> tuple[float, Breach | None]:
         """The least margin over the conflicts at ``t`` and the breach it would be."""
