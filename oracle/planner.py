@@ -90,9 +90,7 @@ def _check_no_plan(answer: Answer, scenario: Scenario, model: ModelChoice | None
 
 def _checked_states(engine: Engine, problem: Problem, result: SearchResult | Answer) -> tuple[State, ...]:
     """The states of a plan, after checking it with the interpreter: an invalid plan is an engine error."""
-    actions = result.actions
-    verdict: Validation | sound.SoundValidation = (
-        validate(problem, actions) if problem.scenario.sound is None else sound.validate(problem, actions))
+    verdict = verdict_for(problem, result.actions)
     if not verdict.valid:
         raise EngineError(f"engine {engine.name} returned an invalid plan: {verdict.reason}")
     if result.states and result.states != verdict.states:
@@ -134,6 +132,12 @@ def _summary(stages: list[tuple[ModelKind, Status, str]]) -> str:
     return "; ".join(parts)
 
 
+def verdict_for(problem: Problem, actions: Sequence[Action]) -> Validation | sound.SoundValidation:
+    """The interpreter's verdict on ``actions``: under the paper's rules, or the sound model's when the scenario has
+    one."""
+    return validate(problem, actions) if problem.scenario.sound is None else sound.validate(problem, actions)
+
+
 @dataclass(frozen=True, slots=True)
 class PipelineValidation:
     """An action list checked against the pipeline's models: valid under which model, or why under none."""
@@ -149,8 +153,7 @@ def validate_pipeline(scenario: Scenario, actions: Sequence[Action], model: Mode
     (under the sound model when the scenario has one)."""
     verdicts: list[tuple[ModelKind, Validation | sound.SoundValidation]] = []
     for kind in models_for(model or scenario.model):
-        problem = problem_for(scenario, kind, horizon)
-        verdict = validate(problem, actions) if scenario.sound is None else sound.validate(problem, actions)
+        verdict = verdict_for(problem_for(scenario, kind, horizon), actions)
         if verdict.valid:
             return PipelineValidation(kind, verdict, verdict.reason)
         verdicts.append((kind, verdict))
