@@ -1,9 +1,14 @@
-"""The interpreter engine, registered once: DFS over offsets for sensible, bitset BFS for shortest."""
+"""The interpreter engine, registered once: DFS over offsets for sensible, bitset BFS for shortest, a uniform-cost
+search over offsets for optimal (``oracle.optimum``, the conformance check's own search)."""
 
 from __future__ import annotations
 
 from oracle import bitplan, offsets, sound
+from oracle.interpreter import replay
+from oracle.optimum import lexicographic_optimum
+from oracle.search import trivial_answer
 from spec.answers import Limits, SearchResult, Status, Strategy
+from spec.cost import COST_DOC, COST_TERMS
 from spec.engines import Engine, register
 from spec.scenario import Problem
 
@@ -15,7 +20,26 @@ def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult
         return sound.solve(problem, strategy, limits)
     if strategy is Strategy.SHORTEST:
         return bitplan.shortest(problem)
+    if strategy is Strategy.OPTIMAL:
+        return _optimal(problem, limits)
     return offsets.sensible(problem, limits)
+
+
+def _optimal(problem: Problem, limits: Limits) -> SearchResult:
+    """The least-cost plan of the paper's rules, its states the interpreter's replay."""
+    trivial = trivial_answer(problem)
+    if trivial is not None:
+        return trivial
+    try:
+        best = lexicographic_optimum(problem, limits.max_states)
+    except MemoryError as exc:
+        return SearchResult(Status.INCOMPLETE, (), limits.max_states, str(exc))
+    if best.cost is None:
+        return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), best.explored,
+                            f"no plan within {problem.horizon} actions")
+    return SearchResult(Status.PLAN, best.actions, best.explored, f"optimal under {COST_DOC}",
+                        replay(problem, best.actions, "interpreter"),
+                        {"cost": dict(zip(COST_TERMS, best.cost, strict=True)), "cost_order": list(COST_TERMS)})
 
 
 def _beyond(problem: Problem) -> SearchResult:
@@ -26,6 +50,6 @@ def _beyond(problem: Problem) -> SearchResult:
 
 
 INTERPRETER = register(
-    Engine("interpreter", (Strategy.SENSIBLE, Strategy.SHORTEST), _solve, "Python reference interpreter and planners",
-           _beyond, sound=True)
+    Engine("interpreter", (Strategy.SENSIBLE, Strategy.SHORTEST, Strategy.OPTIMAL), _solve,
+           "Python reference interpreter and planners", _beyond, sound=True)
 )

@@ -38,6 +38,7 @@ class Optimum:
 
     cost: Cost | None
     actions: tuple[Action, ...]
+    explored: int = 0  # (situation, steps) pairs pushed
 
 
 def plan_cost(problem: Problem, actions: tuple[Action, ...]) -> Cost:
@@ -72,7 +73,7 @@ def lexicographic_optimum(problem: Problem, max_states: int = 2_000_000) -> Opti
             continue
         fewest_steps[situation] = steps
         if situations.goal(situation):
-            return Optimum(_unpacked(cost, base), _actions(links, entry))
+            return Optimum(_unpacked(cost, base), _actions(links, entry), len(best))
         if steps >= problem.horizon:
             continue
         for action, after, added in situations.successors(situation):
@@ -86,7 +87,7 @@ def lexicographic_optimum(problem: Problem, max_states: int = 2_000_000) -> Opti
                     raise MemoryError(f"optimum: more than {max_states} states")
                 links.append((entry, action))
                 heapq.heappush(queue, (total, len(links) - 1, after, steps + 1))
-    return Optimum(None, ())
+    return Optimum(None, (), len(best))
 
 
 def _actions(links: list[tuple[int, Action | None]], entry: int) -> tuple[Action, ...]:

@@ -1,8 +1,9 @@
-"""The sound model in the interpreter: its step, plan validation and its planners (sensible, shortest).
+"""The sound model in the interpreter: its step, plan validation and its planners (sensible, shortest, optimal).
 
 Pure functions over frozen values, like the paper's interpreter (``oracle.interpreter``): the rules
-are ``spec.sound``'s, the search is ``oracle.search.depth_first`` (sensible) or an ordered
-breadth-first search (shortest) over ``SoundState``s. A plan reaches the goal with every step safe
+are ``spec.sound``'s, the search is ``oracle.search.depth_first`` (sensible), an ordered
+breadth-first search (shortest) or a uniform-cost search with ``spec.cost`` (optimal) over
+``SoundState``s. A plan reaches the goal with every step safe
 at every instant and its last state safe for ever (the minimal-risk manoeuvre); the empty plan
 is held to the same. The sound model cannot prove that no plan of any length exists (time grows
 without bound): beyond the horizon it says so, never "no plan".
@@ -10,6 +11,7 @@ without bound): beyond the horizon it says so, never "no plan".
 
 from __future__ import annotations
 
+import heapq
 import time
 from collections import deque
 from collections.abc import Iterator, Sequence
@@ -19,6 +21,7 @@ from functools import lru_cache
 from oracle.search import depth_first
 from spec.actions import Action
 from spec.answers import Limits, SearchResult, Status, Strategy
+from spec.cost import COST_DOC, COST_TERMS, action_cost
 from spec.rules import disabled_guard, disabled_reason
 from spec.scenario import Problem
 from spec.sound import SoundRules, SoundState, Violation
@@ -138,6 +141,57 @@ def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
     return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(parent), beyond(problem))
 
 
+def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
+    """The least-cost plan (``spec.cost``, lexicographic) of at most ``horizon`` actions: a uniform-cost search.
+
+    Every cost term only grows along a plan, so the first goal state taken from the queue is least-cost (ties: the
+    one pushed first). A state taken after one with the same key (``SoundState.key``: everything the future depends
+    on but the steps) was taken with no more steps is dominated: it costs no less (the queue's order) and has no
+    more of the horizon left. ``tests/oracle/test_sound.py`` checks it against every plan of a walk."""
+    trivial = _trivial(problem)
+    if trivial is not None:
+        return trivial
+    limits = limits or Limits()
+    deadline = None if limits.timeout_s is None else time.monotonic() + limits.timeout_s
+    first = start(problem)
+    entries: list[tuple[SoundState, int, Action | None]] = [(first, -1, None)]  # state, the entry before, action
+    queue: list[tuple[tuple[int, ...], int]] = [((0,) * len(COST_TERMS), 0)]  # cost, entry (ties: pushed first)
+    fewest: dict[tuple[object, ...], int] = {}  # key -> the fewest steps it was taken with
+    while queue:
+        cost, entry = heapq.heappop(queue)
+        state = entries[entry][0]
+        if fewest.get(state.key(), state.steps + 1) <= state.steps:
+            continue
+        fewest[state.key()] = state.steps
+        if done(problem, state):
+            actions, states = _entries_path(entries, entry)
+            return SearchResult(Status.PLAN, actions, len(entries), f"optimal under {COST_DOC}",
+                                tuple(display(problem, s) for s in states),
+                                {"cost": dict(zip(COST_TERMS, cost, strict=True)), "cost_order": list(COST_TERMS)})
+        for action, nxt in _successors(problem, state):
+            if fewest.get(nxt.key(), nxt.steps + 1) <= nxt.steps:
+                continue
+            entries.append((nxt, entry, action))
+            added = action_cost(action, nxt.lane)
+            heapq.heappush(queue, (tuple(a + b for a, b in zip(cost, added, strict=True)), len(entries) - 1))
+        if len(entries) >= limits.max_states:
+            return SearchResult(Status.INCOMPLETE, (), len(entries), f"state limit {limits.max_states} reached")
+        if deadline is not None and time.monotonic() > deadline:
+            return SearchResult(Status.INCOMPLETE, (), len(entries), f"time limit {limits.timeout_s} s reached")
+    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(entries), beyond(problem))
+
+
+def _entries_path(entries: list[tuple[SoundState, int, Action | None]],
+                  entry: int) -> tuple[tuple[Action, ...], tuple[SoundState, ...]]:
+    actions, states = [], [entries[entry][0]]
+    while entry > 0:
+        _, entry, action = entries[entry]
+        if action is not None:
+            actions.append(action)
+        states.append(entries[entry][0])
+    return tuple(reversed(actions)), tuple(reversed(states))
+
+
 def _path(parent: dict[tuple[object, ...], tuple[SoundState, SoundState | None, Action | None]],
           last: SoundState) -> tuple[tuple[Action, ...], tuple[SoundState, ...]]:
     actions, states = [], [last]
@@ -151,9 +205,7 @@ def _path(parent: dict[tuple[object, ...], tuple[SoundState, SoundState | None, 
 
 def solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult:
     """The interpreter's answer for a problem of the sound model."""
-    if strategy is Strategy.SHORTEST:
-        return shortest(problem, limits)
-    return sensible(problem, limits)
+    return {Strategy.SHORTEST: shortest, Strategy.OPTIMAL: optimal}.get(strategy, sensible)(problem, limits)
 
 
 @dataclass(frozen=True, slots=True)

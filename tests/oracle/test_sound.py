@@ -11,18 +11,19 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from oracle import reach
+from oracle import reach, sound
 from oracle.planner import plan, solve
 from oracle.sound import validate
 from spec.actions import Action
 from spec.answers import Limits, Status, Strategy
 from spec.assumptions import Bounds, SpeedBounds, profile
+from spec.cost import COST_TERMS, action_cost
 from spec.errors import OptionError, ScenarioError
 from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
 from spec.library import BUILTINS
 from spec.models import ModelKind
-from spec.scenario import Scenario, make_scenario, problem_for
+from spec.scenario import Problem, Scenario, make_scenario, problem_for
 from spec.sound import Sound
 from tests.conftest import scenarios
 
@@ -65,7 +66,7 @@ def _check(scenario: Scenario, strategy: Strategy, motions: int, rng: random.Ran
 
 @settings(max_examples=100 if CI else 25)
 @given(st.sampled_from(STANDARD_CELLS_M).flatmap(lambda c: sound_scenarios(Grid(c))),
-       st.sampled_from((Strategy.SHORTEST, Strategy.SENSIBLE)), st.integers(0, 2**32 - 1))
+       st.sampled_from(list(Strategy)), st.integers(0, 2**32 - 1))
 def test_every_sound_plan_survives_every_motion_within_its_bounds(scenario: Scenario, strategy: Strategy,
                                                                  seed: int) -> None:
     _check(scenario, strategy, 4, random.Random(seed))
@@ -136,6 +137,68 @@ def test_the_papers_plans_break_under_the_default_bounds() -> None:
         scenario = replace(builtin.load(), sound=Sound(profile("default")))
         broken += reach.exact_check(scenario, paper.actions) is not None
     assert broken == 5
+
+
+def _every_plan_cost(scenario: Scenario, kind: ModelKind, horizon: int) -> tuple[int, ...] | None:
+    """The least cost over every plan of at most ``horizon`` actions, by walking every path (no pruning, no merging
+    of states): the brute force the uniform-cost search must match."""
+    problem = problem_for(scenario, kind, horizon)
+    first = sound.start(problem)
+    if sound.rules_for(problem).start_violation(first) is not None:
+        return None
+    best, paths = None, [(first, (0,) * len(COST_TERMS))]
+    while paths:
+        state, cost = paths.pop()
+        if sound.done(problem, state):
+            best = cost if best is None or cost < best else best
+            continue
+        if state.steps == horizon:
+            continue
+        for action in Action:
+            try:
+                after = sound.step(problem, state, action)
+            except ValueError:  # disabled by the paper's guards
+                continue
+            if not isinstance(after, sound.Violation):
+                paths.append((after, tuple(a + b for a, b in zip(cost, action_cost(action, after.lane), strict=True))))
+    return best
+
+
+def _cost(problem: Problem, actions: tuple[Action, ...]) -> tuple[int, ...]:
+    state, total = sound.start(problem), (0,) * len(COST_TERMS)
+    for action in actions:
+        after = sound.step(problem, state, action)
+        assert not isinstance(after, sound.Violation)
+        total = tuple(a + b for a, b in zip(total, action_cost(action, after.lane), strict=True))
+        state = after
+    return total
+
+
+def test_the_optimal_plan_costs_the_least_of_every_plan() -> None:
+    """The uniform-cost search (its dominance rule included) against every plan walked without pruning, on random
+    scenarios and bounds (seed printed): the same least cost, and its plan valid at that cost."""
+    seed = 11
+    print(f"seed {seed}")
+    rng = random.Random(seed)
+    checked = planned = 0
+    while checked < (150 if CI else 40):
+        scenario = _random_scenario(rng)
+        horizon = min(scenario.horizon, 6)
+        for kind in ModelKind:
+            problem = problem_for(scenario, kind, horizon)
+            least = _every_plan_cost(scenario, kind, horizon)
+            found = sound.optimal(problem)
+            checked += 1
+            if least is None:
+                assert found.status is not Status.PLAN
+                continue
+            planned += 1
+            assert found.status is Status.PLAN and validate(problem, found.actions).valid
+            assert _cost(problem, found.actions) == least
+            if found.actions:
+                assert tuple(found.extra["cost"][t] for t in COST_TERMS) == least  # type: ignore[index]
+    print(f"{checked} problems, {planned} with a plan")
+    assert planned >= checked // 10, "too few problems with a plan to test anything"
 
 
 def test_the_empty_plan_is_proved_like_any_other() -> None:
