@@ -43,9 +43,10 @@ def _optimal(problem: Problem, limits: Limits) -> SearchResult:
 
 
 def _beyond(problem: Problem) -> SearchResult:
-    """The paper model's proof that no plan of any length exists; the sound model has none (its time is unbounded)."""
+    """The proof that no plan of any length exists: the paper model's bitset closure; the sound model's when every
+    path is refused before the horizon (its time has no end, so no closure of all its states)."""
     if problem.scenario.sound is not None:
-        return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 0, sound.beyond(problem))
+        return sound.prove_beyond(problem)
     return bitplan.beyond_horizon(problem)
 
 

@@ -13,7 +13,7 @@ target count, so the remaining targets are the same vehicles as before.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import z3
 
@@ -48,6 +48,8 @@ class Explanation:
 
 def explain(scenario: Scenario, strategy: Strategy = Strategy.SHORTEST) -> Explanation:
     """Explain a scenario without a plan; a scenario with a plan is reported as such."""
+    if scenario.sound is not None:
+        raise ValueError("explain: Z3 does not answer the sound model (oracle.why.explain_sound explains it)")
     if plan(scenario, strategy).status is Status.PLAN:
         return Explanation(scenario, True, (), None, ())
     vehicles = [(Lane.LEFT, i) for i in range(len(scenario.left_lane))]
@@ -78,13 +80,15 @@ def _solver(scenario: Scenario, kind: ModelKind, literals: dict[Vehicle, z3.Bool
 
 
 def keep_only(scenario: Scenario, keep: set[Vehicle]) -> Scenario:
-    """The scenario with only the vehicles in ``keep`` (targets: those kept among the original targets)."""
+    """The scenario with only the vehicles in ``keep`` (targets: those kept among the original targets; the sound
+    model's assumptions, if any, unchanged)."""
     targets = set(scenario.target_indices)
     left = [c for i, c in enumerate(scenario.left_lane) if (Lane.LEFT, i) in keep]
     right = [c for i, c in enumerate(scenario.right_lane) if (Lane.RIGHT, i) in keep]
     kept_targets = sum(1 for i in targets if (Lane.LEFT, i) in keep)
-    return make_scenario(scenario.lane, left, right, kept_targets, scenario.model, scenario.horizon,
-                         grid=scenario.grid)
+    reduced = make_scenario(scenario.lane, left, right, kept_targets, scenario.model, scenario.horizon,
+                            grid=scenario.grid)
+    return replace(reduced, sound=scenario.sound)
 
 
 def _checked(scenario: Scenario, blocking: tuple[Vehicle, ...], strategy: Strategy) -> Explanation:

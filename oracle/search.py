@@ -50,23 +50,27 @@ def depth_first(
     is_goal: Callable[[K], bool],
     max_states: int = DEFAULT_MAX_STATES,
     timeout_s: float | None = None,
+    key: Callable[[K], Hashable] | None = None,
 ) -> tuple[Status, tuple[Action, ...], tuple[K, ...], int, str]:
     """Depth-first search in successor order with visited-state pruning, stopping at the first goal.
 
     Generic over the state representation, so that the readable search over interpreter
-    states and the fast one over integer offsets are the same algorithm. Returns
-    (status, actions, states along the plan, states stored, detail).
+    states and the fast one over integer offsets are the same algorithm. ``key``: what a
+    state is visited as (default: itself). Returns (status, actions, states along the plan,
+    states stored, detail).
     """
     deadline = None if timeout_s is None else time.monotonic() + timeout_s
-    visited = {start}
+    seen: Callable[[K], Hashable] = key or (lambda k: k)
+    visited = {seen(start)}
     plan: list[Action] = []
     path = [start]
     stack = [iter(successors(start))]
     while stack:
         for action, nxt in stack[-1]:
-            if nxt in visited:
+            mark = seen(nxt)
+            if mark in visited:
                 continue
-            visited.add(nxt)
+            visited.add(mark)
             plan.append(action)
             path.append(nxt)
             if is_goal(nxt):

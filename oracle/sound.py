@@ -13,29 +13,106 @@ from __future__ import annotations
 
 import heapq
 import time
-from collections import deque
-from collections.abc import Iterator, Sequence
+from collections import OrderedDict, deque
+from collections.abc import Callable, Hashable, Iterator, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Protocol
 
+from oracle.abstraction import offsets_of
+from oracle.interpreter import problem_collision, problem_goal
+from oracle.interpreter import step as paper_step
 from oracle.search import depth_first
 from spec.actions import Action
 from spec.answers import Limits, SearchResult, Status, Strategy
 from spec.cost import COST_DOC, COST_TERMS, action_cost
+from spec.lanes import Lane
+from spec.models import GoalRule
+from spec.motion import action_speed_mps
 from spec.rules import disabled_guard, disabled_reason
 from spec.scenario import Problem
-from spec.sound import SoundRules, SoundState, Violation
-from spec.state import State
+from spec.sound import Checks, SoundRules, SoundState, Violation, advance
+from spec.state import Collision, State
+
+Refusal = Violation | Collision  # why a start, a step or a continuation is refused
+
+
+class Rules(Protocol):
+    """What the sound model's code path asks of its rules (``SoundRules``, or the paper's cells for the identity)."""
+
+    def key(self, state: SoundState) -> Hashable: ...
+    def start_violation(self, state: SoundState) -> Refusal | None: ...
+    def step_violation(self, state: SoundState, action: Action) -> Refusal | None: ...
+    def after(self, state: SoundState, action: Action) -> SoundState: ...
+    def continuation_violation(self, state: SoundState) -> Refusal | None: ...
+    def goal_holds(self, state: SoundState, goal: GoalRule) -> bool: ...
+    def hopeless(self, state: SoundState, goal: GoalRule) -> bool: ...
 
 
 @lru_cache(maxsize=64)  # a few problems at a time (a pipeline's stages); a campaign must not keep every one
-def rules_for(problem: Problem) -> SoundRules:
+def rules_for(problem: Problem) -> Rules:
     """The sound model's rules on ``problem``'s scenario (its vehicles as intervals, its phantoms)."""
     sc = problem.scenario
     sound = sc.sound
     if sound is None:
         raise ValueError("the problem's scenario has no sound model")
+    if sound.checks is Checks.PAPER_CELLS:
+        return PaperCells(problem)
     return SoundRules(sound, sc.lane, sc.left_lane, sc.right_lane, sc.grid, sc.target_indices)
+
+
+class PaperCells:
+    """The paper's cell rules (``oracle.interpreter``) asked on the nominal cells of sound states: the identity
+    check of the sound model's code path (its states, time and advance, searches, validation). Only with zero
+    bounds: every vehicle at the common speed, no sensing error, no phantoms; the AV at its actions' speeds with
+    instant changes is what the nominal cells already say."""
+
+    def __init__(self, problem: Problem) -> None:
+        sound, grid = problem.scenario.sound, problem.grid
+        b = sound.bounds if sound is not None else None
+        zero = b is not None and not b.phantoms and b.sensing_error_m == 0 and all(
+            s.low_mps == s.high_mps == grid.speed for s in (b.same_mps, b.oncoming_mps))
+        if not zero:
+            raise ValueError("the paper's cell rules hold only with zero bounds (common speed, no error, no phantoms)")
+        self.problem = problem
+        self.speeds = {a: action_speed_mps(a, grid) for a in Action}
+        form = offsets_of(problem)
+        self.track_left, self.o_saturation = form.track_left, form.o_saturation
+        # The paper's rules read nothing but the key: each question answered once (a search meets a key at many
+        # step counts).
+        self._steps: dict[tuple[Hashable, Action], Refusal | None] = {}
+        self._goals: dict[Hashable, bool] = {}
+
+    def key(self, state: SoundState) -> Hashable:
+        """The paper's search state (``oracle.offsets``): lane changes, the left lane's offset (0 when it is empty),
+        oncoming ticks up to saturation; the paper's rules read nothing else."""
+        left = state.t_units - state.d_cells if self.track_left else 0
+        return state.lane_changes, left, min(state.t_units + state.d_cells, self.o_saturation)
+
+    def start_violation(self, state: SoundState) -> Refusal | None:
+        return problem_collision(self.problem, display(self.problem, state))
+
+    def step_violation(self, state: SoundState, action: Action) -> Refusal | None:
+        asked = (self.key(state), action)
+        if asked not in self._steps:
+            after = paper_step(display(self.problem, state), action, self.problem.rules, self.problem.grid)
+            self._steps[asked] = after if isinstance(after, Collision) else None
+        return self._steps[asked]
+
+    def after(self, state: SoundState, action: Action) -> SoundState:
+        return advance(state, action, self.problem.grid, self.speeds[action])
+
+    def continuation_violation(self, state: SoundState) -> Refusal | None:
+        return None  # the paper's rules end a plan at its goal, nothing after it
+
+    def goal_holds(self, state: SoundState, goal: GoalRule) -> bool:
+        asked = self.key(state)
+        if asked not in self._goals:
+            self._goals[asked] = problem_goal(self.problem, display(self.problem, state))
+        return self._goals[asked]
+
+    def hopeless(self, state: SoundState, goal: GoalRule) -> bool:
+        return False
 
 
 def start(problem: Problem) -> SoundState:
@@ -43,7 +120,7 @@ def start(problem: Problem) -> SoundState:
     return SoundState(problem.scenario.lane, 0, 0, 0, 0, None, None)
 
 
-def step(problem: Problem, state: SoundState, action: Action) -> SoundState | Violation:
+def step(problem: Problem, state: SoundState, action: Action) -> SoundState | Refusal:
     """One decision step: the state after ``action``, or the violation that forbids it."""
     if disabled_guard(_paper(state), action, problem.rules) is not None:
         raise ValueError(disabled_reason(_paper(state), action, problem.rules))
@@ -71,15 +148,29 @@ def _paper(state: SoundState) -> State:
     return State(state.lane, (), (), state.lane_changes, state.steps)
 
 
-def _successors(problem: Problem, state: SoundState) -> Iterator[tuple[Action, SoundState]]:
-    if state.steps >= problem.horizon:
-        return
-    rules = rules_for(problem)
-    for action in Action:
-        if disabled_guard(_paper(state), action, problem.rules) is None and rules.step_violation(state, action) is None:
-            nxt = rules.after(state, action)
-            if not rules.hopeless(nxt, problem.goal):
-                yield action, nxt
+class _Search:
+    """One problem's successors and goal for a search, its rules looked up once (hashing a problem is not free)."""
+
+    def __init__(self, problem: Problem) -> None:
+        self.rules, self.goal, self.horizon = rules_for(problem), problem.goal, problem.horizon
+        self.key = self.rules.key
+        # The guards read the lane and the lane changes only.
+        self.enabled = {(lane, lc): [a for a in Action
+                                     if disabled_guard(State(lane, (), (), lc, 0), a, problem.rules) is None]
+                        for lane in Lane for lc in range(problem.rules.max_lane_changes + 1)}
+
+    def successors(self, state: SoundState) -> Iterator[tuple[Action, SoundState]]:
+        if state.steps >= self.horizon:
+            return
+        rules = self.rules
+        for action in self.enabled[state.lane, state.lane_changes]:
+            if rules.step_violation(state, action) is None:
+                nxt = rules.after(state, action)
+                if not rules.hopeless(nxt, self.goal):
+                    yield action, nxt
+
+    def done(self, state: SoundState) -> bool:
+        return self.rules.goal_holds(state, self.goal) and self.rules.continuation_violation(state) is None
 
 
 def _trivial(problem: Problem) -> SearchResult | None:
@@ -94,8 +185,22 @@ def _trivial(problem: Problem) -> SearchResult | None:
 
 
 def beyond(problem: Problem) -> str:
-    """What the sound model says when no plan is found within the horizon."""
-    return f"no plan within {problem.horizon} actions (the sound model proves nothing beyond its horizon)"
+    """What the sound model says when no plan is found within the horizon and none is proved beyond it."""
+    return f"no plan within {problem.horizon} actions (a longer one may exist: the sound model's time has no end)"
+
+
+#: Problems whose complete breadth-first search ended without a proof (a few: a pipeline's stages).
+_UNPROVED: OrderedDict[Problem, None] = OrderedDict()
+
+
+def prove_beyond(problem: Problem) -> SearchResult:
+    """After a search found no plan within the horizon: "no plan" if every path is refused before it (the
+    breadth-first search's proof, ``shortest``), else "no plan within the horizon"."""
+    if problem not in _UNPROVED:
+        found = shortest(problem)
+        if found.status is Status.NO_PLAN:
+            return found
+    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 0, beyond(problem))
 
 
 def sensible(problem: Problem, limits: Limits | None = None) -> SearchResult:
@@ -104,33 +209,45 @@ def sensible(problem: Problem, limits: Limits | None = None) -> SearchResult:
     if trivial is not None:
         return trivial
     limits = limits or Limits()
+    search = _Search(problem)
+    key = search.key
     status, actions, states, explored, detail = depth_first(
-        start(problem), lambda s: _successors(problem, s), lambda s: done(problem, s), limits.max_states,
-        limits.timeout_s)
+        start(problem), search.successors, search.done, limits.max_states, limits.timeout_s,
+        lambda s: (key(s), s.steps))
     if status is Status.NO_PLAN_WITHIN_HORIZON:
         detail = beyond(problem)
     return SearchResult(status, actions, explored, detail, tuple(display(problem, s) for s in states))
 
 
 def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
-    """Breadth-first search with ordered expansion: the first shortest plan in the action order."""
+    """Breadth-first search with ordered expansion: the first shortest plan in the action order.
+
+    When the search ends without a plan, it is "no plan" (of any length) if every path of the graph it built (a
+    state's moves depend on its key alone) is refused before the horizon, as the paper's bitset search says when
+    a layer empties; "no plan within the horizon" otherwise."""
     trivial = _trivial(problem)
     if trivial is not None:
         return trivial
     limits = limits or Limits()
     deadline = None if limits.timeout_s is None else time.monotonic() + limits.timeout_s
     first = start(problem)
-    parent: dict[tuple[object, ...], tuple[SoundState, SoundState | None, Action | None]] = {
-        first.key(): (first, None, None)}
+    search = _Search(problem)
+    key = search.key
+    parent: dict[Hashable, tuple[SoundState, SoundState | None, Action | None]] = {key(first): (first, None, None)}
     queue = deque([first])
+    moves: dict[Hashable, list[Hashable]] = {}  # key -> its successors' keys (the graph the search built)
     while queue:
         state = queue.popleft()
-        for action, nxt in _successors(problem, state):
-            if nxt.key() in parent:
+        if state.steps >= problem.horizon:
+            moves[key(state)] = [key(state)]  # cut by the horizon, not refused: stands for a path that goes on
+        out = moves.setdefault(key(state), [])
+        for action, nxt in search.successors(state):
+            out.append(key(nxt))
+            if key(nxt) in parent:
                 continue
-            parent[nxt.key()] = (nxt, state, action)
-            if done(problem, nxt):
-                actions, states = _path(parent, nxt)
+            parent[key(nxt)] = (nxt, state, action)
+            if search.done(nxt):
+                actions, states = _path(parent, key, nxt)
                 return SearchResult(Status.PLAN, actions, len(parent), "",
                                     tuple(display(problem, s) for s in states))
             if len(parent) >= limits.max_states:
@@ -138,16 +255,46 @@ def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
             if deadline is not None and len(parent) % 256 == 0 and time.monotonic() > deadline:
                 return SearchResult(Status.INCOMPLETE, (), len(parent), f"time limit {limits.timeout_s} s reached")
             queue.append(nxt)
+    longest = _longest(moves, key(first), problem.horizon)
+    if longest < problem.horizon:
+        return SearchResult(Status.NO_PLAN, (), len(parent),
+                            f"no plan of any length: every path ends within {longest + 1} action(s), refused or "
+                            "unable ever to reach the goal")
+    _UNPROVED[problem] = None
+    if len(_UNPROVED) > 16:
+        _UNPROVED.popitem(last=False)
     return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(parent), beyond(problem))
+
+
+def _longest(moves: dict[Hashable, list[Hashable]], root: Hashable, cap: int) -> int:
+    """The most actions a path from ``root`` takes in the graph ``moves`` (``cap`` if it has a cycle or reaches it)."""
+    depth: dict[Hashable, int] = {}
+    on_path: set[Hashable] = {root}
+    stack = [(root, iter(moves.get(root, ())))]
+    while stack:
+        node, todo = stack[-1]
+        nxt = next(todo, None)
+        if nxt is None:
+            stack.pop()
+            on_path.discard(node)
+            depth[node] = max((depth[n] + 1 for n in moves.get(node, ())), default=0)
+            if depth[node] >= cap:
+                return cap
+        elif nxt in on_path:
+            return cap
+        elif nxt not in depth:
+            on_path.add(nxt)
+            stack.append((nxt, iter(moves.get(nxt, ()))))
+    return depth[root]
 
 
 def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
     """The least-cost plan (``spec.cost``, lexicographic) of at most ``horizon`` actions: a uniform-cost search.
 
     Every cost term only grows along a plan, so the first goal state taken from the queue is least-cost (ties: the
-    one pushed first). A state taken after one with the same key (``SoundState.key``: everything the future depends
-    on but the steps) was taken with no more steps is dominated: it costs no less (the queue's order) and has no
-    more of the horizon left. ``tests/oracle/test_sound.py`` checks it against every plan of a walk."""
+    one pushed first). A state taken after one with the same key (``Rules.key``: everything the future depends on
+    but the steps) was taken with no more steps is dominated: it costs no less (the queue's order) and has no more
+    of the horizon left. ``tests/oracle/test_sound.py`` checks it against every plan of a walk."""
     trivial = _trivial(problem)
     if trivial is not None:
         return trivial
@@ -156,20 +303,22 @@ def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
     first = start(problem)
     entries: list[tuple[SoundState, int, Action | None]] = [(first, -1, None)]  # state, the entry before, action
     queue: list[tuple[tuple[int, ...], int]] = [((0,) * len(COST_TERMS), 0)]  # cost, entry (ties: pushed first)
-    fewest: dict[tuple[object, ...], int] = {}  # key -> the fewest steps it was taken with
+    search = _Search(problem)
+    key = search.key
+    fewest: dict[Hashable, int] = {}  # key -> the fewest steps it was taken with
     while queue:
         cost, entry = heapq.heappop(queue)
         state = entries[entry][0]
-        if fewest.get(state.key(), state.steps + 1) <= state.steps:
+        if fewest.get(key(state), state.steps + 1) <= state.steps:
             continue
-        fewest[state.key()] = state.steps
-        if done(problem, state):
+        fewest[key(state)] = state.steps
+        if search.done(state):
             actions, states = _entries_path(entries, entry)
             return SearchResult(Status.PLAN, actions, len(entries), f"optimal under {COST_DOC}",
                                 tuple(display(problem, s) for s in states),
                                 {"cost": dict(zip(COST_TERMS, cost, strict=True)), "cost_order": list(COST_TERMS)})
-        for action, nxt in _successors(problem, state):
-            if fewest.get(nxt.key(), nxt.steps + 1) <= nxt.steps:
+        for action, nxt in search.successors(state):
+            if fewest.get(key(nxt), nxt.steps + 1) <= nxt.steps:
                 continue
             entries.append((nxt, entry, action))
             added = action_cost(action, nxt.lane)
@@ -192,14 +341,14 @@ def _entries_path(entries: list[tuple[SoundState, int, Action | None]],
     return tuple(reversed(actions)), tuple(reversed(states))
 
 
-def _path(parent: dict[tuple[object, ...], tuple[SoundState, SoundState | None, Action | None]],
-          last: SoundState) -> tuple[tuple[Action, ...], tuple[SoundState, ...]]:
+def _path(parent: dict[Hashable, tuple[SoundState, SoundState | None, Action | None]],
+          key: Callable[[SoundState], Hashable], last: SoundState) -> tuple[tuple[Action, ...], tuple[SoundState, ...]]:
     actions, states = [], [last]
-    _, before, action = parent[last.key()]
+    _, before, action = parent[key(last)]
     while before is not None and action is not None:
         actions.append(action)
         states.append(before)
-        _, before, action = parent[before.key()]
+        _, before, action = parent[key(before)]
     return tuple(reversed(actions)), tuple(reversed(states))
 
 
@@ -215,7 +364,7 @@ class SoundValidation:
     valid: bool
     reason: str
     states: tuple[State, ...]  # display states: the initial one, then one per executed step
-    violation: Violation | None = None
+    violation: Refusal | None = None
 
 
 def validate(problem: Problem, actions: Sequence[Action]) -> SoundValidation:
@@ -235,7 +384,7 @@ def validate(problem: Problem, actions: Sequence[Action]) -> SoundValidation:
         if reason is not None:
             return SoundValidation(False, f"step {n}: {reason}", tuple(shown))
         result = step(problem, state, action)
-        if isinstance(result, Violation):
+        if not isinstance(result, SoundState):
             return SoundValidation(False, f"step {n} ({action.value}): {result.describe()}", tuple(shown), result)
         state = result
         shown.append(display(problem, state))

@@ -28,6 +28,7 @@ condition and in no goal field (a goal speaks of the vehicles sensed).
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass, replace
 
@@ -46,6 +47,13 @@ from spec.safety import SAFETY, Conflict, SafetySpec
 EPS_M = 1e-9
 
 
+class Checks(enum.Enum):
+    """What a step of the sound model's code path is checked against."""
+
+    PHYSICAL = "physical"  # the safety specification over every motion within the bounds (the sound model)
+    PAPER_CELLS = "paper cells"  # the paper's cell rules on the nominal cells: the identity check, zero bounds only
+
+
 @dataclass(frozen=True, slots=True)
 class Sound:
     """The sound model's parameters: the assumptions of the world, the specification, the AV's envelope."""
@@ -55,9 +63,12 @@ class Sound:
     tracking: Tracking = TRACKING
     start_mps: float | None = None  # the AV's measured speed at the snapshot; None: the common speed
     minimal_risk: MinimalRisk = MINIMAL_RISK
+    checks: Checks = Checks.PHYSICAL
 
     def describe(self) -> str:
         b = self.bounds
+        if self.checks is Checks.PAPER_CELLS:
+            return f"the sound model's code path with the paper's cell rules (identity check), bounds {b.name}"
         return (f"sound model, bounds {b.name}: same-direction {b.same_mps.low_mps:g}..{b.same_mps.high_mps:g} m/s, "
                 f"oncoming {b.oncoming_mps.low_mps:g}..{b.oncoming_mps.high_mps:g} m/s, sensing error "
                 f"{b.sensing_error_m:g} m, phantoms {'on' if b.phantoms else 'off'}")
@@ -189,6 +200,16 @@ class SoundState:
         return (self.lane, self.lane_changes, self.t_units, self.d_cells, self.first_mps, self.last_mps, self.moved)
 
 
+def advance(state: SoundState, action: Action, grid: Grid, speed_mps: float) -> SoundState:
+    """The state after ``action`` at ``speed_mps`` (its effect: lane, counts, time and nominal advance in whole grid
+    units; every vehicle moves with its lane's bounds, so nothing else changes)."""
+    rule = ACTION_RULES[action]
+    units = grid.units(action)
+    return SoundState(rule.to_lane or state.lane, state.lane_changes + int(rule.changes_lane), state.steps + 1,
+                      state.t_units + units, state.d_cells + units - grid.left_shift(action),
+                      speed_mps if state.first_mps is None else state.first_mps, speed_mps, rule.to_lane)
+
+
 @dataclass(frozen=True, slots=True)
 class Bounded:
     """A piece of the reference with its three thresholds (value, time reached): the least start ``lo`` of a
@@ -239,6 +260,10 @@ class SoundRules:
         self.dip_m = max((v1 - v2) * ramp_s(v1, v2) / 8 for v1 in self.speeds.values() for v2 in self.speeds.values()
                          if v1 > v2)
         self._relative: dict[tuple[float, Action | None, Lane, Lane | None], list[tuple[Segment, list[Bounded]]]] = {}
+
+    def key(self, state: SoundState) -> tuple[object, ...]:
+        """What a search tells states apart by (``SoundState.key``)."""
+        return state.key()
 
     # -- the AV's reference over a window ---------------------------------------------------------------------
     def reference(self, state: SoundState, action: Action | None) -> Reference:
@@ -443,12 +468,8 @@ class SoundRules:
         return None
 
     def after(self, state: SoundState, action: Action) -> SoundState:
-        """The state after ``action`` (its effect: lane, counts, time and nominal advance in whole grid units)."""
-        rule, grid, speed = ACTION_RULES[action], self.grid, self.speeds[action]
-        units = grid.units(action)
-        return SoundState(rule.to_lane or state.lane, state.lane_changes + int(rule.changes_lane), state.steps + 1,
-                          state.t_units + units, state.d_cells + units - grid.left_shift(action),
-                          speed if state.first_mps is None else state.first_mps, speed, rule.to_lane)
+        """The state after ``action`` (``advance``)."""
+        return advance(state, action, self.grid, self.speeds[action])
 
     def continuation_violation(self, state: SoundState) -> Violation | None:
         """A plan's last state must be safe for ever: the minimal-risk manoeuvre (brake in lane to the hold speed)

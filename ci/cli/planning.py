@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import click
 from rich.table import Table
@@ -28,12 +29,16 @@ from oracle.shrink import engines_disagree, to_toml
 from oracle.shrink import shrink as shrink_scenario
 from spec.actions import parse_action
 from spec.answers import Answer, Limits, Status, Strategy, state_to_json
+from spec.assumptions import Phantom
 from spec.engines import check_strategy, get_engine, load_engines
 from spec.errors import ActionError, ExitCode, OptionError
 from spec.files import scenario_to_dict
 from spec.models import ModelChoice, ModelKind, models_for
 from spec.scenario import Scenario, problem_for
-from spec.sound import sound_to_table
+from spec.sound import Violation, sound_to_table
+
+if TYPE_CHECKING:
+    from oracle.why import SoundExplanation, Suspect
 
 
 @click.command()
@@ -168,11 +173,16 @@ def promela(file: str, model: str | None, horizon: int | None, cell_m: float | N
 @click.argument("file")
 @cell_option()
 @click.option("--json", "as_json", is_flag=True)
-def explain(file: str, cell_m: float | None, as_json: bool) -> None:
-    """Name a minimal set of vehicles that makes the overtake impossible (Z3 unsat core, minimised)."""
+@sound_options
+def explain(file: str, cell_m: float | None, as_json: bool, sound: Callable[[Scenario], Scenario]) -> None:
+    """Name a minimal set of vehicles that makes the overtake impossible (Z3 unsat core, minimised); under the sound
+    model (the interpreter), also the phantoms and the assumption to blame."""
+    scenario = sound(load(file, cell_m))
+    if scenario.sound is not None:
+        _explain_sound(file, scenario, as_json)
+        return
     from oracle.explain import explain as explain_scenario  # loads Z3 only when asked for
 
-    scenario = load(file, cell_m)
     result = explain_scenario(scenario)
     if as_json:
         print_json({
@@ -198,6 +208,109 @@ def explain(file: str, cell_m: float | None, as_json: bool) -> None:
         plan_text = ", ".join(a.value for a in answer.actions) or "(the empty plan)"
         out.print(f"  {result.name(vehicle)}: without it, {answer.model.value if answer.model else '-'} model: "
                   f"{plan_text}")
+
+
+def _explain_sound(file: str, scenario: Scenario, as_json: bool) -> None:
+    """``explain`` under the sound model: which answer, the start's violation, the blocking vehicles and phantoms,
+    and the assumptions narrowed to the paper's world."""
+    from oracle.why import explain_sound, narrow, stated  # loads Z3 (oracle.explain's keep_only) only when asked for
+
+    result = explain_sound(scenario)
+    if as_json:
+        print_json(_sound_explanation_json(result))
+        sys.exit(ExitCode.INCOMPLETE if result.status is Status.INCOMPLETE else ExitCode.OK)
+    assert scenario.sound is not None
+    out.print(scenario.sound.describe())
+    if result.status is Status.INCOMPLETE:
+        out.print(f"{file}: the search hit its limit ({result.answer.detail}): nothing is explained.")
+        sys.exit(ExitCode.INCOMPLETE)
+    if result.has_plan:
+        out.print(f"{file} has a plan under the sound model: nothing to explain (`overtake plan` with the same "
+                  "options shows it).")
+        return
+    if result.violation is not None:
+        out.print(f"no plan for {file} (no_plan): the start already breaks the safety specification: "
+                  f"{result.violation.describe()}.")
+    elif result.status is Status.NO_PLAN:
+        out.print(f"no plan for {file} (no_plan): {result.answer.detail}.")
+    else:
+        out.print(f"no plan within {scenario.horizon} actions for {file} (no_plan_within_horizon: a longer plan may "
+                  "exist).")
+    if result.blocking:
+        out.print(f"These {len(result.blocking)} vehicle(s) alone leave no plan, and removing any one of them gives "
+                  "one:")
+        for suspect, answer in result.removals:
+            out.print(f"  {result.name(suspect)}: without it, {_answer_text(answer)}")
+    else:
+        out.print(f"No vehicle or phantom is to blame: without any there is still no plan within the horizon of "
+                  f"{scenario.horizon}.")
+    if result.everything is None:
+        return
+    base = scenario.sound
+    out.print("Each assumption narrowed to the paper's world alone, everything else as stated:")
+    for narrowed in result.narrowings:
+        (a,) = narrowed.assumptions
+        out.print(f"  {a.label}: {stated(base, a)} -> {stated(narrow(base, a), a)}: {_answer_text(narrowed.answer)}")
+    out.print(f"  all of them: {_answer_text(result.everything.answer)}")
+    singles = [n.assumptions[0].label for n in result.narrowings if n.has_plan]
+    if singles:
+        out.print(f"The bound to blame: {', '.join(singles)} (narrowing {'it' if len(singles) == 1 else 'any one'} "
+                  "alone gives a plan).")
+    elif result.enough is not None:
+        out.print(f"The bounds to blame, together: {', '.join(a.label for a in result.enough.assumptions)} "
+                  f"(narrowing them gives a plan, no one alone does): {_answer_text(result.enough.answer)}")
+    else:
+        out.print("No assumption is to blame: even the paper's world leaves no plan.")
+
+
+def _answer_text(answer: Answer) -> str:
+    """An answer in a line: the plan and its model, or the status."""
+    if answer.status is not Status.PLAN:
+        return answer.status.value
+    return f"{answer.model.value if answer.model else '-'} model: " + (
+        ", ".join(a.value for a in answer.actions) or "(the empty plan)")
+
+
+def _answer_json(answer: Answer) -> dict[str, object]:
+    return {"status": answer.status.value, "model": answer.model.value if answer.model else None,
+            "plan": [a.value for a in answer.actions]}
+
+
+def _sound_explanation_json(result: SoundExplanation) -> dict[str, object]:
+    """``explain --json`` under the sound model."""
+    from oracle.why import narrow, stated
+
+    scenario = result.scenario
+    assert scenario.sound is not None
+    v = result.violation
+    return {
+        "has_plan": result.has_plan,
+        "status": result.status.value,
+        "detail": result.answer.detail,
+        "violation": None if v is None else {"text": v.describe(), **(
+            {"conflict": v.conflict.value, "vehicle": v.vehicle.name, "time_s": v.time_s, "gap_m": v.gap_m,
+             "required_m": v.required_m} if isinstance(v, Violation) else {"conflict": "collision"})},
+        "blocking": [_suspect_json(result, s) for s in result.blocking],
+        "reduced": scenario_to_dict(result.reduced) if result.reduced else None,  # its phantoms: reduced_phantoms
+        "reduced_phantoms": [result.name(s) for s in result.blocking if isinstance(s, Phantom)],
+        "removals": [{"removed": result.name(s), **_answer_json(a)} for s, a in result.removals],
+        "narrowings": [{"assumption": n.assumptions[0].value, "stated": stated(scenario.sound, n.assumptions[0]),
+                        "narrowed": stated(narrow(scenario.sound, n.assumptions[0]), n.assumptions[0]),
+                        **_answer_json(n.answer)} for n in result.narrowings],
+        "all_narrowed": None if result.everything is None else {
+            "assumptions": [a.value for a in result.everything.assumptions], **_answer_json(result.everything.answer)},
+        "enough": None if result.enough is None else {
+            "assumptions": [a.value for a in result.enough.assumptions], **_answer_json(result.enough.answer)},
+        **_sound_json(scenario),
+    }
+
+
+def _suspect_json(result: SoundExplanation, suspect: Suspect) -> dict[str, object]:
+    if isinstance(suspect, Phantom):
+        return {"kind": "phantom", "lane": suspect.lane.value, "index": None, "dx_m": suspect.dx_m,
+                "name": result.name(suspect)}
+    lane, i = suspect
+    return {"kind": "sensed", "lane": lane.value, "index": i, "dx_m": None, "name": result.name(suspect)}
 
 
 @click.command()

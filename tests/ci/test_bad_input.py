@@ -234,6 +234,7 @@ CASES: list[Case] = [
     *out_files("promela"), *unknown("promela"), *scenario_files("promela"),
     # explain
     *numbers("explain", "--cell-m"), *unknown("explain"), *scenario_files("explain"),
+    *sound("explain"),
     # shrink
     *numbers("shrink", "--cell-m"), *choices("shrink", "--strategy"), *choices("shrink", "--engine"),
     *out_files("shrink"), *unknown("shrink"), *scenario_files("shrink"), no_spin("shrink", "--engine=spin"),

@@ -208,12 +208,37 @@ def test_the_empty_plan_is_proved_like_any_other() -> None:
     assert answer.status is Status.PLAN and answer.actions == ()
 
 
-def test_beyond_the_horizon_the_sound_model_claims_nothing() -> None:
-    """No plan within the horizon is never upgraded to "no plan": the sound model has no proof beyond it."""
-    builtin = next(b for b in BUILTINS if b.name == "two_targets")
-    answer = solve(replace(builtin.load(), sound=Sound(profile("default"))), Strategy.SHORTEST)
-    assert answer.status is Status.NO_PLAN_WITHIN_HORIZON
-    assert "beyond its horizon" in answer.detail
+def test_beyond_the_horizon_the_sound_model_claims_only_what_it_proves() -> None:
+    """Paths that survive to the horizon: "no plan within the horizon", never "no plan"; every path refused (or
+    hopeless) before it: "no plan", for every strategy (the pipeline asks for the proof)."""
+    one = next(b for b in BUILTINS if b.name == "one_target").load()
+    short = replace(one, horizon=3, sound=Sound(profile("paper")))  # its plan takes 5 actions
+    for strategy in Strategy:
+        answer = solve(short, strategy)
+        assert answer.status is Status.NO_PLAN_WITHIN_HORIZON and "a longer one may exist" in answer.detail
+    two = replace(next(b for b in BUILTINS if b.name == "two_targets").load(), sound=Sound(profile("default")))
+    for strategy in Strategy:
+        answer = solve(two, strategy)
+        assert answer.status is Status.NO_PLAN and "no plan of any length" in answer.detail
+
+
+def test_a_proof_of_no_plan_holds_at_any_horizon() -> None:
+    """Where the sound model proves "no plan", a search with twice the horizon finds none either (random scenarios
+    and bounds, seed printed)."""
+    seed = 5
+    print(f"seed {seed}")
+    rng = random.Random(seed)
+    proved = 0
+    for _ in range(200 if CI else 60):
+        scenario = _random_scenario(rng)
+        if solve(scenario, Strategy.SHORTEST, limits=Limits(max_states=100_000)).status is not Status.NO_PLAN:
+            continue
+        proved += 1
+        longer = solve(replace(scenario, horizon=2 * scenario.horizon), Strategy.SENSIBLE,
+                       limits=Limits(max_states=100_000))
+        assert longer.status in (Status.NO_PLAN, Status.INCOMPLETE), (scenario, longer.actions)
+    print(f"{proved} proofs of no plan")
+    assert proved >= 5
 
 
 def test_an_unsafe_start_is_no_plan() -> None:
@@ -250,7 +275,7 @@ def test_a_plan_that_ends_in_the_right_lane_with_phantoms_has_no_safe_continuati
 
 def test_the_search_prune_changes_no_answer(monkeypatch: pytest.MonkeyPatch) -> None:
     """``SoundRules.hopeless`` only drops states whose goal can never hold: with and without it, the same answer
-    and the same shortest plan, on random scenarios and bounds (seed printed) and every built-in one."""
+    (or a proof of no plan with it where the full search runs to the horizon) and the same shortest plan, on random scenarios and bounds (seed printed) and every built-in one."""
     from spec.sound import SoundRules
 
     seed = 7
@@ -264,4 +289,6 @@ def test_the_search_prune_changes_no_answer(monkeypatch: pytest.MonkeyPatch) -> 
         slow = solve(scenario, Strategy.SHORTEST, limits=Limits(max_states=100_000))
         if Status.INCOMPLETE in (slow.status, fast.status):
             continue
+        if (fast.status, slow.status) == (Status.NO_PLAN, Status.NO_PLAN_WITHIN_HORIZON):
+            continue  # the prune cuts paths that can never reach the goal: it may prove what the full search cannot
         assert (fast.status, fast.actions) == (slow.status, slow.actions), scenario
