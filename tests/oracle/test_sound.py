@@ -275,7 +275,8 @@ def test_a_plan_that_ends_in_the_right_lane_with_phantoms_has_no_safe_continuati
 
 def test_the_search_prune_changes_no_answer(monkeypatch: pytest.MonkeyPatch) -> None:
     """``SoundRules.hopeless`` only drops states whose goal can never hold: with and without it, the same answer
-    (or a proof of no plan with it where the full search runs to the horizon) and the same shortest plan, on random scenarios and bounds (seed printed) and every built-in one."""
+    (or a proof of no plan with it where the full search runs to the horizon) and the same shortest plan, on random
+    scenarios and bounds (seed printed) and every built-in one."""
     from spec.sound import SoundRules
 
     seed = 7
