@@ -1,0 +1,97 @@
+"""Tightness of the sound model (``ci.tightness``): every refusal is classified, the unjustified ones are the
+documented findings, and the witness check is not vacuous."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+
+from ci import tightness
+from ci.tightness import Finding, Refusal, Tightness, Where
+from spec.assumptions import profile
+from spec.models import ModelKind, models_for
+from spec.safety import Conflict
+from spec.scenario import Scenario, make_scenario, problem_for
+from spec.sound import Sound
+
+
+def _with(name: str, lane: str, left: list[int], right: list[int], targets: int) -> Scenario:
+    return replace(make_scenario(lane, left, right, targets), sound=Sound(profile(name)))
+
+
+#: Two scenarios of the conformance example sweep's seeded sample (``ci.tightness``, seed 2026), on the paper grid.
+OVERTAKE = _with("default", "left", [12, 15], [14], 2)  # every refusal exhibited by a motion
+RETURN = _with("paper", "right", [9, 17], [18], 0)  # both findings of docs/sound.md, "How tight it is"
+
+
+def _refusals(scenario: Scenario) -> list[tuple[ModelKind, Refusal]]:
+    out = []
+    for kind in models_for(scenario.model):
+        found, _, capped = tightness.refusals(problem_for(scenario, kind))
+        assert not capped
+        out += [(kind, r) for r in found]
+    return out
+
+
+def test_every_refusal_is_classified_and_only_the_documented_findings_are_unjustified() -> None:
+    for scenario, neither in ((OVERTAKE, {}), (RETURN, {(Finding.FOLLOWER_AHEAD, Where.STEP): 76,
+                                                        (Finding.NOTHING_CLOSES_IN, Where.END): 2392})):
+        counts = tightness.measure(scenario)
+        classified = sum(n for tally in counts.by_where.values() for n in tally.values())
+        assert classified == len(_refusals(scenario))
+        found = {(f, w): n for f, tally in counts.findings.items() for w, n in tally.items() if n}
+        assert found == neither  # a model fix that removes a finding must update these counts and the docs
+        assert sum(counts.by_where[w][Tightness.NEITHER] for w in Where) == sum(neither.values())
+        assert counts.thin == 0
+
+
+def test_a_refusal_with_its_vehicle_moved_far_away_is_exhibited_by_no_motion() -> None:
+    exhibited = []
+    for kind, r in _refusals(OVERTAKE):
+        verdict = tightness.classify(problem_for(OVERTAKE, kind), r)
+        if verdict.tightness is Tightness.EXHIBITED:
+            exhibited.append(r)
+    conflicts = {r.violation.conflict for r in exhibited}
+    assert {Conflict.AHEAD, Conflict.ONCOMING} <= conflicts
+    for r in exhibited[:: max(1, len(exhibited) // 40)]:
+        v = r.violation
+        away = -1e4 if v.conflict is Conflict.CUT_IN else 1e4  # in its favour: out of reach for the whole horizon
+        moved = replace(v, vehicle=replace(v.vehicle, lo_m=v.vehicle.lo_m + away, hi_m=v.vehicle.hi_m + away))
+        far = replace(r, violation=moved)
+        assert tightness.witness(OVERTAKE, r) is not None
+        assert tightness.corner_witness(OVERTAKE, far) is None
+        assert tightness.witness(OVERTAKE, far) is None, r.describe()
+
+
+def test_a_witness_breaks_the_specification_by_what_it_says() -> None:
+    _, r = next((k, r) for k, r in _refusals(OVERTAKE) if r.violation.conflict is Conflict.AHEAD)
+    shown = tightness.witness(OVERTAKE, r)
+    assert shown is not None and shown.gap_m < shown.required_m
+    sound = OVERTAKE.sound
+    assert sound is not None
+    low, high = sound.bounds.same_mps.low_mps, sound.bounds.same_mps.high_mps
+    assert r.violation.vehicle.lo_m <= shown.start_m <= r.violation.vehicle.hi_m and low <= shown.speed_mps <= high
+    assert abs(shown.av_offset_m) <= sound.tracking.position_m and abs(shown.av_speed_offset_mps) <= \
+        sound.tracking.speed_mps
+
+
+@pytest.mark.parametrize("finding", [Finding.NOTHING_CLOSES_IN, Finding.FOLLOWER_AHEAD])
+def test_the_findings_are_what_they_say(finding: Finding) -> None:
+    for kind, r in _refusals(RETURN):
+        verdict = tightness.classify(problem_for(RETURN, kind), r)
+        if verdict.finding is not finding:
+            continue
+        sound = RETURN.sound
+        assert sound is not None and verdict.tightness is Tightness.NEITHER
+        path = tightness.plan_path(RETURN, r)
+        if finding is Finding.NOTHING_CLOSES_IN:
+            # After the manoeuvre the AV is at most as fast as the slowest vehicle ahead (the hold speed plus the
+            # speed error is the slowest speed to float rounding): nothing closes in, yet the end is refused.
+            _, end_s = tightness.window_s(r, path)
+            excess = path.speed(end_s) + sound.tracking.speed_mps - sound.bounds.same_mps.low_mps
+            assert r.where is Where.END and abs(excess) < 1e-9 and r.violation.gap_m == float("-inf")
+        else:  # the vehicle was behind the AV (every position, bumpers clear) when it entered the left lane
+            assert r.violation.conflict is Conflict.AHEAD and r.violation.vehicle.name.startswith("left_lane[0]")
+        return
+    raise AssertionError(f"no {finding.name} in the sample")
