@@ -14,7 +14,7 @@ from __future__ import annotations
 import heapq
 import time
 from collections import OrderedDict, deque
-from collections.abc import Callable, Hashable, Iterator, Sequence
+from collections.abc import Hashable, Iterator, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Protocol
@@ -148,10 +148,16 @@ def _paper(state: SoundState) -> State:
     return State(state.lane, (), (), state.lane_changes, state.steps)
 
 
-class _Search:
-    """One problem's successors and goal for a search, its rules looked up once (hashing a problem is not free)."""
+Entry = tuple[SoundState, int, Action | None]  # a state a search reached, the entry it came from, the action
 
-    def __init__(self, problem: Problem) -> None:
+
+class _Search:
+    """One problem's successors, goal and limits for a search, its rules looked up once (hashing a problem is not
+    free)."""
+
+    def __init__(self, problem: Problem, limits: Limits | None) -> None:
+        self.problem, self.limits = problem, limits or Limits()
+        self.deadline = None if self.limits.timeout_s is None else time.monotonic() + self.limits.timeout_s
         self.rules, self.goal, self.horizon = rules_for(problem), problem.goal, problem.horizon
         self.key = self.rules.key
         # The guards read the lane and the lane changes only.
@@ -171,6 +177,26 @@ class _Search:
 
     def done(self, state: SoundState) -> bool:
         return self.rules.goal_holds(state, self.goal) and self.rules.continuation_violation(state) is None
+
+    def stopped(self, explored: int, clock: bool = True) -> SearchResult | None:
+        """"Incomplete" once the state limit is reached, or the time limit (looked at only when ``clock``)."""
+        if explored >= self.limits.max_states:
+            return SearchResult(Status.INCOMPLETE, (), explored, f"state limit {self.limits.max_states} reached")
+        if clock and self.deadline is not None and time.monotonic() > self.deadline:
+            return SearchResult(Status.INCOMPLETE, (), explored, f"time limit {self.limits.timeout_s} s reached")
+        return None
+
+    def plan(self, entries: list[Entry], entry: int, detail: str = "",
+             extra: dict[str, object] | None = None) -> SearchResult:
+        """The plan that led to ``entries[entry]``, its states shown as the paper's."""
+        actions, states = [], [entries[entry][0]]
+        while entry > 0:
+            _, entry, action = entries[entry]
+            if action is not None:
+                actions.append(action)
+            states.append(entries[entry][0])
+        return SearchResult(Status.PLAN, tuple(reversed(actions)), len(entries), detail,
+                            tuple(display(self.problem, s) for s in reversed(states)), extra or {})
 
 
 def _trivial(problem: Problem) -> SearchResult | None:
@@ -208,11 +234,10 @@ def sensible(problem: Problem, limits: Limits | None = None) -> SearchResult:
     trivial = _trivial(problem)
     if trivial is not None:
         return trivial
-    limits = limits or Limits()
-    search = _Search(problem)
+    search = _Search(problem, limits)
     key = search.key
     status, actions, states, explored, detail = depth_first(
-        start(problem), search.successors, search.done, limits.max_states, limits.timeout_s,
+        start(problem), search.successors, search.done, search.limits.max_states, search.limits.timeout_s,
         lambda s: (key(s), s.steps))
     if status is Status.NO_PLAN_WITHIN_HORIZON:
         detail = beyond(problem)
@@ -228,42 +253,39 @@ def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
     trivial = _trivial(problem)
     if trivial is not None:
         return trivial
-    limits = limits or Limits()
-    deadline = None if limits.timeout_s is None else time.monotonic() + limits.timeout_s
-    first = start(problem)
-    search = _Search(problem)
-    key = search.key
-    parent: dict[Hashable, tuple[SoundState, SoundState | None, Action | None]] = {key(first): (first, None, None)}
-    queue = deque([first])
+    search = _Search(problem, limits)
+    key, first = search.key, start(problem)
+    entries: list[Entry] = [(first, -1, None)]
+    seen = {key(first)}
+    queue = deque([0])
     moves: dict[Hashable, list[Hashable]] = {}  # key -> its successors' keys (the graph the search built)
     while queue:
-        state = queue.popleft()
+        entry = queue.popleft()
+        state = entries[entry][0]
         if state.steps >= problem.horizon:
             moves[key(state)] = [key(state)]  # cut by the horizon, not refused: stands for a path that goes on
         out = moves.setdefault(key(state), [])
         for action, nxt in search.successors(state):
             out.append(key(nxt))
-            if key(nxt) in parent:
+            if key(nxt) in seen:
                 continue
-            parent[key(nxt)] = (nxt, state, action)
+            seen.add(key(nxt))
+            entries.append((nxt, entry, action))
             if search.done(nxt):
-                actions, states = _path(parent, key, nxt)
-                return SearchResult(Status.PLAN, actions, len(parent), "",
-                                    tuple(display(problem, s) for s in states))
-            if len(parent) >= limits.max_states:
-                return SearchResult(Status.INCOMPLETE, (), len(parent), f"state limit {limits.max_states} reached")
-            if deadline is not None and len(parent) % 256 == 0 and time.monotonic() > deadline:
-                return SearchResult(Status.INCOMPLETE, (), len(parent), f"time limit {limits.timeout_s} s reached")
-            queue.append(nxt)
+                return search.plan(entries, len(entries) - 1)
+            stop = search.stopped(len(entries), len(entries) % 256 == 0)
+            if stop is not None:
+                return stop
+            queue.append(len(entries) - 1)
     longest = _longest(moves, key(first), problem.horizon)
     if longest < problem.horizon:
-        return SearchResult(Status.NO_PLAN, (), len(parent),
+        return SearchResult(Status.NO_PLAN, (), len(entries),
                             f"no plan of any length: every path ends within {longest + 1} action(s), refused or "
                             "unable ever to reach the goal")
     _UNPROVED[problem] = None
     if len(_UNPROVED) > 16:
         _UNPROVED.popitem(last=False)
-    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(parent), beyond(problem))
+    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(entries), beyond(problem))
 
 
 def _longest(moves: dict[Hashable, list[Hashable]], root: Hashable, cap: int) -> int:
@@ -298,13 +320,10 @@ def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
     trivial = _trivial(problem)
     if trivial is not None:
         return trivial
-    limits = limits or Limits()
-    deadline = None if limits.timeout_s is None else time.monotonic() + limits.timeout_s
-    first = start(problem)
-    entries: list[tuple[SoundState, int, Action | None]] = [(first, -1, None)]  # state, the entry before, action
-    queue: list[tuple[tuple[int, ...], int]] = [((0,) * len(COST_TERMS), 0)]  # cost, entry (ties: pushed first)
-    search = _Search(problem)
+    search = _Search(problem, limits)
     key = search.key
+    entries: list[Entry] = [(start(problem), -1, None)]
+    queue: list[tuple[tuple[int, ...], int]] = [((0,) * len(COST_TERMS), 0)]  # cost, entry (ties: pushed first)
     fewest: dict[Hashable, int] = {}  # key -> the fewest steps it was taken with
     while queue:
         cost, entry = heapq.heappop(queue)
@@ -313,43 +332,18 @@ def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
             continue
         fewest[key(state)] = state.steps
         if search.done(state):
-            actions, states = _entries_path(entries, entry)
-            return SearchResult(Status.PLAN, actions, len(entries), f"optimal under {COST_DOC}",
-                                tuple(display(problem, s) for s in states),
-                                {"cost": dict(zip(COST_TERMS, cost, strict=True)), "cost_order": list(COST_TERMS)})
+            return search.plan(entries, entry, f"optimal under {COST_DOC}",
+                               {"cost": dict(zip(COST_TERMS, cost, strict=True)), "cost_order": list(COST_TERMS)})
         for action, nxt in search.successors(state):
             if fewest.get(key(nxt), nxt.steps + 1) <= nxt.steps:
                 continue
             entries.append((nxt, entry, action))
             added = action_cost(action, nxt.lane)
             heapq.heappush(queue, (tuple(a + b for a, b in zip(cost, added, strict=True)), len(entries) - 1))
-        if len(entries) >= limits.max_states:
-            return SearchResult(Status.INCOMPLETE, (), len(entries), f"state limit {limits.max_states} reached")
-        if deadline is not None and time.monotonic() > deadline:
-            return SearchResult(Status.INCOMPLETE, (), len(entries), f"time limit {limits.timeout_s} s reached")
+        stop = search.stopped(len(entries))
+        if stop is not None:
+            return stop
     return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(entries), beyond(problem))
-
-
-def _entries_path(entries: list[tuple[SoundState, int, Action | None]],
-                  entry: int) -> tuple[tuple[Action, ...], tuple[SoundState, ...]]:
-    actions, states = [], [entries[entry][0]]
-    while entry > 0:
-        _, entry, action = entries[entry]
-        if action is not None:
-            actions.append(action)
-        states.append(entries[entry][0])
-    return tuple(reversed(actions)), tuple(reversed(states))
-
-
-def _path(parent: dict[Hashable, tuple[SoundState, SoundState | None, Action | None]],
-          key: Callable[[SoundState], Hashable], last: SoundState) -> tuple[tuple[Action, ...], tuple[SoundState, ...]]:
-    actions, states = [], [last]
-    _, before, action = parent[key(last)]
-    while before is not None and action is not None:
-        actions.append(action)
-        states.append(before)
-        _, before, action = parent[key(before)]
-    return tuple(reversed(actions)), tuple(reversed(states))
 
 
 def solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult:
