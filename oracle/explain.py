@@ -39,11 +39,16 @@ class Explanation:
     removals: tuple[tuple[Vehicle, Answer], ...]
 
     def name(self, vehicle: Vehicle) -> str:
-        lane, i = vehicle
-        cells = self.scenario.left_lane if lane is Lane.LEFT else self.scenario.right_lane
-        kind = "oncoming vehicle" if lane is Lane.RIGHT else "vehicle"
-        kind = "target" if lane is Lane.LEFT and i in self.scenario.target_indices else kind
-        return f"{lane.value}_lane[{i}] ({kind} at cell {cells[i]})"
+        return vehicle_name(self.scenario, vehicle)
+
+
+def vehicle_name(scenario: Scenario, vehicle: Vehicle) -> str:
+    """A sensed vehicle as people read it: its lane, index, role and cell."""
+    lane, i = vehicle
+    cells = scenario.left_lane if lane is Lane.LEFT else scenario.right_lane
+    kind = "oncoming vehicle" if lane is Lane.RIGHT else "vehicle"
+    kind = "target" if lane is Lane.LEFT and i in scenario.target_indices else kind
+    return f"{lane.value}_lane[{i}] ({kind} at cell {cells[i]})"
 
 
 def explain(scenario: Scenario, strategy: Strategy = Strategy.SHORTEST) -> Explanation:

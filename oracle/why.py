@@ -25,7 +25,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, fields, replace
 
 from oracle import sound as sound_model
-from oracle.explain import Vehicle, keep_only
+from oracle.explain import Vehicle, keep_only, vehicle_name
 from oracle.planner import plan
 from spec.answers import Answer, Status, Strategy
 from spec.assumptions import Bounds, Phantom, profile
@@ -140,11 +140,7 @@ def name(scenario: Scenario, suspect: Suspect) -> str:
     if isinstance(suspect, Phantom):
         kind = "oncoming" if suspect.lane is Lane.RIGHT else "same-direction"
         return f"the {kind} phantom at {suspect.dx_m:+g} m ({suspect.why})"
-    lane, i = suspect
-    cells = scenario.left_lane if lane is Lane.LEFT else scenario.right_lane
-    kind = "oncoming vehicle" if lane is Lane.RIGHT else "vehicle"
-    kind = "target" if lane is Lane.LEFT and i in scenario.target_indices else kind
-    return f"{lane.value}_lane[{i}] ({kind} at cell {cells[i]})"
+    return vehicle_name(scenario, suspect)
 
 
 def suspects(scenario: Scenario) -> tuple[Suspect, ...]:
