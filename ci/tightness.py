@@ -61,7 +61,7 @@ from spec.models import ModelKind, models_for
 from spec.rules import disabled_guard
 from spec.safety import Conflict
 from spec.scenario import Problem, Scenario, problem_for
-from spec.sound import Sound, SoundRules, SoundState, Vehicle, Violation
+from spec.sound import Sound, SoundRules, SoundState, Vehicle, Violation, vehicles
 
 DEFAULT_SPACE = "left=2@8..20,right=1@12..30,lanes=both"
 #: The profiles measured: the paper's world stated as bounds, and the default one (``spec.assumptions``).
@@ -421,13 +421,10 @@ def shifted_rules(problem: Problem, vehicle: Vehicle, by_m: float) -> SoundRules
     """The problem's rules with one vehicle's interval moved ``by_m`` metres (positive: farther ahead)."""
     sc = problem.scenario
     assert sc.sound is not None
-    rules = SoundRules(sc.sound, sc.lane, sc.left_lane, sc.right_lane, sc.grid, sc.target_indices)
     moved = replace(vehicle, lo_m=vehicle.lo_m + by_m, hi_m=vehicle.hi_m + by_m)
-    rules.vehicles = tuple(moved if v == vehicle else v for v in rules.vehicles)
-    rules.same = tuple(v for v in rules.vehicles if v.lane is Lane.LEFT)
-    rules.oncoming = tuple(v for v in rules.vehicles if v.lane is Lane.RIGHT)
-    rules.sensed_same = {v.index: v for v in rules.same if v.index is not None}
-    return rules
+    given = tuple(moved if v == vehicle else v for v in vehicles(sc.lane, sc.left_lane, sc.right_lane, sc.grid,
+                                                                 sc.sound))
+    return SoundRules(sc.sound, sc.lane, sc.left_lane, sc.right_lane, sc.grid, sc.target_indices, given)
 
 
 def rounding_only(problem: Problem, refusal: Refusal) -> bool:

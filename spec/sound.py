@@ -246,9 +246,11 @@ class SoundRules:
     """The sound model on one scenario: its vehicles and every rule over sound states."""
 
     def __init__(self, sound: Sound, lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Grid,
-                 targets: tuple[int, ...]) -> None:
+                 targets: tuple[int, ...], given: tuple[Vehicle, ...] | None = None) -> None:
+        """``given``: the vehicles as intervals, when not the scenario's own (``vehicles``); a measurement that
+        moves one of them passes them here."""
         self.sound, self.grid, self.targets = sound, grid, targets
-        self.vehicles = vehicles(lane, left, right, grid, sound)
+        self.vehicles = vehicles(lane, left, right, grid, sound) if given is None else given
         self.same = tuple(v for v in self.vehicles if v.lane is Lane.LEFT)
         self.oncoming = tuple(v for v in self.vehicles if v.lane is Lane.RIGHT)
         self.sensed_same = {v.index: v for v in self.same if v.index is not None}
