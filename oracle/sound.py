@@ -30,7 +30,7 @@ from spec.lanes import Lane
 from spec.models import GoalRule
 from spec.motion import action_speed_mps
 from spec.rules import disabled_guard, disabled_reason
-from spec.scenario import Problem
+from spec.scenario import Problem, Scenario
 from spec.sound import Checks, SoundRules, SoundState, Violation, advance
 from spec.state import Collision, State
 
@@ -58,7 +58,15 @@ def rules_for(problem: Problem) -> Rules:
         raise ValueError("the problem's scenario has no sound model")
     if sound.checks is Checks.PAPER_CELLS:
         return PaperCells(problem)
-    return SoundRules(sound, sc.lane, sc.left_lane, sc.right_lane, sc.grid, sc.target_indices)
+    return _scenario_rules(sc)
+
+
+@lru_cache(maxsize=32)
+def _scenario_rules(sc: Scenario) -> SoundRules:
+    """One scenario's rules, shared by its models (they read the scenario alone; the goal is asked per question), so
+    that the preparations model's search reuses the answers the final model's found."""
+    assert sc.sound is not None  # rules_for checked it
+    return SoundRules(sc.sound, sc.lane, sc.left_lane, sc.right_lane, sc.grid, sc.target_indices)
 
 
 class PaperCells:

@@ -29,6 +29,7 @@ condition and in no goal field (a goal speaks of the vehicles sensed).
 from __future__ import annotations
 
 import enum
+import functools
 import math
 from dataclasses import dataclass, replace
 
@@ -45,6 +46,11 @@ from spec.safety import SAFETY, Conflict, SafetySpec
 
 #: Conditions are held to this much slack on the safe side, so that float rounding never makes a gap look large.
 EPS_M = 1e-9
+#: A ramp's end speed is a sum of floats: one that ends at the hold speed (the slowest speed ahead less the speed
+#: error) may come out a rounding above it, which must not count as closing in (1e-9 m/s closes 1 mm in 11 days).
+EPS_MPS = 1e-9
+#: The most step answers one scenario's rules remember (a few MB; a longer walk starts again).
+MEMO_ENTRIES = 50_000
 
 
 class Checks(enum.Enum):
@@ -242,6 +248,16 @@ class Segment:
     at_start: bool = False  # the plan's start: one behind is a follower (bumpers clear), not a cut-in
 
 
+Shapes = dict[tuple[float, Action | None, Lane, Lane | None], list[tuple[Segment, list[Bounded]]]]
+
+
+@functools.lru_cache(maxsize=16)
+def _shapes(sound: Sound, grid: Grid) -> Shapes:
+    """The windows' shapes (``SoundRules.window``), shared by every scenario under the same assumptions and grid: a
+    shape depends on the speeds, the action, the lane and the move before it, never on the vehicles."""
+    return {}
+
+
 class SoundRules:
     """The sound model on one scenario: its vehicles and every rule over sound states."""
 
@@ -261,7 +277,8 @@ class SoundRules:
         #: slower action starts half a ramp early): a lower bound on where the AV is at a boundary, whatever follows.
         self.dip_m = max((v1 - v2) * ramp_s(v1, v2) / 8 for v1 in self.speeds.values() for v2 in self.speeds.values()
                          if v1 > v2)
-        self._relative: dict[tuple[float, Action | None, Lane, Lane | None], list[tuple[Segment, list[Bounded]]]] = {}
+        self._steps: dict[tuple[tuple[object, ...], Action], Violation | None] = {}
+        self._relative = _shapes(sound, grid)
 
     def key(self, state: SoundState) -> tuple[object, ...]:
         """What a search tells states apart by (``SoundState.key``)."""
@@ -462,12 +479,20 @@ class SoundRules:
         return self.check_segment(seg, [self._bounded(p) for p in ref.pieces(0.0, 0.0)])
 
     def step_violation(self, state: SoundState, action: Action) -> Violation | None:
-        """Whether ``action`` from ``state`` keeps the specification at every instant of its window."""
+        """Whether ``action`` from ``state`` keeps the specification at every instant of its window (each question
+        answered once: a pipeline's searches, its proof and its validation ask the same ones)."""
+        asked = (state.key(), action)
+        if asked in self._steps:
+            return self._steps[asked]
+        found = None
         for seg, pieces in self.window(state, action):
             found = self.check_segment(seg, pieces)
             if found is not None:
-                return found
-        return None
+                break
+        if len(self._steps) >= MEMO_ENTRIES:
+            self._steps.clear()
+        self._steps[asked] = found
+        return found
 
     def after(self, state: SoundState, action: Action) -> SoundState:
         """The state after ``action`` (``advance``)."""
@@ -489,7 +514,7 @@ class SoundRules:
                     return Violation(Conflict.ONCOMING, v, end_s, -math.inf, self._required(
                         Conflict.ONCOMING, tail, end_s))
             return None
-        if end_v + self.sound.tracking.speed_mps > self.sound.bounds.same_mps.low_mps:
+        if end_v + self.sound.tracking.speed_mps > self.sound.bounds.same_mps.low_mps + EPS_MPS:
             for v in self.same:
                 if self.held_ahead(v, end_x, end_s):
                     return Violation(Conflict.AHEAD, v, end_s, -math.inf, self._required(Conflict.AHEAD, tail, end_s))
