@@ -18,7 +18,8 @@ start of the ramp into it to its end), every vehicle in conflict keeps the gap o
   max(g_min, tau (v_high - v + e_v))``.
 
 A same-direction vehicle behind the AV in its own lane follows it (a lane keeps its order; a
-rear-end collision is the follower's to avoid) and is no conflict. Each condition is a threshold on
+rear-end collision is the follower's to avoid) and is no conflict; the state remembers which ones
+do (``SoundState.followers``), since an interval behind a braking AV grows past it. Each condition is a threshold on
 the vehicle's start interval, the extreme over the window of a function of the reference alone;
 the reference is piecewise quadratic, so the extreme is exact (the ends of each piece and a
 vertex inside it). Goal fields hold only for every position; a plan's last state must admit the
@@ -200,10 +201,14 @@ class SoundState:
     first_mps: float | None  # the plan's first action's speed (its ramp starts at once), None before it
     last_mps: float | None  # the speed of the action just finished, None at the start
     moved: Lane | None = None  # the lane the action just finished moved into (a ramp after it may meet its move)
+    #: The same-direction vehicles (places in ``SoundRules.same``) certainly behind the AV when it last got into the
+    #: left lane: they follow it from then on (a lane keeps its order). None: since the start (classified there).
+    followers: frozenset[int] | None = None
 
     def key(self) -> tuple[object, ...]:
         """What the future depends on: everything but the step count (a search at the least depth keeps it)."""
-        return (self.lane, self.lane_changes, self.t_units, self.d_cells, self.first_mps, self.last_mps, self.moved)
+        return (self.lane, self.lane_changes, self.t_units, self.d_cells, self.first_mps, self.last_mps, self.moved,
+                self.followers)
 
 
 def advance(state: SoundState, action: Action, grid: Grid, speed_mps: float) -> SoundState:
@@ -213,7 +218,8 @@ def advance(state: SoundState, action: Action, grid: Grid, speed_mps: float) -> 
     units = grid.units(action)
     return SoundState(rule.to_lane or state.lane, state.lane_changes + int(rule.changes_lane), state.steps + 1,
                       state.t_units + units, state.d_cells + units - grid.left_shift(action),
-                      speed_mps if state.first_mps is None else state.first_mps, speed_mps, rule.to_lane)
+                      speed_mps if state.first_mps is None else state.first_mps, speed_mps, rule.to_lane,
+                      state.followers)
 
 
 @dataclass(frozen=True, slots=True)
@@ -279,6 +285,7 @@ class SoundRules:
                          if v1 > v2)
         self._steps: dict[tuple[tuple[object, ...], Action], Violation | None] = {}
         self._relative = _shapes(sound, grid)
+        self._start_followers: frozenset[int] | None = None
 
     def key(self, state: SoundState) -> tuple[object, ...]:
         """What a search tells states apart by (``SoundState.key``)."""
@@ -426,20 +433,24 @@ class SoundRules:
         required = self._required(conflict, p, need[1])
         return Violation(conflict, v, need[1], required - short, required)
 
-    def check_segment(self, seg: Segment, pieces: list[Bounded]) -> Violation | None:
-        """The first violation over one segment of a window (AV occupancy fixed), or None."""
+    def check_segment(self, seg: Segment, pieces: list[Bounded], followers: frozenset[int] = frozenset()) \
+            -> Violation | None:
+        """The first violation over one segment of a window (AV occupancy fixed), or None; ``followers``: the
+        vehicles that follow the AV in the left lane (no conflict)."""
         if Lane.LEFT in seg.lanes:
-            found = self._check_entering(pieces, not seg.at_start) if seg.entering_left else self._check_ahead(pieces)
+            found = self._check_entering(pieces, not seg.at_start) if seg.entering_left else \
+                self._check_ahead(pieces, followers)
             if found is not None:
                 return found
         if Lane.RIGHT in seg.lanes:
             return self._check_oncoming(pieces)
         return None
 
-    def _check_ahead(self, pieces: list[Bounded]) -> Violation | None:
+    def _check_ahead(self, pieces: list[Bounded], followers: frozenset[int]) -> Violation | None:
         for b in pieces:
-            for v in self.same:
-                if v.lo_m < b.ahead[0] + EPS_M and self.held_ahead(v, b.piece.x0_m, b.piece.t0_s):
+            for i, v in enumerate(self.same):
+                if v.lo_m < b.ahead[0] + EPS_M and i not in followers and \
+                        self.held_ahead(v, b.piece.x0_m, b.piece.t0_s):
                     return self._violation(Conflict.AHEAD, v, b.piece, b.ahead, True)
         return None
 
@@ -485,8 +496,9 @@ class SoundRules:
         if asked in self._steps:
             return self._steps[asked]
         found = None
+        followers = self.followers(state, action)
         for seg, pieces in self.window(state, action):
-            found = self.check_segment(seg, pieces)
+            found = self.check_segment(seg, pieces, followers)
             if found is not None:
                 break
         if len(self._steps) >= MEMO_ENTRIES:
@@ -495,8 +507,32 @@ class SoundRules:
         return found
 
     def after(self, state: SoundState, action: Action) -> SoundState:
-        """The state after ``action`` (``advance``)."""
-        return advance(state, action, self.grid, self.speeds[action])
+        """The state after ``action`` (``advance``), with the vehicles that follow the AV once it gets into the left
+        lane."""
+        nxt = advance(state, action, self.grid, self.speeds[action])
+        if ACTION_RULES[action].to_lane is Lane.LEFT:
+            return replace(nxt, followers=self.followers(state, action))
+        return nxt
+
+    def followers(self, state: SoundState, action: Action | None) -> frozenset[int]:
+        """The vehicles that follow the AV in the left lane during ``action`` from ``state`` (None: after it): the
+        state's, or for a move into the left lane those not clear ahead at its boundary. The entering checks hold
+        every vehicle certainly ahead or certainly behind over the whole sideways move, so these are the ones behind
+        (as at the start, where ``start_violation`` holds them so)."""
+        if action is not None and ACTION_RULES[action].to_lane is Lane.LEFT:
+            t_s = state.t_units * self.unit_s
+            x_m = self.reference(state, action).position_m(t_s)
+        elif state.followers is not None:
+            return state.followers
+        else:
+            if self._start_followers is None:
+                x_m = self._reference(0.0, 0.0, None, None, None, self.start_mps).position_m(0.0)
+                self._start_followers = self._behind(x_m, 0.0)
+            return self._start_followers
+        return self._behind(x_m, t_s)
+
+    def _behind(self, x_m: float, t_s: float) -> frozenset[int]:
+        return frozenset(i for i, v in enumerate(self.same) if not self.held_ahead(v, x_m, t_s))
 
     def continuation_violation(self, state: SoundState) -> Violation | None:
         """A plan's last state must be safe for ever: the minimal-risk manoeuvre (brake in lane to the hold speed)
@@ -515,8 +551,9 @@ class SoundRules:
                         Conflict.ONCOMING, tail, end_s))
             return None
         if end_v + self.sound.tracking.speed_mps > self.sound.bounds.same_mps.low_mps + EPS_MPS:
-            for v in self.same:
-                if self.held_ahead(v, end_x, end_s):
+            followers = self.followers(state, None)
+            for i, v in enumerate(self.same):
+                if i not in followers and self.held_ahead(v, end_x, end_s):
                     return Violation(Conflict.AHEAD, v, end_s, -math.inf, self._required(Conflict.AHEAD, tail, end_s))
         return None
 
@@ -576,9 +613,11 @@ class SoundRules:
         least_m = self.sound.safety.required_gap_m(self.sound.tracking.speed_mps + b.oncoming_mps.high_mps)
         nearest = max(v.lo_m for v in phantoms)
         fastest = max(max(self.speeds.values()), self.start_mps)
+        followers = self.followers(state, None) if state.lane is Lane.LEFT else frozenset()
         for i in self.targets:
             v = self.sensed_same[i]
-            if state.lane is Lane.LEFT and not self.held_ahead(v, x_m + self.dip_m, t_s):
+            if state.lane is Lane.LEFT and (self.same.index(v) in followers or
+                                            not self.held_ahead(v, x_m + self.dip_m, t_s)):
                 continue  # the left lane's rules may let it fall behind there: no argument
             if self.same_high(v, t_s) + length + g_min + ex <= x_m - self.dip_m - ex:
                 continue  # already passed
