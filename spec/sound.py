@@ -539,7 +539,7 @@ class SoundRules:
         over its ramp, and after it no conflict may close in (an oncoming vehicle not yet past an AV in the right
         lane always does)."""
         ((seg, pieces),) = self.window(state, None)
-        found = self.check_segment(seg, pieces)
+        found = self.check_segment(seg, pieces, self.followers(state, None))
         if found is not None:
             return found
         tail = pieces[-1].piece

@@ -127,3 +127,18 @@ def test_a_follower_is_never_held_ahead() -> None:
         t_s = state.t_units * rules.unit_s
         assert rules.held_ahead(rules.same[follower], rules.reference(state, None).position_m(t_s), t_s)
         assert rules.step_violation(state, Action.ACCELERATE) is None
+
+
+def test_a_plan_may_end_with_a_follower_clear_ahead_of_a_braking_av() -> None:
+    """The minimal-risk manoeuvre's window skips followers too (the tightness run's end refusals, all of them this):
+    lane=right left=[18, 34] right=[36] at 10.5 m, default profile, after accelerate, left_lane_change, drive, drive,
+    twelve brakes and accelerate, left_lane[0] (behind when the AV got into the left lane) is no conflict."""
+    scenario = replace(make_scenario("right", [18, 34], [36], 0, cell_m="10.5"), sound=Sound(profile("default")))
+    problem = problem_for(scenario, ModelKind.FINAL)
+    rules, state = rules_for(problem), start(problem)
+    for action in [Action.ACCELERATE, Action.LEFT_LANE_CHANGE, Action.DRIVE, Action.DRIVE] + [Action.BRAKE] * 12 + \
+            [Action.ACCELERATE]:
+        assert rules.step_violation(state, action) is None
+        state = rules.after(state, action)
+    assert state.followers is not None and 0 in state.followers and rules.same[0].name.startswith("left_lane[0]")
+    assert rules.continuation_violation(state) is None
