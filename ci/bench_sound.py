@@ -8,7 +8,8 @@ A seeded sample of the sweep's scenarios (paper grid), the same traffic cut fine
 default, sensible, and shortest), whole pipeline (final model, then preparations), under the
 paper's rules, the sound model with the ``paper`` profile and with the ``default`` profile, in
 one run. The table quotes median and p99 latency and the share of each answer, and the sound
-model's plans are checked by the exact reachable-set check (a breach would be printed; there has been none).
+model's plans are checked by the exact reachable-set check (a breach would be printed; there has
+been none).
 """
 
 from __future__ import annotations

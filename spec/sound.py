@@ -19,10 +19,10 @@ start of the ramp into it to its end), every vehicle in conflict keeps the gap o
 
 A same-direction vehicle behind the AV in its own lane follows it (a lane keeps its order; a
 rear-end collision is the follower's to avoid) and is no conflict; the state remembers which ones
-do (``SoundState.followers``), since an interval behind a braking AV grows past it. Each condition is a threshold on
-the vehicle's start interval, the extreme over the window of a function of the reference alone;
-the reference is piecewise quadratic, so the extreme is exact (the ends of each piece and a
-vertex inside it). Goal fields hold only for every position; a plan's last state must admit the
+do (``SoundState.followers``), since an interval behind a braking AV grows past it. Each condition
+is a threshold on the vehicle's start interval, the extreme over the window of a function of the
+reference alone; the reference is piecewise quadratic, so the extreme is exact (the ends of each
+piece and a vertex inside it). Goal fields hold only for every position; a plan's last state must admit the
 minimal-risk manoeuvre for ever (``continuation_violation``). Phantoms are in every safety
 condition and in no goal field (a goal speaks of the vehicles sensed).
 """
@@ -521,15 +521,13 @@ class SoundRules:
         (as at the start, where ``start_violation`` holds them so)."""
         if action is not None and ACTION_RULES[action].to_lane is Lane.LEFT:
             t_s = state.t_units * self.unit_s
-            x_m = self.reference(state, action).position_m(t_s)
-        elif state.followers is not None:
+            return self._behind(self.reference(state, action).position_m(t_s), t_s)
+        if state.followers is not None:
             return state.followers
-        else:
-            if self._start_followers is None:
-                x_m = self._reference(0.0, 0.0, None, None, None, self.start_mps).position_m(0.0)
-                self._start_followers = self._behind(x_m, 0.0)
-            return self._start_followers
-        return self._behind(x_m, t_s)
+        if self._start_followers is None:
+            self._start_followers = self._behind(
+                self._reference(0.0, 0.0, None, None, None, self.start_mps).position_m(0.0), 0.0)
+        return self._start_followers
 
     def _behind(self, x_m: float, t_s: float) -> frozenset[int]:
         return frozenset(i for i, v in enumerate(self.same) if not self.held_ahead(v, x_m, t_s))
@@ -538,8 +536,9 @@ class SoundRules:
         """A plan's last state must be safe for ever: the minimal-risk manoeuvre (brake in lane to the hold speed)
         over its ramp, and after it no conflict may close in (an oncoming vehicle not yet past an AV in the right
         lane always does)."""
+        followers = self.followers(state, None)
         ((seg, pieces),) = self.window(state, None)
-        found = self.check_segment(seg, pieces, self.followers(state, None))
+        found = self.check_segment(seg, pieces, followers)
         if found is not None:
             return found
         tail = pieces[-1].piece
@@ -551,7 +550,6 @@ class SoundRules:
                         Conflict.ONCOMING, tail, end_s))
             return None
         if end_v + self.sound.tracking.speed_mps > self.sound.bounds.same_mps.low_mps + EPS_MPS:
-            followers = self.followers(state, None)
             for i, v in enumerate(self.same):
                 if i not in followers and self.held_ahead(v, end_x, end_s):
                     return Violation(Conflict.AHEAD, v, end_s, -math.inf, self._required(Conflict.AHEAD, tail, end_s))
