@@ -349,22 +349,27 @@ class SoundRules:
         nominal position plus the first ramp's constant gain, plus the ramp at the boundary): it is computed
         once per (speed before, action) and moved in time and place."""
         ref = self.reference(state, action)
-        first = ref.first
-        window_start = min([ref.boundary_s] + ([ref.ramp.start_s] if ref.ramp is not None else []))
-        if first is not None and first.start_s + first.duration_s > window_start:
+        if early(ref):
             return [(seg, [self._bounded(p) for p in ref.pieces(seg.t0_s, seg.t1_s)])
                     for seg in self._segments(state.lane, ref, action, state.moved)]
-        key = (ref.before_mps, action, state.lane, state.moved)
-        shape = self._relative.get(key)
-        if shape is None:
-            rel = self._reference(0.0, 0.0, ref.before_mps, ref.before_mps, action, ref.before_mps)
-            shape = self._relative[key] = [
-                (seg, [self._bounded(p) for p in rel.pieces(seg.t0_s, seg.t1_s)])
-                for seg in self._segments(state.lane, rel, action, state.moved)]
+        shape = self.relative_window(ref.before_mps, action, state.lane, state.moved)
         dt, dx = ref.boundary_s, ref.nominal_m + ramp_gain_m(ref.start_mps, ref.first_mps)
         bounds = self.sound.bounds
         return [(Segment(seg.t0_s + dt, seg.t1_s + dt, seg.lanes, seg.entering_left),
                  [b.shifted(dt, dx, bounds) for b in pieces]) for seg, pieces in shape]
+
+    def relative_window(self, before_mps: float, action: Action | None, lane: Lane, moved: Lane | None) -> list[
+            tuple[Segment, list[Bounded]]]:
+        """The window's shape from a boundary at time 0 and place 0 (``window``), once per speed before it, action,
+        lane and move before it."""
+        key = (before_mps, action, lane, moved)
+        shape = self._relative.get(key)
+        if shape is None:
+            rel = self._reference(0.0, 0.0, before_mps, before_mps, action, before_mps)
+            shape = self._relative[key] = [
+                (seg, [self._bounded(p) for p in rel.pieces(seg.t0_s, seg.t1_s)])
+                for seg in self._segments(lane, rel, action, moved)]
+        return shape
 
     def _bounded(self, p: Piece) -> Bounded:
         return Bounded(p, self._ahead_need(p), self._oncoming_need(p), self._behind_allow(p))
@@ -628,6 +633,14 @@ class SoundRules:
             if nearest - b.oncoming_mps.high_mps * passed_at - (av_at + ex) - length < least_m - EPS_M:
                 return True
         return False
+
+
+def early(ref: Reference) -> bool:
+    """Whether the ramp into the first action still runs when a window from ``ref`` starts (its shape then depends
+    on where the plan started, not only on the speed before it: computed as it is, never moved)."""
+    first = ref.first
+    window_start = min([ref.boundary_s] + ([ref.ramp.start_s] if ref.ramp is not None else []))
+    return first is not None and first.start_s + first.duration_s > window_start
 
 
 def _max_of(p: Piece, c1: float, b1: float, c2: float, b2: float, flip: bool = False) -> tuple[float, float]:

@@ -1,0 +1,215 @@
+"""The sound model's windows as every engine translates them: one table per (assumptions, grid), no vehicle in it.
+
+A step of the sound model is safe when every vehicle keeps its gap over the step's window
+(``spec.sound``). Where over a piece of the window each condition binds (the worst instant of
+the AV's reference against a vehicle's bound) does not depend on the vehicle: this table holds,
+for each piece, the reference at the piece's start and at each condition's worst instant. An
+engine translates the rest itself, from the same declarations the interpreter reads: a
+vehicle's interval (its cell's extent, ``spec.cells``, widened by the sensing error; the
+phantoms, ``spec.assumptions``), its growth with its lane's speed bounds, the AV's envelope
+(``spec.envelope``) and the required gap (``spec.safety``):
+
+- ``AHEAD`` (a stretch in the left lane, not entering it), per piece, per same-direction vehicle
+  not a follower and held ahead at the piece's start (``lo + low t0 - L >= x0 + e_x``): refused
+  when ``lo + low t < x + e_x + L + gap(v + e_v - low) + EPS_M`` at the piece's ``ahead`` instant;
+- ``ONCOMING`` (a stretch in the right lane), per oncoming vehicle not passed at the piece's start
+  (``hi - low_o t0 + L <= x0 - e_x - EPS_M``): refused when ``lo - high_o t < x + e_x + L +
+  gap(v + e_v + high_o) + EPS_M`` at its ``oncoming`` instant;
+- entering the left lane (``entering``), per same-direction vehicle: safe when it is ahead (the
+  ``AHEAD`` test above, not refused) at every piece, or behind at every piece: ``hi + high t <= x
+  - e_x - L - gap(high - v + e_v) - EPS_M`` at each ``behind`` instant (at the plan's start,
+  ``at_start``, only bumpers clear: ``hi <= x0 - e_x - L - EPS_M``);
+- followers: at the start, and at the boundary of a move into the left lane (``boundary``), the
+  same-direction vehicles not held ahead there; they stay followers until the next such move;
+- the end of a plan: its continuation window (action None) as above, then at its ``end``: in the
+  right lane every oncoming vehicle passed; in the left lane, when ``v + e_v > low + EPS_MPS``,
+  no same-direction vehicle but a follower held ahead;
+- the goal, at the continuation window's ``boundary`` (``spec.sound.SoundRules.goal_holds``).
+
+Lookup (``SoundTable.window``): a window while the first ramp still runs is in ``early`` under
+the state's whole key; any other is its shape in ``relative`` (by the speed before the
+boundary, the action, the lane and the lane the action before moved into) moved by ``t_units``
+time units and ``d_cells`` cells plus the first ramp's gain (``gain_m``).
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+from spec.actions import ACTION_RULES, Action
+from spec.envelope import Reference
+from spec.grid import Grid
+from spec.lanes import Lane
+from spec.motion import ramp_gain_m, ramp_s
+from spec.sound import Bounded, Segment, Sound, SoundRules, SoundState, advance, early
+
+NO_SPEED = -1  # a state's first or last speed before any action (``SoundState.first_mps`` None)
+
+
+@dataclass(frozen=True, slots=True)
+class Instant:
+    """The AV's reference at one instant: time on the plan's clock, position from the AV's start, speed."""
+
+    t_s: float
+    x_m: float
+    v_mps: float
+
+    def shifted(self, dt_s: float, dx_m: float) -> Instant:
+        return Instant(self.t_s + dt_s, self.x_m + dx_m, self.v_mps)
+
+
+@dataclass(frozen=True, slots=True)
+class Binding:
+    """One piece of a window: the reference at its start, and at the instant each condition binds over it."""
+
+    start: Instant
+    ahead: Instant
+    oncoming: Instant
+    behind: Instant
+
+    def shifted(self, dt_s: float, dx_m: float) -> Binding:
+        return Binding(*(i.shifted(dt_s, dx_m) for i in (self.start, self.ahead, self.oncoming, self.behind)))
+
+
+@dataclass(frozen=True, slots=True)
+class Stretch:
+    """A stretch of a window with one occupancy: the lanes the AV is in, whether it is entering the left one (at the
+    plan's start: already in it), and its pieces."""
+
+    left: bool
+    right: bool
+    entering: bool
+    at_start: bool
+    pieces: tuple[Binding, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class Window:
+    """A step's window (or the continuation's, or the start's): its stretches, the reference at its boundary and at
+    its end."""
+
+    stretches: tuple[Stretch, ...]
+    boundary: Instant
+    end: Instant
+
+    def shifted(self, dt_s: float, dx_m: float) -> Window:
+        return Window(tuple(Stretch(s.left, s.right, s.entering, s.at_start,
+                                    tuple(b.shifted(dt_s, dx_m) for b in s.pieces)) for s in self.stretches),
+                      self.boundary.shifted(dt_s, dx_m), self.end.shifted(dt_s, dx_m))
+
+
+ShapeKey = tuple[int, Action | None, Lane, Lane | None]  # speed before, action (None: continuation), lane, moved
+EarlyKey = tuple[Lane, int, int, int, int, Lane | None, Action | None]  # lane, t, d, first, last, moved, action
+
+
+@dataclass(frozen=True)
+class SoundTable:
+    """Every window of the sound model under one set of assumptions on one grid (see the module's docstring)."""
+
+    sound: Sound
+    grid: Grid
+    unit_s: float  # one time unit
+    cell_m: float  # one cell
+    speeds_mps: tuple[float, ...]  # every speed a state records: the actions' and the start's, ascending
+    action_speed: dict[Action, int]  # index into speeds_mps
+    start_speed: int
+    gain_m: tuple[float, ...]  # per first speed: how far the first ramp puts the AV ahead of its nominal position
+    relative: dict[ShapeKey, Window]
+    early: dict[EarlyKey, Window]
+    start: dict[Lane, Window]  # the plan's start, an instant
+
+    def speed_index(self, speed_mps: float | None) -> int:
+        return NO_SPEED if speed_mps is None else self.speeds_mps.index(speed_mps)
+
+    def window(self, lane: Lane, t_units: int, d_cells: int, first: int, last: int, moved: Lane | None,
+               action: Action | None) -> Window:
+        """The window of ``action`` (None: the continuation) from a state given by its lane, time, advance, first
+        and last speed (indices, ``NO_SPEED``) and the lane its last action moved into."""
+        found = self.early.get((lane, t_units, d_cells, first, last, moved, action))
+        if found is not None:
+            return found
+        if first == NO_SPEED:
+            first = self.start_speed if action is None else self.action_speed[action]
+        before = first if last == NO_SPEED else last
+        return self.relative[before, action, lane, moved].shifted(
+            t_units * self.unit_s, d_cells * self.cell_m + self.gain_m[first])
+
+    def state_window(self, state: SoundState, action: Action | None) -> Window:
+        return self.window(state.lane, state.t_units, state.d_cells, self.speed_index(state.first_mps),
+                           self.speed_index(state.last_mps), state.moved, action)
+
+
+def _instant(b: Bounded, t_s: float) -> Instant:
+    return Instant(t_s, b.piece.x(t_s), b.piece.v(t_s))
+
+
+def _binding(b: Bounded) -> Binding:
+    p = b.piece
+    return Binding(Instant(p.t0_s, p.x0_m, p.v0_mps), _instant(b, b.ahead[1]), _instant(b, b.oncoming[1]),
+                   _instant(b, b.behind[1]))
+
+
+def declared(window: list[tuple[Segment, list[Bounded]]], boundary: Instant) -> Window:
+    """A window of ``SoundRules`` as the table holds it."""
+    stretches = tuple(Stretch(Lane.LEFT in seg.lanes, Lane.RIGHT in seg.lanes, seg.entering_left, seg.at_start,
+                              tuple(_binding(b) for b in pieces)) for seg, pieces in window)
+    tail = window[-1][1][-1].piece
+    return Window(stretches, boundary, Instant(tail.t1_s, tail.x(tail.t1_s), tail.v(tail.t1_s)))
+
+
+@functools.lru_cache(maxsize=16)
+def sound_table(sound: Sound, grid: Grid) -> SoundTable:
+    """The table of ``sound`` on ``grid``: every shape, every window while the first ramp runs (from either lane,
+    every action order the lanes allow), the start."""
+    rules = SoundRules(sound, Lane.RIGHT, (), (), grid, ())  # windows never read the vehicles
+    action_speeds = {a: rules.speeds[a] for a in Action}
+    speeds = tuple(sorted({*action_speeds.values(), rules.start_mps}))
+    index = {v: i for i, v in enumerate(speeds)}
+    relative: dict[ShapeKey, Window] = {}
+    for before in speeds:
+        for lane in Lane:
+            for moved in (None, lane):
+                for action in (*Action, None):
+                    if action is not None and ACTION_RULES[action].from_lane not in (None, lane):
+                        continue
+                    shape = rules.relative_window(before, action, lane, moved)
+                    ref = rules._reference(0.0, 0.0, before, before, action, before)
+                    relative[index[before], action, lane, moved] = declared(shape, _at_boundary(ref))
+    early_windows: dict[EarlyKey, Window] = {}
+    first_end_s = max(ramp_s(rules.start_mps, v) for v in speeds)
+    half_ramp_s = max(ramp_s(a, b) for a in speeds for b in speeds) / 2
+    todo = [SoundState(lane, 0, 0, 0, 0, None, None) for lane in Lane]
+    seen: set[tuple[object, ...]] = set()
+    while todo:
+        state = todo.pop()
+        if state.key() in seen or state.t_units * rules.unit_s - half_ramp_s >= first_end_s:
+            continue
+        seen.add(state.key())
+        for action in (*Action, None):
+            if action is not None and ACTION_RULES[action].from_lane not in (None, state.lane):
+                continue
+            ref = rules.reference(state, action)
+            if early(ref):
+                key = (state.lane, state.t_units, state.d_cells, _index(index, state.first_mps),
+                       _index(index, state.last_mps), state.moved, action)
+                early_windows[key] = declared(rules.window(state, action), _at_boundary(ref))
+            if action is not None:
+                todo.append(advance(state, action, grid, action_speeds[action]))
+    start = {}
+    for lane in Lane:
+        ref = rules.reference(SoundState(lane, 0, 0, 0, 0, None, None), None)
+        seg = Segment(0.0, 0.0, frozenset({lane}), lane is Lane.LEFT, at_start=True)
+        start[lane] = declared([(seg, [rules._bounded(p) for p in ref.pieces(0.0, 0.0)])], _at_boundary(ref))
+    gains = tuple(ramp_gain_m(rules.start_mps, v) for v in speeds)
+    return SoundTable(sound, grid, rules.unit_s, rules.cell_m, speeds, {a: index[v] for a, v in action_speeds.items()},
+                      index[rules.start_mps], gains, relative, early_windows, start)
+
+
+def _index(index: dict[float, int], speed: float | None) -> int:
+    return NO_SPEED if speed is None else index[speed]
+
+
+def _at_boundary(ref: Reference) -> Instant:
+    t_s = ref.boundary_s
+    return Instant(t_s, ref.position_m(t_s), ref.speed_mps(t_s))
