@@ -19,7 +19,7 @@ import math
 import re
 from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree
@@ -38,6 +38,7 @@ from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
 from spec.library import BUILTINS
 from spec.scenario import Scenario, make_scenario
+from spec.sound import Sound, sound_to_table
 
 VERDICTS_FILE = "verdicts.jsonl"
 BATCH = 8  # scenarios per job: few enough for a smooth progress bar, enough to amortise a job's start
@@ -142,7 +143,7 @@ def check_scenario(scenario: Scenario, properties: Sequence[PropertyName], engin
     return {"key": scenario_key(scenario), "scenario": scenario_to_dict(scenario), "verdicts": verdicts,
             "ms": {r.key.label: round(r.ms, 3) for r in runs.made()},
             "statuses": {r.key.label: (r.status.value if r.status else "error") for r in runs.made()},
-            "rules": sorted(rules_exercised(scenario, first_has_plan))}
+            "rules": [] if scenario.sound is not None else sorted(rules_exercised(scenario, first_has_plan))}
 
 
 def check_batch(scenarios: list[dict[str, Any]], properties: list[str], engines: list[str], timeout_s: float | None,
@@ -170,11 +171,62 @@ class Campaign:
     timeout_s: float | None = 10.0
     space: str | None = None
     seed: int | None = None
+    #: The sound model's assumptions every scenario is checked under (None: the paper's rules; ``DRAWN``: the
+    #: hypothesis source draws them with each scenario, ``ci.hypo.BOUND_CHOICES``).
+    sound: Sound | str | None = None
 
     def key(self) -> dict[str, Any]:
-        return {"source": self.source, "properties": [p.value for p in self.properties], "engines": list(self.engines),
-                "cell_m": self.cell_m, "horizon": self.horizon, "timeout_s": self.timeout_s, "space": self.space,
-                "seed": self.seed}
+        key = {"source": self.source, "properties": [p.value for p in self.properties], "engines": list(self.engines),
+               "cell_m": self.cell_m, "horizon": self.horizon, "timeout_s": self.timeout_s, "space": self.space,
+               "seed": self.seed}
+        if self.sound is not None:  # a paper campaign's key is what it always was: its records stay resumable
+            key["model"] = "sound"
+            key["bounds"] = self.sound if isinstance(self.sound, str) else sound_to_table(self.sound)
+        return key
+
+    def with_model(self, scenario: Scenario) -> Scenario:
+        """``scenario`` under the campaign's model (a drawn one keeps its own bounds)."""
+        return replace(scenario, sound=self.sound) if isinstance(self.sound, Sound) else scenario
+
+
+DRAWN = "drawn with each scenario"
+
+
+def check_resumable(log: Path, campaign: Campaign) -> None:
+    """Refuse to resume, into the records of ``log``, a campaign that differs from one recorded there only in its
+    model or bounds: its verdicts would sit beside ones made under other assumptions, in one summary. The message
+    names the difference."""
+    key = campaign.key()
+    plain = {k: v for k, v in key.items() if k not in ("model", "bounds")}
+    for record in read_records(log):
+        other = record.get("campaign")
+        if not isinstance(other, dict) or other == key:
+            continue
+        if {k: v for k, v in other.items() if k not in ("model", "bounds")} != plain:
+            continue
+        ours, theirs = key.get("bounds"), other.get("bounds")
+        option = "--bounds" if ours is not None and theirs is not None else "--model"
+        value = ("sound" if option == "--model" else campaign.sound.bounds.name if isinstance(campaign.sound, Sound)
+                 else str(campaign.sound)) if campaign.sound is not None else "paper"
+        raise OptionError(option, value, f"{log} holds this campaign under other assumptions ("
+                                         f"{_difference(ours, theirs)}): resume it with the same model and bounds, "
+                                         f"or start again with --fresh or another --out")
+
+
+def _assumptions(bounds: object) -> str:
+    if bounds is None:
+        return "the paper's rules"
+    if isinstance(bounds, dict):
+        return "the sound model, " + ", ".join(f"{k} {v}" for k, v in bounds.items())
+    return f"the sound model, bounds {bounds}"
+
+
+def _difference(ours: object, theirs: object) -> str:
+    if isinstance(ours, dict) and isinstance(theirs, dict):
+        changed = [f"{k} {theirs.get(k)} there, {ours.get(k)} here" for k in dict.fromkeys([*theirs, *ours])
+                   if theirs.get(k) != ours.get(k)]
+        return "; ".join(changed)
+    return f"{_assumptions(theirs)} there, {_assumptions(ours)} here"
 
 
 def recorded(log: Path, campaign: Campaign) -> dict[str, dict[str, Any]]:
@@ -208,6 +260,8 @@ def _sweep(campaign: Campaign, scenarios: Iterable[Scenario], out: Path, executo
            on_result: Callable[[dict[str, Any], bool], None] | None,
            on_checked: Callable[[int], None] | None) -> list[dict[str, Any]]:
     log = out / VERDICTS_FILE
+    check_resumable(log, campaign)
+    scenarios = [campaign.with_model(s) for s in scenarios]
     done = recorded(log, campaign)
     ordered = [scenario_key(s) for s in scenarios]
     todo: list[dict[str, Any]] = []
@@ -245,6 +299,7 @@ class Summary:
     ms: dict[str, list[float]] = field(default_factory=dict)
     rules: dict[float, Counter[str]] = field(default_factory=dict)  # cell size (m) -> rule -> scenarios
     failures: dict[str, list[dict[str, Any]]] = field(default_factory=dict)  # property -> failing results
+    paper: bool = True  # rule coverage names the paper model's rules: a sound-model campaign shows none
 
     def add(self, result: dict[str, Any]) -> None:
         self.scenarios += 1
@@ -266,6 +321,8 @@ class Summary:
 
     def coverage(self) -> dict[str, dict[str, int]]:
         """Per cell size ("21 m"), every rule that can occur there and how many scenarios exercised it."""
+        if not self.paper:
+            return {}
         return {f"{cell_m:g} m": {rule: counts[rule] for rule in rules_on(grid_for(cell_m))}
                 for cell_m, counts in sorted(self.rules.items(), reverse=True)}
 
@@ -303,7 +360,8 @@ def markdown(data: dict[str, Any]) -> str:
     lines = ["# Cross-validation", "",
              f"Source {c['source']}" + (f" ({c['space']})" if c["space"] else "") + (
                  f", seed {c['seed']}" if c["seed"] is not None else "")
-             + f"; engines {', '.join(c['engines'])}; {data['scenarios']} scenarios; cell {c['cell_m']:g} m.", "",
+             + f"; engines {', '.join(c['engines'])}; {data['scenarios']} scenarios; cell {c['cell_m']:g} m; "
+             + (f"the sound model, bounds {c['bounds']}." if c.get("model") == "sound" else "the paper's rules."), "",
              "| property | checked | held | failed | incomplete |", "|---|---|---|---|---|"]
     lines += [f"| {name} | {v['checked']} | {v['held']} | {v['failed']} | {v['incomplete']} |"
               for name, v in data["properties"].items()]

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -22,16 +23,19 @@ from hypothesis import strategies as st
 from hypothesis.database import DirectoryBasedExampleDatabase
 from rich.console import Console
 
-from ci.crossval import VERDICTS_FILE, Campaign, check_scenario, recorded
+from ci.crossval import DRAWN, VERDICTS_FILE, Campaign, check_resumable, check_scenario, recorded
 from ci.executors import ExecutorChoice, run_jobs
 from ci.properties import PropertyName, Verdict
 from ci.records import campaign_lock
+from spec import assumptions
+from spec.assumptions import Bounds, SpeedBounds
 from spec.constants import DEFAULT_HORIZON
 from spec.errors import ScenarioError
 from spec.files import scenario_from_dict
 from spec.grid import Grid, grid_for
 from spec.lanes import Lane
 from spec.scenario import Scenario, make_scenario
+from spec.sound import Sound
 
 #: The campaign's own profiles (the tests register theirs in tests/conftest.py), picked by ``PROFILE_VAR``.
 #: Quiet: hypothesis would print its falsifying examples from the workers into the command's output (and --json);
@@ -55,10 +59,38 @@ def profile() -> str:
     return name
 
 
-def scenarios(grid: Grid, horizon: int | None) -> st.SearchStrategy[Scenario]:
+def _speed_choices() -> tuple[SpeedBounds, ...]:
+    paper, default = assumptions.PROFILES["paper"].same_mps, assumptions.PROFILES[assumptions.DEFAULT_PROFILE].same_mps
+    half = SpeedBounds((paper.low_mps + default.low_mps) / 2, (paper.high_mps + default.high_mps) / 2)
+    return paper, half, default
+
+
+#: The bounds the hypothesis source draws with each scenario (``--model sound`` with no bounds option), stated: each
+#: lane's speeds from the paper profile's single speed to the default profile's interval (the spread traffic's
+#: cut-off), in three steps (the ends and halfway); the sensing error none or the default profile's; phantoms on or
+#: off. A lattice, not a continuum: every distinct set of bounds is a verifier Spin compiles (36 here, cached), and
+#: the ends are the profiles the suite ships.
+SPEED_CHOICES = _speed_choices()
+ERROR_CHOICES = (assumptions.PROFILES["paper"].sensing_error_m,
+                 assumptions.PROFILES[assumptions.DEFAULT_PROFILE].sensing_error_m)
+
+
+@st.composite
+def drawn_sound(draw: st.DrawFn) -> Sound:
+    """Bounds from the stated choices (shrinking towards the paper profile's)."""
+    same, oncoming = draw(st.sampled_from(SPEED_CHOICES)), draw(st.sampled_from(SPEED_CHOICES))
+    error, phantoms = draw(st.sampled_from(ERROR_CHOICES)), draw(st.sampled_from((True, False)))
+    name = (f"drawn: same {same.low_mps:g}..{same.high_mps:g}, oncoming {oncoming.low_mps:g}..{oncoming.high_mps:g}, "
+            f"error {error:g} m, phantoms {'on' if phantoms else 'off'}")
+    return Sound(Bounds(name, same, oncoming, error, phantoms, "drawn by the hypothesis source (ci.hypo.SPEED_CHOICES, "
+                                                               "ERROR_CHOICES)"))
+
+
+def scenarios(grid: Grid, horizon: int | None, model: Sound | str | None = None) -> st.SearchStrategy[Scenario]:
     """Valid scenarios on ``grid``: up to 4 same-direction and 2 oncoming vehicles anywhere in the window, either
     lane, any target count; drawn near the AV first (hypothesis shrinks towards small cells, so the window's
-    start is put at the AV's cell and cells count outwards from it)."""
+    start is put at the AV's cell and cells count outwards from it). Under ``model`` (``Campaign.sound``): the
+    paper's rules (None), that sound model, or one drawn with each scenario (``DRAWN``)."""
     cells = st.integers(0, grid.road_cells)
 
     @st.composite
@@ -69,8 +101,9 @@ def scenarios(grid: Grid, horizon: int | None) -> st.SearchStrategy[Scenario]:
         ahead = sum(1 for c in left if c >= grid.av_cell)
         targets = draw(st.integers(0, min(ahead, 3)))
         h = horizon if horizon is not None else draw(st.integers(1, DEFAULT_HORIZON))
+        sound = draw(drawn_sound()) if model == DRAWN else model if isinstance(model, Sound) else None
         try:
-            return make_scenario(lane, left, right, targets, horizon=h, grid=grid)
+            return replace(make_scenario(lane, left, right, targets, horizon=h, grid=grid), sound=sound)
         except ScenarioError:
             from hypothesis import reject
 
@@ -99,7 +132,7 @@ def hypothesis_job(name: str, campaign: Campaign, out_dir: str, profile_name: st
     @hypothesis_seed((campaign.seed or 0) + offset)
     @settings(PROFILES[profile_name],
               database=DirectoryBasedExampleDatabase(str(out / "hypothesis" / name)))
-    @given(scenarios(grid, campaign.horizon))
+    @given(scenarios(grid, campaign.horizon, campaign.sound))
     def test(scenario: Scenario) -> None:
         result = check_scenario(scenario, [prop], campaign.engines, campaign.timeout_s)
         if name not in done.get(result["key"], {}).get("verdicts", {}):
@@ -134,6 +167,7 @@ def _run(campaign: Campaign, out: Path, executor: ExecutorChoice, max_reproducer
     from ci.repro import reproduce
 
     (out / VERDICTS_FILE).touch()
+    check_resumable(out / VERDICTS_FILE, campaign)
     name = profile()
     console.print(f"crossval: hypothesis profile {name} ({PROFILE_VAR}), seed {campaign.seed}")
     jobs = [(p.value, campaign, str(out), name, n) for n, p in enumerate(campaign.properties)]

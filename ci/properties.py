@@ -19,9 +19,8 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from oracle.interpreter import validate
-from oracle.optimum import lexicographic_optimum, plan_cost
-from oracle.planner import combined_status, solve
+from oracle.planner import combined_status, cost_of, least_cost, solve
+from oracle.planner import verdict_for as validate
 from spec.actions import plan_text
 from spec.answers import Answer, Limits, Status, Strategy
 from spec.errors import EngineError
@@ -284,8 +283,8 @@ def optimality(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
     checked = validate(problem, optimal.answer.actions)
     if not checked.valid:
         return Outcome(Verdict.FAILED, f"z3/optimal plan {_actions(optimal)} is invalid: {checked.reason}")
-    cost = plan_cost(problem, optimal.answer.actions)
-    best = lexicographic_optimum(problem)
+    cost = cost_of(problem, optimal.answer.actions)
+    best = least_cost(problem)
     problems = []
     if best.cost != cost:
         problems.append(f"z3/optimal costs {cost}, the least cost is {best.cost} "
@@ -295,7 +294,7 @@ def optimality(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
             continue
         if not validate(problem, other.answer.actions).valid:
             continue  # validity reports it
-        other_cost = plan_cost(problem, other.answer.actions)
+        other_cost = cost_of(problem, other.answer.actions)
         if other_cost < cost:
             problems.append(f"{other.key.label}'s plan costs {other_cost}, less than z3/optimal's {cost}")
     return Outcome(Verdict.FAILED, "; ".join(problems)) if problems else HELD
@@ -307,7 +306,7 @@ def no_plan_proof(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
         return _incomplete(runs) or HELD
     deeper = scenario.horizon * DEEPER
     for kind in models_for(scenario.model):
-        found = lexicographic_optimum(problem_for(scenario, kind, deeper))
+        found = least_cost(problem_for(scenario, kind, deeper))
         if found.cost is not None:
             return Outcome(Verdict.FAILED, f"{', '.join(r.key.label for r in claims)} claim no plan of any length; "
                                            f"the {kind.value} model has one of {len(found.actions)} action(s): "

@@ -12,8 +12,9 @@ from typing import Any
 
 from ci.properties import PROPERTIES, PropertyName, Run, Runs, Verdict, first_difference
 from oracle import bmc
-from oracle.interpreter import validate
+from oracle.planner import verdict_for as validate
 from oracle.shrink import shrink, to_toml
+from oracle.sound import reachable_sets
 from spec.actions import plan_text
 from spec.answers import Limits, Status
 from spec.scenario import Scenario, problem_for
@@ -90,7 +91,8 @@ def side_by_side(scenario: Scenario, runs: Sequence[Run]) -> str:
     """Each run's plan and its states beside the interpreter's replay of it, up to the first differing step."""
     lines = [f"scenario: AV in the {scenario.lane.value} lane, left {list(scenario.left_lane)}, oncoming "
              f"{list(scenario.right_lane)}, {scenario.targets} target(s), horizon {scenario.horizon}, "
-             f"{scenario.grid.describe()}; states are cells (the AV's is {scenario.grid.av_cell})"]
+             f"{scenario.grid.describe()}; states are cells (the AV's is {scenario.grid.av_cell})"
+             + (f"; {scenario.sound.describe()}" if scenario.sound is not None else "; the paper's rules")]
     for run in runs:
         answer = run.answer
         if run.error is not None:
@@ -112,4 +114,8 @@ def side_by_side(scenario: Scenario, runs: Sequence[Run]) -> str:
             ours = compact(replay.states[n]) if n < len(replay.states) else "(none: the plan is invalid here)"
             mark = "  <-- first difference" if n == differ else ""
             lines.append(f"  {n:>4}  {action:<18} {theirs:<34} {ours}{mark}")
+        if scenario.sound is not None:
+            lines.append("  the interpreter's reachable sets along it (each vehicle's interval, metres ahead of the "
+                         "AV's reference; +-inf: a phantom's unseen stretch):")
+            lines += [f"    {line}" for line in reachable_sets(problem_for(scenario, answer.model), answer.actions)]
     return "\n".join(lines) + "\n"

@@ -8,8 +8,10 @@ from dataclasses import dataclass, replace
 
 from oracle import sound
 from oracle.interpreter import Validation, validate
+from oracle.optimum import Cost, Optimum, lexicographic_optimum, plan_cost
 from spec.actions import Action, plan_text
 from spec.answers import Answer, Limits, SearchResult, Status, Strategy
+from spec.cost import total_cost
 from spec.engines import Engine, check_model, check_strategy, get_engine, parse_strategy
 from spec.errors import EngineError
 from spec.models import ModelChoice, ModelKind, models_for
@@ -130,6 +132,27 @@ def combined_status(stages: list[tuple[ModelKind, Status, str]]) -> Status:
 def _summary(stages: list[tuple[ModelKind, Status, str]]) -> str:
     parts = (f"{kind.value}: {status.value}" + (f" ({detail})" if detail else "") for kind, status, detail in stages)
     return "; ".join(parts)
+
+
+def least_cost(problem: Problem) -> Optimum:
+    """The least cost of a plan within the horizon and one such plan, by the interpreter's own uniform-cost search:
+    over the paper's offsets, or over the sound model's states when the scenario has one."""
+    if problem.scenario.sound is None:
+        return lexicographic_optimum(problem)
+    found = sound.optimal(problem)
+    if found.status is not Status.PLAN:
+        return Optimum(None, (), found.states_explored)
+    return Optimum(cost_of(problem, found.actions), found.actions, found.states_explored)
+
+
+def cost_of(problem: Problem, actions: Sequence[Action]) -> Cost:
+    """The cost of a valid action list (``spec.cost``), replayed under the paper's rules or the sound model's."""
+    if problem.scenario.sound is None:
+        return plan_cost(problem, tuple(actions))
+    replayed = sound.validate(problem, actions)
+    if not replayed.valid:
+        raise ValueError(f"not a plan: {replayed.reason}")
+    return total_cost(zip(actions, replayed.states[1:]))
 
 
 def verdict_for(problem: Problem, actions: Sequence[Action]) -> Validation | sound.SoundValidation:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable, Iterator
+from dataclasses import replace
 
 from oracle.conform import disagreements
 from oracle.planner import plan
@@ -66,10 +67,10 @@ def _valid(s: Scenario, left: tuple[int, ...] | None = None, right: tuple[int, .
            targets: int | None = None, horizon: int | None = None) -> Iterator[Scenario]:
     """The changed scenario, if it is still valid and actually different."""
     try:
-        changed = make_scenario(s.lane, list(s.left_lane if left is None else left),
-                                list(s.right_lane if right is None else right),
-                                s.targets if targets is None else targets, s.model,
-                                s.horizon if horizon is None else horizon, grid=s.grid)
+        changed = replace(make_scenario(s.lane, list(s.left_lane if left is None else left),
+                                        list(s.right_lane if right is None else right),
+                                        s.targets if targets is None else targets, s.model,
+                                        s.horizon if horizon is None else horizon, grid=s.grid), sound=s.sound)
     except ScenarioError:
         return
     if changed != s:

@@ -397,3 +397,33 @@ def validate(problem: Problem, actions: Sequence[Action]) -> SoundValidation:
     if after is not None:
         return SoundValidation(False, f"no safe continuation after the plan: {after.describe()}", tuple(shown), after)
     return SoundValidation(True, "plan reaches the goal, safe at every instant and for ever after", tuple(shown))
+
+
+def reachable_sets(problem: Problem, actions: Sequence[Action]) -> list[str]:
+    """The reachable sets along ``actions`` (as far as they are safe), one line per state: where every vehicle can
+    be at that boundary, metres ahead of the AV's reference there (the AV itself within the tracking error of it);
+    for reproducers, beside the cells the traces show."""
+    rules = rules_for(problem)
+    if not isinstance(rules, SoundRules):
+        return []
+    state, lines = start(problem), []
+    for n in range(len(actions) + 1):
+        t_s = state.t_units * rules.unit_s
+        x_m = rules.reference(state, None).position_m(t_s)
+        parts = []
+        for v in rules.vehicles:
+            lo, hi = ((rules.same_low(v, t_s), rules.same_high(v, t_s)) if v.lane is Lane.LEFT
+                      else (rules.oncoming_low(v, t_s), rules.oncoming_high(v, t_s)))
+            name = (f"{'L' if v.lane is Lane.LEFT else 'R'}{v.index}" if v.index is not None
+                    else f"phantom-{'L' if v.lane is Lane.LEFT else 'R'}{'+' if lo > 0 else '-'}")
+            parts.append(f"{name} {lo - x_m:+.1f}..{hi - x_m:+.1f}")
+        lines.append(f"step {n}, t {t_s:.2f} s, AV at {x_m:.1f} m +-{rules.sound.tracking.position_m:g}: "
+                     + ", ".join(parts))
+        if n == len(actions):
+            break
+        after = step(problem, state, actions[n])
+        if not isinstance(after, SoundState):
+            lines.append(f"step {n + 1} ({actions[n].value}) refused: {after.describe()}")
+            break
+        state = after
+    return lines

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -13,18 +14,23 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColum
 from rich.table import Table
 from rich.text import Text
 
-from ci.cli.common import cell_option, err, horizon_option, out, print_json
+from ci.cli.common import cell_option, err, horizon_option, out, print_json, sound_options
 from ci.cli.options import MAX_WORKERS, REPRODUCERS, SCHEDULER, SECONDS, SEED, WORKERS, names
 from ci.cli.options import out_dir as checked_out_dir
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.records import campaign_lock
 from oracle.coverage import CoverageTarget
+from spec.assumptions import DEFAULT_PROFILE, profile
 from spec.errors import ExitCode, OptionError
+from spec.lanes import Lane
+from spec.scenario import Scenario
+from spec.sound import Checks, Sound
 
 if TYPE_CHECKING:
     from ci.properties import PropertyName
 
 SOURCES = ("library", "hypothesis", "exhaustive")
+MODELS = ("paper", "sound")
 DEFAULT_SPACE = "left=2@8..20,right=1@12..30,lanes=both"
 
 
@@ -62,13 +68,25 @@ class RateColumn(ProgressColumn):
 @click.option("--fresh", is_flag=True, help="Forget the verdicts already recorded in --out instead of resuming.")
 @click.option("--list", "list_only", is_flag=True, help="List the registered properties and exit.")
 @click.option("--json", "as_json", is_flag=True)
+@click.option("--model", "model_name", type=click.Choice(MODELS), default="paper", show_default=True,
+              help="The paper's rules, or the sound model (under --bounds and the options below; with --source "
+                   "hypothesis the bounds are drawn with each scenario unless given).")
+@sound_options
 def crossval(source: str, space: str, property_text: str, engine_text: str, workers: int | None, executor_kind: str,
              scheduler: str | None, timeout_s: float, coverage_text: str, seed: int | None, max_reproducers: int,
-             cell_m: float | None,
-             horizon: int | None, out_dir: str, fresh: bool, list_only: bool, as_json: bool) -> None:
+             cell_m: float | None, horizon: int | None, out_dir: str, fresh: bool, list_only: bool, as_json: bool,
+             model_name: str, sound: Callable[[Scenario], Scenario]) -> None:
     """Check every property on scenarios from a source; exit 0 when all hold, 6 on any failure, 7 when every property
     held but the coverage target was missed."""
-    from ci.crossval import VERDICTS_FILE, Campaign, Summary, library_scenarios, parse_space, write_reports
+    from ci.crossval import (
+        VERDICTS_FILE,
+        Campaign,
+        Summary,
+        check_resumable,
+        library_scenarios,
+        parse_space,
+        write_reports,
+    )
     from ci.properties import PROPERTIES
     from spec.grid import grid_for
 
@@ -79,6 +97,10 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
     grid = grid_for(cell_m)
     properties = _properties(property_text)
     engines = _engines(engine_text)
+    model = _model(model_name, sound, grid, source, engines)
+    if model is not None and coverage_text != CoverageTarget.NONE.value:
+        raise OptionError("--coverage-target", coverage_text, "names the paper model's rules; a --model sound campaign "
+                                                              "has no rule coverage yet")
     executor = ExecutorChoice(ExecutorKind(executor_kind), workers or min(os.cpu_count() or 1, MAX_WORKERS), scheduler)
     check_executor(executor)
     chosen = [p for p in properties if PROPERTIES[p].applies(engines)]
@@ -100,14 +122,15 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
     if source == "hypothesis" and seed is None:
         seed = int.from_bytes(os.urandom(4), "little")
     campaign = Campaign(source, tuple(chosen), engines, float(grid.cell_m), horizon, timeout_s,
-                        the_space.describe() if the_space else None, seed if source == "hypothesis" else None)
+                        the_space.describe() if the_space else None, seed if source == "hypothesis" else None, model)
     if fresh:
         (out_path / VERDICTS_FILE).unlink(missing_ok=True)
+    check_resumable(out_path / VERDICTS_FILE, campaign)  # before any line: one model and bounds per folder
     err.print(f"crossval: source {source}; properties {', '.join(p.value for p in chosen)}"
               + (f" (not applicable to these engines: {', '.join(skipped)})" if skipped else "")
-              + f"; engines {', '.join(engines)}; on {executor.describe()}; results in {out_dir}"
+              + f"; engines {', '.join(engines)}; {_describe(model)}; on {executor.describe()}; results in {out_dir}"
               + (f"; seed {seed}" if source == "hypothesis" else ""))
-    summary = Summary(CoverageTarget(coverage_text), float(grid.cell_m))
+    summary = Summary(CoverageTarget(coverage_text), float(grid.cell_m), paper=model is None)
     started = time.perf_counter()
     if source == "hypothesis":
         from ci.hypo import run_hypothesis
@@ -148,6 +171,38 @@ def _properties(text: str) -> tuple[PropertyName, ...]:
             raise OptionError("--properties", name, f"unknown property (known: {known}, or all)")
 
     return tuple(PropertyName(name) for name in names("--properties", text, check))
+
+
+def _model(name: str, sound: Callable[[Scenario], Scenario], grid: Any, source: str,
+           engines: tuple[str, ...]) -> Sound | str | None:
+    """The campaign's model: None (the paper's rules), the sound model the options choose, or drawn with each
+    scenario (the hypothesis source without bounds options); bad input names the option, the value and why."""
+    from ci.crossval import DRAWN
+    from spec.engines import get_engine, load_engines
+    from spec.scenario import make_scenario
+
+    probe = sound(make_scenario(Lane.RIGHT, [], [], 0, grid=grid))  # the options on an empty road: their model
+    if name == "paper":
+        if probe.sound is not None:
+            raise OptionError("--bounds", probe.sound.bounds.name, "the bounds options choose the sound model: add "
+                                                                   "--model sound")
+        return None
+    for engine in engines:
+        if not get_engine(engine).sound:
+            able = ", ".join(e.name for e in load_engines().values() if e.sound) or "none"
+            raise OptionError("--engines", engine, f"engine {engine} answers the paper model only, not --model sound "
+                                                   f"(the sound model is answered by: {able})")
+    if probe.sound is not None:
+        if probe.sound.checks is not Checks.PHYSICAL:
+            raise OptionError("--model", name, "the identity check's cell rules are not a campaign's model")
+        return probe.sound
+    return DRAWN if source == "hypothesis" else Sound(profile(DEFAULT_PROFILE))
+
+
+def _describe(model: Sound | str | None) -> str:
+    if model is None:
+        return "the paper's rules"
+    return f"the sound model, bounds {model}" if isinstance(model, str) else model.describe()
 
 
 def _engines(text: str) -> tuple[str, ...]:

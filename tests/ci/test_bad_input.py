@@ -118,14 +118,21 @@ BAD_SPEEDS = ("9..5", "nan..9", "1..inf", "-1..3", "ten", "1..2..3", "..4", "")
 
 
 def sound(command: str) -> list[Case]:
+    """The sound model's options (``sound_options``), and a scenario file's bounds table gone wrong."""
+    return [*sound_options(command), *(Case((BASE[command][0], name, *BASE[command][2:]), key, ceiling=True)
+                                       for name, key in BOUNDS_FILES.items())]
+
+
+def sound_options(command: str, *extra: str) -> list[Case]:
     """The sound model's options: an unknown profile, speed intervals that are not intervals of finite speeds,
-    numbers out of range (a sensing error beyond the window), and a scenario file's bounds table gone wrong."""
-    return [*choices(command, "--bounds"), *numbers(command, "--sensing-error-m", "--av-speed-mps"),
-            *(_case(command, f"{option}={value}", named=option) for option in ("--same-mps", "--oncoming-mps")
+    numbers out of range (a sensing error beyond the window); ``extra`` arguments with each."""
+    return [*(_case(command, *extra, f"--bounds={value}", named="--bounds") for value in ("nosuch", "")),
+            *(_case(command, *extra, f"{option}={value}", named=option) for option in ("--sensing-error-m",
+                                                                                        "--av-speed-mps")
+              for value in NOT_NUMBERS),
+            *(_case(command, *extra, f"{option}={value}", named=option) for option in ("--same-mps", "--oncoming-mps")
               for value in BAD_SPEEDS),
-            _case(command, "--sensing-error-m=1001", named="--sensing-error-m"),
-            *(Case((BASE[command][0], name, *BASE[command][2:]), key, ceiling=True)
-              for name, key in BOUNDS_FILES.items())]
+            _case(command, *extra, "--sensing-error-m=1001", named="--sensing-error-m")]
 
 
 #: Scenario files whose ``bounds`` table is wrong, and the key each one's line must name.
@@ -274,6 +281,9 @@ CASES: list[Case] = [
                     "left=1@20..10,right=0@0..0", "left=5@0..50,right=5@0..50")),
     *schedulers("crossval"), *out_dirs("crossval"), *unknown("crossval"),
     no_spin("crossval", "--engines=interpreter,spin"),
+    *choices("crossval", "--model"), *sound_options("crossval", "--model=sound"),
+    _case("crossval", "--bounds=paper", named="--bounds"),  # the bounds choose the sound model: --model sound
+    _case("crossval", "--model=sound", "--coverage-target=grid", named="--coverage-target"),
     # the older conformance campaign
     *numbers("conform", "--timeout", "--cell-m"),
     *whole("conform", "--count", COUNT), *whole("conform", "--seed", SEED),
