@@ -1,12 +1,14 @@
 """Mutation check: does what CI runs catch each single-rule fault of ``ci.mutants``?
 
-Usage: python -m ci.mutation [--mutants a,b | --rotate K [--date YYYY-MM-DD]] [--out DIR] [--list]
+Usage: python -m ci.mutation [--mutants a,b | --rotate K [--date YYYY-MM-DD]] [--crossval-only] [--out DIR] [--list]
 
 Each mutant is applied to a scratch copy of the checkout (the files git tracks) and the
 detectors ``.ci/run`` runs are tried on it, cheapest first, until one fails: the tests of the
 mutated layer, ``crossval`` on the library, ``crossval`` on CI's exhaustive space, CI's
 hypothesis campaign on the 10.5 m grid (with its coverage target; the day's seed, as CI picks
-it), then the whole test suite. The report says which detector caught each mutant, after how many seconds,
+it), the same exhaustive space and 10.5 m hypothesis campaign under the sound model (``--model
+sound``), then the whole test suite (``--crossval-only``: the campaigns alone). The report says
+which detector caught each mutant, after how many seconds,
 and how small its reproducer is (vehicles and horizon of the shrunk scenario, or the first
 failing test). ``--rotate K`` checks K mutants chosen by the date (every mutant at least once
 in ``ceil(n / K)`` days: CI's daily share). Exit 0 when every mutant checked was caught, 6 when
@@ -79,8 +81,19 @@ DETECTORS: tuple[Detector, ...] = (
                                        "--cell-m", "10.5", "--properties", CI_FINE_PROPERTIES,
                                        "--coverage-target", "grid"),
              (ExitCode.DISAGREE, ExitCode.COVERAGE_MISSED), (("HYPOTHESIS_PROFILE", "ci"),)),
+    Detector("crossval sound exhaustive (CI's space)",
+             lambda m, work: _crossval(work / "sound-exhaustive", "--source", "exhaustive", "--space", CI_SPACE,
+                                       "--model", "sound"),
+             (ExitCode.DISAGREE,)),
+    Detector("crossval sound hypothesis 10.5 m (CI's)",
+             lambda m, work: _crossval(work / "sound-hypothesis-10.5m", "--source", "hypothesis", "--seed",
+                                       _ci_seed(), "--cell-m", "10.5", "--model", "sound", "--properties",
+                                       CI_FINE_PROPERTIES),
+             (ExitCode.DISAGREE,), (("HYPOTHESIS_PROFILE", "ci"),)),
     Detector("tests (all)", lambda m, work: _pytest("tests", SELF_CHECK), (1,)),
 )
+#: The detectors that are cross-validation campaigns (``--crossval-only``: what catches a mutant without the tests).
+CROSSVAL = tuple(d for d in DETECTORS if d.name.startswith("crossval"))
 
 
 @dataclass(slots=True)
@@ -119,7 +132,8 @@ def apply(m: Mutant, tree: Path) -> None:
     path.write_text(text.replace(m.old, m.new))
 
 
-def check(m: Mutant, cache: Path, on_detector: Callable[[str], None] | None = None) -> Verdict:
+def check(m: Mutant, cache: Path, on_detector: Callable[[str], None] | None = None,
+          detectors: tuple[Detector, ...] = DETECTORS) -> Verdict:
     """Apply ``m`` to a scratch copy and run the detectors until one catches it."""
     started = time.perf_counter()
     errors: list[str] = []
@@ -128,7 +142,7 @@ def check(m: Mutant, cache: Path, on_detector: Callable[[str], None] | None = No
         apply(m, tree)
         work = Path(scratch) / "work"
         env = {**os.environ, "PYTHONPATH": str(tree), "OVERTAKE_CACHE": str(cache), "HYPOTHESIS_PROFILE": "dev"}
-        for detector in DETECTORS:
+        for detector in detectors:
             if on_detector:
                 on_detector(detector.name)
             try:
@@ -167,7 +181,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--date", default=None, help="the rotation's date, YYYY-MM-DD (default: today, UTC)")
     parser.add_argument("--out", default="out/mutation")
     parser.add_argument("--list", action="store_true")
+    parser.add_argument("--crossval-only", action="store_true",
+                        help="only the cross-validation campaigns as detectors (does crossval alone catch each?)")
     args = parser.parse_args(argv)
+    detectors = CROSSVAL if args.crossval_only else DETECTORS
     try:
         chosen = _chosen(args)
     except SuiteError as error:
@@ -179,14 +196,15 @@ def main(argv: list[str] | None = None) -> int:
         return ExitCode.OK
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    print(f"mutation: {len(chosen)} of {len(MUTANTS)} mutants; detectors: {', '.join(d.name for d in DETECTORS)}",
+    print(f"mutation: {len(chosen)} of {len(MUTANTS)} mutants; detectors: {', '.join(d.name for d in detectors)}",
           file=sys.stderr)
     verdicts = []
     with tempfile.TemporaryDirectory(prefix="mutation-cache-") as cache:
         try:
             for n, m in enumerate(chosen, start=1):
                 print(f"mutation: [{n}/{len(chosen)}] {m.name}: {m.what}", file=sys.stderr)
-                verdict = check(m, Path(cache), lambda name: print(f"  trying {name} ...", file=sys.stderr))
+                verdict = check(m, Path(cache), lambda name: print(f"  trying {name} ...", file=sys.stderr),
+                                detectors)
                 verdicts.append(verdict)
                 print(f"  -> {verdict.caught_by or 'SURVIVED'} after {verdict.seconds:.0f} s {verdict.reproducer}",
                       file=sys.stderr)
