@@ -1,4 +1,6 @@
-"""The Spin engine, registered once: compile-once planning with Spin's DFS (sensible) and BFS (shortest)."""
+"""The Spin engine, registered once: compile-once planning with Spin's DFS (sensible) and BFS (shortest), for the
+paper's model and for the sound model (``promela.sound``: its physical checks; the identity check's paper cell rules,
+``Checks.PAPER_CELLS``, are the interpreter's only and an engine error here)."""
 
 from __future__ import annotations
 
@@ -15,4 +17,4 @@ def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult
 
 SPIN = register(Engine("spin", (Strategy.SENSIBLE, Strategy.SHORTEST), _solve,
                        "Spin model checker, verifier compiled once per model and cached",
-                       check_tools=runner.check_tools))
+                       check_tools=runner.check_tools, sound=True))

@@ -44,6 +44,7 @@ from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
+from promela import sound as sound_model
 from promela.render import ENV_VAR, Shape, render, render_for, scenario_values, shape_of
 from spec.actions import Action
 from spec.answers import SearchResult, Status, Strategy
@@ -106,14 +107,18 @@ def cache_dir() -> Path:
     return Path(base) / "overtake"
 
 
-def verifier(shape: Shape, strategy: Strategy) -> Verifier:
+def verifier(shape: Shape | sound_model.SoundShape, strategy: Strategy) -> Verifier:
     """The compiled verifier for ``shape``: from the cache, or compiled once and cached.
 
     The key hashes the rendered template (which holds every rule and number of the shape's
-    model, goal and grid), the grid itself, the compiler flags and the tool versions."""
-    source = render(shape)
+    model, goal and grid), the grid itself, the compiler flags and the tool versions; for the
+    sound model also the sound model in full (``SoundShape.key_text``: bounds, safety, tracking,
+    start speed, minimal-risk manoeuvre), whose hash is in the shape's name too."""
+    source = sound_model.render(shape) if isinstance(shape, sound_model.SoundShape) else render(shape)
     flags = _flags(strategy)
     key_text = [source, f"cell_m={shape.grid.cell_m}", " ".join(flags), tool_versions(), _server_source()]
+    if isinstance(shape, sound_model.SoundShape):
+        key_text.append(shape.key_text())
     key = hashlib.sha256("\n".join(key_text).encode()).hexdigest()[:24]
     target = cache_dir() / f"pan-{shape.name}-{strategy.value}-{key}"
     if _healthy(target):
@@ -192,7 +197,8 @@ def _compile(folder: Path, source: str, flags: list[str], serve: bool = False) -
 def search(problem: Problem, strategy: Strategy, timeout_s: float | None = None,
            serve: bool = True) -> SearchResult:
     """Compile-once planning: the cached verifier, the scenario injected through the environment; by its server
-    (``serve``), else a pan process per run.
+    (``serve``), else a pan process per run. A scenario with a sound model is searched in the sound model's
+    verifier (``promela.sound``), the others in the paper model's.
 
     A cached verifier that will not start or answers nonsense is rebuilt once; if the rebuilt one
     fails too, the engine error names the cache to clear. Without a time limit pan gets
@@ -200,8 +206,9 @@ def search(problem: Problem, strategy: Strategy, timeout_s: float | None = None,
     check_tools()
     started = time.perf_counter()
     limit = DEFAULT_TIMEOUT_S if timeout_s is None else timeout_s
+    shape = shape_of(problem) if problem.scenario.sound is None else sound_model.shape_of(problem)
     for attempt in (1, 2):
-        built = verifier(shape_of(problem), strategy)
+        built = verifier(shape, strategy)
         try:
             return _search_with(built, problem, limit, started, serve)
         except (EngineError, OSError) as err:
@@ -239,7 +246,11 @@ def _search_with(built: Verifier, problem: Problem, timeout_s: float, started: f
 
 
 def search_compiling(problem: Problem, strategy: Strategy, timeout_s: float | None = None) -> SearchResult:
-    """The paper's pipeline: write the scenario into the model, spin -a, gcc, pan, replay with spin -t."""
+    """The paper's pipeline: write the scenario into the model, spin -a, gcc, pan, replay with spin -t. The paper
+    model's only: the sound model's C code is run by pan alone (``spin -t`` cannot replay it)."""
+    if problem.scenario.sound is not None:
+        raise EngineError("the compile-every-time pipeline answers the paper model only; the sound model is searched "
+                          "by its compiled verifier (runner.search)")
     check_tools()
     started = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="overtake-spin-") as work:

@@ -34,7 +34,7 @@ from spec.engines import check_strategy, get_engine, load_engines
 from spec.errors import ActionError, ExitCode, OptionError
 from spec.files import scenario_to_dict
 from spec.models import ModelChoice, ModelKind, models_for
-from spec.scenario import Scenario, problem_for
+from spec.scenario import Problem, Scenario, problem_for
 from spec.sound import Violation, sound_to_table
 
 if TYPE_CHECKING:
@@ -161,12 +161,23 @@ def promela(file: str, model: str | None, horizon: int | None, cell_m: float | N
     else:  # the model `plan` would answer with: the first of the pipeline with a plan (the interpreter: milliseconds)
         answer = run_plan(scenario, horizon=horizon)
         kind = answer.model if answer.status is Status.PLAN and answer.model else models_for(scenario.model)[0]
-    text = render_for(problem_for(scenario, kind, horizon))
+    problem = problem_for(scenario, kind, horizon)
+    text = render_for(problem) if scenario.sound is None else _sound_promela(problem)
     if target:
         target.write_text(text)
         click.echo(f"wrote {out} ({kind.value} model)")
     else:
         click.echo(text, nl=False)
+
+
+def _sound_promela(problem: Problem) -> str:
+    """The sound model's Promela for ``problem``: its verifier reads the scenario when it starts (the line to run it
+    with heads the file)."""
+    from promela.render import ENV_VAR, scenario_values
+    from promela.sound import render, shape_of
+
+    run = f'{ENV_VAR}="{scenario_values(problem)}" ./pan -E'
+    return f"/* the sound model: spin -a FILE; gcc -DSAFETY -o pan pan.c; {run} */\n" + render(shape_of(problem))
 
 
 @click.command()
