@@ -521,10 +521,15 @@ SOLVERS = {Strategy.SHORTEST: shortest, Strategy.OPTIMAL: optimal}
 
 
 def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult:
-    """shortest: incremental bounds; optimal: lexicographic tightening. sensible is left to the search engines.
+    """shortest: incremental bounds; optimal: lexicographic tightening. sensible is left to the search engines. A
+    scenario with a sound model goes to ``oracle.bmc_sound``.
     Z3 refusing a call because the context was interrupted (an interrupt that lands between checks) is an interrupt
     too, never an engine failure."""
     try:
+        if problem.scenario.sound is not None:
+            from oracle import bmc_sound  # it builds on this module's solvers: imported when first needed
+
+            return bmc_sound.SOLVERS[strategy](problem, limits)
         return SOLVERS[strategy](problem, limits)
     except z3.Z3Exception as err:
         if _cancelled(str(err)):
@@ -533,4 +538,5 @@ def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult
 
 
 Z3 = register(Engine("z3", tuple(SOLVERS), _solve,
-                     "Z3 bounded model checking: shortest lengths, optimal plans, proofs within the horizon"))
+                     "Z3 bounded model checking: shortest lengths, optimal plans, proofs within the horizon",
+                     sound=True))
