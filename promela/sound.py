@@ -32,6 +32,7 @@ stores its answer in the C global ``sound_ok`` and the ``c_expr`` reads it.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import math
 import re
@@ -508,8 +509,10 @@ def _option(action: Action, grid: Grid, table: SoundTable) -> str:
             f"       fi }}")
 
 
+@functools.lru_cache(maxsize=64)
 def render(shape: SoundShape) -> str:
-    """The sound model's Promela+C model of ``shape``, the scenario injected at run time."""
+    """The sound model's Promela+C model of ``shape``, the scenario injected at run time (rendered once per shape: the
+    verifier's cache key hashes it on every search)."""
     table = sound_table(shape.sound, shape.grid)
     rules, goal, grid = shape.rules, shape.goal, shape.grid
     start = "" if shape.sound.start_mps is None else f", measured start speed {shape.sound.start_mps:g} m/s"
