@@ -38,10 +38,16 @@ the shape; a condition on an infinite end is folded to true or false here, never
 
 A plan ends where ``done`` holds (the goal at the continuation window's boundary, and the
 continuation safe: its window, then its end) and nowhere before. ``shortest`` adds one step at a
-time and asks whether ``done`` holds at step k and at no earlier step; ``optimal`` unrolls to the
-horizon with a symbolic length and minimises ``spec.cost`` term by term (``oracle.bmc``'s
-procedures, on this encoding). The identity check's scenarios (``Checks.PAPER_CELLS``) are the
-interpreter's alone: refused here with an ``EngineError``.
+time and asks whether ``done`` holds at step k and at no earlier step (each step's transition
+under a literal assumed for the bound asked, so a plan is never asked to go on past its end); it
+proves "no plan of any length" as the interpreter does, when no path of m actions avoids the goal
+(``_shortest``). ``optimal`` takes whether a plan exists, and its fewest actions, from
+``shortest``, then unrolls to the horizon with a symbolic length and minimises ``spec.cost`` term
+by term (``oracle.bmc``'s procedures, on this encoding). Two rewritings keep the solver's work
+small and change no condition: the pieces of a stretch refuse intervals of one term per vehicle,
+merged before they reach Z3 (``_union``, ``_strongest``), and every unrolled state states its lane
+from the parity of its lane changes (``Unrolling.lanes``). The identity check's scenarios
+(``Checks.PAPER_CELLS``) are the interpreter's alone: refused here with an ``EngineError``.
 """
 
 from __future__ import annotations
@@ -51,7 +57,7 @@ import time
 from collections import OrderedDict
 from collections.abc import Callable, Hashable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TypeAlias, TypeVar
 
 import z3
@@ -114,6 +120,24 @@ def _not(part: Cond) -> Cond:
 
 def _term(part: Cond) -> z3.BoolRef:
     return z3.BoolVal(part) if isinstance(part, bool) else part
+
+
+def _union(spans: Sequence[tuple[float, float]]) -> list[tuple[float, float]]:
+    """The union of half-open intervals ``[lo, hi)`` (empty ones left out), as disjoint ones in order."""
+    out: list[tuple[float, float]] = []
+    for lo, hi in sorted(s for s in spans if s[0] < s[1]):
+        if out and lo <= out[-1][1]:
+            out[-1] = (out[-1][0], max(out[-1][1], hi))
+        else:
+            out.append((lo, hi))
+    return out
+
+
+def _strongest(pieces: Sequence[tuple[float, float]]) -> list[tuple[float, float]]:
+    """The (need, line) pairs no other pair implies: a condition ``x >= need or y <= line`` follows from one with a
+    need at least as large and a line at least as low."""
+    return [p for i, p in enumerate(pieces)
+            if not any(q[0] >= p[0] and q[1] <= p[1] and (q != p or j < i) for j, q in enumerate(pieces) if j != i)]
 
 
 @dataclass(frozen=True, slots=True)
@@ -290,12 +314,19 @@ class SoundEncoding:
 
     def _held(self, v: Interval, at: Instant, frame: Frame) -> Cond:
         """Held to AHEAD at ``at``: every position clear ahead, ``lo + low t - L >= x + e_x``."""
-        return self._atom(v.lo, self.low, frame, ">=", at.x_m + self.ex + self.length_m - self.low * at.t_s)
+        return self._atom(v.lo, self.low, frame, ">=", self._held_from(at))
+
+    def _held_from(self, at: Instant) -> float:
+        """The least ``lo`` (moved to the window's place) of a vehicle held to AHEAD at ``at``."""
+        return at.x_m + self.ex + self.length_m - self.low * at.t_s
 
     def _passed(self, v: Interval, at: Instant, frame: Frame) -> Cond:
         """An oncoming vehicle certainly past the AV at ``at``: ``hi - low_o t + L <= x - e_x - EPS_M``."""
-        return self._atom(v.hi, -self.low_o, frame, "<=",
-                          at.x_m - self.ex - EPS_M - self.length_m + self.low_o * at.t_s)
+        return self._atom(v.hi, -self.low_o, frame, "<=", self._passed_from(at))
+
+    def _passed_from(self, at: Instant) -> float:
+        """The most ``hi`` (moved to the window's place) of an oncoming vehicle certainly past the AV at ``at``."""
+        return at.x_m - self.ex - EPS_M - self.length_m + self.low_o * at.t_s
 
     def _ahead_need(self, at: Instant) -> float:
         """The least ``lo`` (moved to the window's place) a vehicle held to AHEAD needs at ``at``."""
@@ -316,24 +347,27 @@ class SoundEncoding:
         return out
 
     def _ahead(self, s: Stretch, frame: Frame, follows: Sequence[Cond]) -> list[Cond]:
-        out: list[Cond] = []
+        """AHEAD: a vehicle not a follower, held ahead at a piece's start and short of the gap at its worst instant.
+        Both are bounds on the same term (``lo + low dt - dx``), so each piece refuses an interval of it; their
+        union, merged, is what the stretch refuses (fewer atoms, the same condition)."""
+        refused = []
         for b in s.pieces:
             need = self._ahead_need(b.ahead) + EPS_M
-            for v, follower in zip(self.same, follows, strict=True):
-                refused = self._atom(v.lo, self.low, frame, "<", need)
-                out.append(_not(_and(refused, _not(follower), self._held(v, b.start, frame))))
-        return out
+            refused.append((self._held_from(b.start), need))
+        return [_or(follower, self._atom(v.lo, self.low, frame, "<", lo), self._atom(v.lo, self.low, frame, ">=", hi))
+                for lo, hi in _union(refused) for v, follower in zip(self.same, follows, strict=True)]
 
     def _oncoming(self, s: Stretch, frame: Frame) -> list[Cond]:
-        out: list[Cond] = []
+        """ONCOMING: a vehicle not passed at a piece's start and short of the gap at its worst instant. A piece whose
+        need is no larger and whose passing line no lower than another's asks nothing more: left out."""
+        pieces = []
         for b in s.pieces:
             at = b.oncoming
             need = at.x_m + self.ex + self.length_m + self.gap(at.v_mps + self.ev + self.high_o) + EPS_M \
                 + self.high_o * at.t_s
-            for v in self.oncoming:
-                refused = self._atom(v.lo, -self.high_o, frame, "<", need)
-                out.append(_not(_and(refused, _not(self._passed(v, b.start, frame)))))
-        return out
+            pieces.append((need, self._passed_from(b.start)))
+        return [_or(self._atom(v.lo, -self.high_o, frame, ">=", need), self._atom(v.hi, -self.low_o, frame, "<=", line))
+                for need, line in _strongest(pieces) for v in self.oncoming]
 
     def _entering(self, s: Stretch, frame: Frame) -> list[Cond]:
         """Each same-direction vehicle certainly ahead at every piece, or certainly behind at every piece (at the
@@ -460,10 +494,17 @@ class SoundEncoding:
         default = table.start_speed if action is None else table.action_speed[action]
         before = z3.If(s.last != NO_SPEED, s.last, z3.If(s.first != NO_SPEED, s.first, default))
         frame = self._frame(s)
+        shapes: dict[tuple[int, Lane], dict[Lane | None, Window]] = {}
         for (speed, act, lane, moved), window in table.relative.items():
             if act is action:
-                guard = _all([later, before == speed, s.right == (lane is Lane.RIGHT), s.moved == MOVED[moved]])
-                out.append((guard, window, frame, lane))
+                shapes.setdefault((speed, lane), {})[moved] = window
+        for (speed, lane), by_move in shapes.items():
+            common = [later, before == speed, s.right == (lane is Lane.RIGHT)]
+            if len(set(by_move.values())) == 1:  # the move before does not change this shape: one candidate
+                out.append((_all(common), next(iter(by_move.values())), frame, lane))
+                continue
+            for moved, window in by_move.items():
+                out.append((_all([*common, s.moved == MOVED[moved]]), window, frame, lane))
         return out
 
     # -- the transition system --------------------------------------------------------------------------------
@@ -528,9 +569,19 @@ class Unrolling:
         units = [grid.units(a) for a in ACTION_ORDER]
         advance = [grid.units(a) - grid.left_shift(a) for a in ACTION_ORDER]
         speeds = len(self.enc.table.speeds_mps)
-        return z3.And(s.lc >= 0, s.lc <= self.enc.problem.rules.max_lane_changes,
-                      s.t >= min(units) * k, s.t <= max(units) * k, s.d >= min(advance) * k, s.d <= max(advance) * k,
-                      s.first >= 0, s.first < speeds, s.last >= 0, s.last < speeds, s.moved >= 0, s.moved <= 2)
+        return z3.And(self.lanes(k), s.t >= min(units) * k, s.t <= max(units) * k, s.d >= min(advance) * k,
+                      s.d <= max(advance) * k, s.first >= 0, s.first < speeds, s.last >= 0, s.last < speeds,
+                      s.moved >= 0, s.moved <= 2)
+
+    def lanes(self, k: int) -> z3.BoolRef:
+        """The lane after k actions (or, in a bounded unrolling, after k steps, the plan's end repeated): the start's
+        after an even number of lane changes, the other after an odd one; the lane changes a whole number within
+        the model's limit. Implied by the rules; without it, a proof that no plan does with fewer lane changes
+        (every plan from the right lane needs one) takes the solver hundreds of milliseconds."""
+        s, most = self.steps[k], self.enc.problem.rules.max_lane_changes
+        odd = _any([s.lc == n for n in range(1, most + 1, 2)]) if most >= 1 else z3.BoolVal(False)
+        starts_right = self.enc.problem.scenario.lane is Lane.RIGHT
+        return z3.And(_any([s.lc == n for n in range(most + 1)]), s.right == (z3.Not(odd) if starts_right else odd))
 
     def advance(self) -> tuple[SoundStep, z3.ArithRef, SoundStep]:
         """Add the variables of one more decision step: the state it starts from, its action, the state it ends in."""
@@ -612,23 +663,34 @@ class Kept(bmc.Kept):
 
 class Shortest(Kept, bmc.Shortest):
     """``shortest``'s solver: the unrolling grows one step at a time; ``reached[k]`` equals ``done`` after k
-    actions (``goal_before`` is ``oracle.bmc.Shortest``'s)."""
+    actions. Step j's transition holds only under its literal ``live[j - 1]``, assumed for the steps of the bound
+    asked: a plan of k actions is never asked to go on past k (a state where it may end need have no safe
+    successor), however deep an earlier problem unrolled the kept solver."""
 
     def __init__(self, problem: Problem) -> None:
         super().__init__(problem)
         self.add(self.sound_enc.initial)
         self.reached: list[z3.BoolRef] = []
+        self.live: list[z3.BoolRef] = []
         self.last_bound: int | None = None
+        self.last_proved = False  # whether the last problem's answer was no plan (its bound: where paths ended)
 
     def goal(self, k: int) -> z3.BoolRef:
         enc = self.unrolling
         while len(self.reached) <= k:
             if self.reached:
-                self.add(enc.extend(), enc.bounds(len(self.reached)))
+                live = z3.Bool(f"live_{len(self.reached)}")
+                self.add(z3.Implies(live, enc.extend()), enc.bounds(len(self.reached)))
+                self.live.append(live)
             literal = z3.Bool(f"done_{len(self.reached)}")
             self.add(literal == enc.done_at(len(self.reached)))
             self.reached.append(literal)
         return self.reached[k]
+
+    def steps(self, k: int) -> list[z3.BoolRef]:
+        """The literals that make the first k steps transitions."""
+        self.goal(k)
+        return self.live[:k]
 
 
 class Optimal(Kept, bmc.Optimal):
@@ -663,7 +725,7 @@ def bounded(unrolling: Unrolling) -> tuple[z3.ArithRef, list[z3.BoolRef], dict[s
     for k in range(horizon):
         a, action_var, b = unrolling.advance()
         substitute = Substitution([(k_var, z3.IntVal(k)), (action, action_var), *_pairs(here, a), *_pairs(after, b)])
-        constraints.append(substitute(move))
+        constraints += [substitute(move), unrolling.lanes(k + 1)]
         for name, condition in counts.items():
             literal = z3.Bool(f"{name}_{k + 1}")
             constraints.append(literal == substitute(condition))
@@ -699,8 +761,21 @@ def _refused_start(kept: Kept, scenario: Scenario) -> SearchResult | None:
 
 
 def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
-    """The smallest k at which ``done`` holds (and at no earlier step), incrementally, or a proof that none does up
-    to the horizon; the warm start of ``oracle.bmc.shortest``."""
+    """``_shortest``, its answer kept for ``optimal``."""
+    return _remember(problem, _shortest(problem, limits))
+
+
+def _shortest(problem: Problem, limits: Limits | None) -> SearchResult:
+    """The smallest k at which ``done`` holds (and at no earlier step), incrementally; the warm start of
+    ``oracle.bmc.shortest``.
+
+    "No plan" is proved as the interpreter proves it, when every path ends before the horizon: no path of m actions
+    on which ``done`` held at no earlier step exists, so no plan of any length does (a longer plan would begin with
+    one). The dead-state prune (``SoundEncoding._hopeless``) ends the paths that can never reach the goal, as it
+    does the interpreter's. That check is asked after bounds 0, 1, 3, 7, ... (m a power of two), after the warm
+    start's guess when the last problem had no plan, and after the horizon: whatever was asked before, the answer is
+    "no plan" exactly when no such path of horizon + 1 actions exists. A warm start's guess after "no plan" is the m
+    that proved it."""
     started = time.perf_counter()
     horizon, scenario = problem.horizon, problem.scenario
     with _solver_for(Shortest, problem) as kept:
@@ -708,54 +783,103 @@ def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
         if refused is not None:
             return refused
         fixed, not_before, start = kept.fixing(scenario), list[z3.BoolRef](), 0
+
+        def no_path(m: int) -> SearchResult | None:
+            """"No plan" if no path of m actions avoids the goal before its end; "incomplete" if Z3 gave up."""
+            verdict = kept.check(limits, started, *fixed, *kept.steps(m), *not_before)
+            if verdict == z3.unknown:
+                return SearchResult(Status.INCOMPLETE, (), m, f"z3: {kept.solver.reason_unknown()} on the paths of "
+                                    f"{m} actions")
+            if verdict == z3.sat:
+                return None
+            kept.last_bound, kept.last_proved = m, True
+            return SearchResult(Status.NO_PLAN, (), m, f"proved: no plan of any length (no path of {m} action(s) "
+                                "avoids the goal before its end, and no bound below is satisfiable)")
+
         guess = None if kept.last_bound is None else min(kept.last_bound, horizon + 1)
         if guess is not None and guess > 1:
-            verdict = kept.check(limits, started, *fixed, kept.goal_before(guess))
+            verdict = kept.check(limits, started, *fixed, *kept.steps(guess - 1), kept.goal_before(guess))
             if verdict == z3.unknown:
                 return SearchResult(Status.INCOMPLETE, (), 0, f"z3: {kept.solver.reason_unknown()} below bound {guess}")
             if verdict == z3.unsat:
                 start, not_before = guess, [z3.Not(kept.goal(k)) for k in range(guess)]
+                proved = no_path(guess) if kept.last_proved else None  # after a plan, its bound comes first
+                if proved is not None:
+                    return proved
         for k in range(start, horizon + 1):
             reached = kept.goal(k)
-            verdict = kept.check(limits, started, *fixed, *not_before, reached)
+            verdict = kept.check(limits, started, *fixed, *kept.steps(k), *not_before, reached)
             if verdict == z3.sat:
-                kept.last_bound = k
+                kept.last_bound, kept.last_proved = k, False
                 actions, states = kept.unrolling.decode(kept.checked_model(), k, scenario)
                 return SearchResult(Status.PLAN, actions, k + 1, f"shortest: bound {k} satisfiable", states)
             if verdict == z3.unknown:
                 return SearchResult(Status.INCOMPLETE, (), k, f"z3: {kept.solver.reason_unknown()} at bound {k}")
             not_before.append(z3.Not(reached))
-        kept.last_bound = horizon + 1
+            if k == horizon or (k + 1) & k == 0:
+                proved = no_path(k + 1)
+                if proved is not None:
+                    return proved
+        kept.last_bound, kept.last_proved = horizon + 1, True
     return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), horizon + 1,
                         f"proved: every bound up to {horizon} is unsatisfiable")
 
 
+#: The last answers of ``shortest`` (a few problems: a pipeline's stages, a campaign's runs of one scenario).
+_SHORTEST: OrderedDict[Problem, SearchResult] = OrderedDict()
+
+
+def _remember(problem: Problem, found: SearchResult) -> SearchResult:
+    """Keep ``shortest``'s answer on ``problem`` for ``optimal`` (an incomplete one is never kept)."""
+    if found.status is not Status.INCOMPLETE:
+        _SHORTEST[problem] = found
+        while len(_SHORTEST) > 16:
+            _SHORTEST.popitem(last=False)
+    return found
+
+
+def _shortest_answer(problem: Problem, limits: Limits | None) -> SearchResult:
+    """``shortest``'s answer on ``problem``: the one it last gave, or a new one."""
+    found = _SHORTEST.get(problem)
+    return found if found is not None else shortest(problem, limits)
+
+
 def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
     """The plan of least cost (COST_DOC) among all plans of at most ``horizon`` actions: ``oracle.bmc.optimal``'s
-    lexicographic bisection with its warm start, on this encoding."""
+    lexicographic bisection with its warm start, on this encoding.
+
+    Whether a plan exists at all, and the fewest actions one takes, is ``shortest``'s answer on this encoding (its
+    proofs of no plan are far cheaper than one check of the whole unrolling)."""
     started = time.perf_counter()
     scenario = problem.scenario
+    least = _shortest_answer(problem, limits)
+    if least.status is not Status.PLAN:
+        return replace(least, detail=f"shortest (no plan to optimise): {least.detail}")
+    limits = None if limits is None else limits.remaining(started, time.perf_counter())
+    started = time.perf_counter()
     with _solver_for(Optimal, problem) as kept:
-        refused = _refused_start(kept, scenario)
-        if refused is not None:
-            return refused
-        solver, terms, assumed = kept.solver, kept.terms, kept.fixing(scenario)
+        solver, terms = kept.solver, kept.terms
+        assumed = kept.fixing(scenario)
         guess, model, checks = kept.last_cost, None, 0
-        if guess is not None:
+        if guess is not None:  # the last problem's least cost (often this one's too)
             verdict, checks = kept.check(limits, started, *assumed, *kept.costing(guess)), 1
             if verdict == z3.unknown:
                 return bmc._gave_up(solver, checks)
             model = kept.checked_model() if verdict == z3.sat else None
-        if model is None:
-            verdict, checks = kept.check(limits, started, *assumed), checks + 1
-            if verdict == z3.unsat:
-                return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), checks,
-                                    f"proved: no plan of at most {problem.horizon} actions")
+        if model is None:  # the shortest plan, its actions fixed: a check that propagates, never searches
+            plan = [kept.literal(var == ACTION_ORDER.index(action))
+                    for var, action in zip(kept.unrolling.actions, least.actions, strict=False)]
+            verdict, checks = kept.check(limits, started, *assumed, *plan,
+                                         kept.literal(kept.length == len(least.actions))), checks + 1
             if verdict == z3.unknown:
                 return bmc._gave_up(solver, checks)
+            if verdict == z3.unsat:
+                raise EngineError(f"z3: the shortest plan {[a.value for a in least.actions]} is no plan of the "
+                                  "bounded unrolling (the two unrollings of the sound model disagree)")
             model = kept.checked_model()
+        floors = {"length": len(least.actions)}  # no plan is shorter than the shortest: proved, not asked again
         for index, name in enumerate(COST_TERMS):
-            floor, best = 0, _value(model, terms[name])
+            floor, best = floors.get(name, 0), _value(model, terms[name])
             tries = [] if guess is None else [guess[index], guess[index] - 1]
             while floor < best:
                 middle = next((t for t in tries if floor <= t < best), (floor + best) // 2)
