@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import datetime
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -30,7 +31,8 @@ def test_there_are_mutants_in_every_engine_spec_the_discretiser_and_the_simulato
     files = {m.path for m in MUTANTS}
     assert len(MUTANTS) >= 15 and len({m.name for m in MUTANTS}) == len(MUTANTS)
     for needed in ("promela/render.py", "oracle/bmc.py", "oracle/interpreter.py", "spec/models.py", "spec/cells.py",
-                   "sim/simulator.py", "sim/traffic.py", "sim/tolerance.py"):
+                   "sim/simulator.py", "sim/traffic.py", "sim/tolerance.py", "promela/sound.py", "oracle/bmc_sound.py",
+                   "spec/sound.py"):
         assert needed in files
 
 
@@ -40,6 +42,13 @@ def test_the_rotation_reaches_every_mutant_within_its_days(per_day: int) -> None
     start = datetime.date(2026, 11, 23)
     seen = {m.name for d in range(days) for m in rotation(per_day, start + datetime.timedelta(days=d))}
     assert seen == {m.name for m in MUTANTS}
+
+
+def test_cis_daily_share_reaches_every_mutant_within_a_week() -> None:
+    """``.ci/run`` checks ``--rotate K`` mutants a day: K must grow with the mutants so that a week sees them all."""
+    found = re.search(r"ci\.mutation --rotate (\d+)", (ROOT / ".ci" / "run").read_text())
+    assert found is not None
+    assert math.ceil(len(MUTANTS) / int(found.group(1))) <= 7
 
 
 def test_bad_mutation_input_is_exit_two(capsys: pytest.CaptureFixture[str]) -> None:
