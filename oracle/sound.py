@@ -14,7 +14,7 @@ from __future__ import annotations
 import heapq
 import time
 from collections import OrderedDict, deque
-from collections.abc import Hashable, Iterator, Sequence
+from collections.abc import Callable, Hashable, Iterator, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Protocol
@@ -47,6 +47,7 @@ class Rules(Protocol):
     def continuation_violation(self, state: SoundState) -> Refusal | None: ...
     def goal_holds(self, state: SoundState, goal: GoalRule) -> bool: ...
     def hopeless(self, state: SoundState, goal: GoalRule) -> bool: ...
+    def beyond_reach(self, state: SoundState, goal: GoalRule, actions_left: int) -> bool: ...
 
 
 @lru_cache(maxsize=64)  # a few problems at a time (a pipeline's stages); a campaign must not keep every one
@@ -122,6 +123,9 @@ class PaperCells:
     def hopeless(self, state: SoundState, goal: GoalRule) -> bool:
         return False
 
+    def beyond_reach(self, state: SoundState, goal: GoalRule, actions_left: int) -> bool:
+        return False
+
 
 def start(problem: Problem) -> SoundState:
     """The sound model's initial state."""
@@ -173,15 +177,24 @@ class _Search:
                                      if disabled_guard(State(lane, (), (), lc, 0), a, problem.rules) is None]
                         for lane in Lane for lc in range(problem.rules.max_lane_changes + 1)}
 
-    def successors(self, state: SoundState) -> Iterator[tuple[Action, SoundState]]:
+    def successors(self, state: SoundState, cut: Callable[[SoundState], None] | None = None) -> Iterator[
+            tuple[Action, SoundState]]:
+        """The states each enabled, safe action leads to, but those from which the goal can never hold and those from
+        which it cannot hold within the horizon (unless it holds there); ``cut`` hears of the latter (a proof of "no
+        plan of any length" counts them as reaching the horizon)."""
         if state.steps >= self.horizon:
             return
-        rules = self.rules
+        rules, goal = self.rules, self.goal
         for action in self.enabled[state.lane, state.lane_changes]:
             if rules.step_violation(state, action) is None:
                 nxt = rules.after(state, action)
-                if not rules.hopeless(nxt, self.goal):
-                    yield action, nxt
+                if rules.hopeless(nxt, goal):
+                    continue
+                if rules.beyond_reach(nxt, goal, self.horizon - nxt.steps) and not self.done(nxt):
+                    if cut is not None:
+                        cut(nxt)
+                    continue
+                yield action, nxt
 
     def done(self, state: SoundState) -> bool:
         return self.rules.goal_holds(state, self.goal) and self.rules.continuation_violation(state) is None
@@ -273,7 +286,12 @@ def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
         if state.steps >= problem.horizon:
             moves[key(state)] = [key(state)]  # cut by the horizon, not refused: stands for a path that goes on
         out = moves.setdefault(key(state), [])
-        for action, nxt in search.successors(state):
+
+        def cut(nxt: SoundState, out: list[Hashable] = out) -> None:  # stands for a path that reaches the horizon
+            out.append(key(nxt))
+            moves.setdefault(key(nxt), [key(nxt)])
+
+        for action, nxt in search.successors(state, cut):
             out.append(key(nxt))
             if key(nxt) in seen:
                 continue

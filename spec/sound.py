@@ -283,6 +283,12 @@ class SoundRules:
         #: slower action starts half a ramp early): a lower bound on where the AV is at a boundary, whatever follows.
         self.dip_m = max((v1 - v2) * ramp_s(v1, v2) / 8 for v1 in self.speeds.values() for v2 in self.speeds.values()
                          if v1 > v2)
+        #: The most the AV's nominal advance can gain on a same-direction vehicle at its highest speed in one action,
+        #: and the most the first ramp can add to it (``beyond_reach``).
+        high = sound.bounds.same_mps.high_mps
+        self.gain_per_action_m = max((grid.units(a) - grid.left_shift(a)) * self.cell_m
+                                     - high * grid.units(a) * self.unit_s for a in Action)
+        self.first_ramp_m = {v: abs(ramp_gain_m(self.start_mps, v)) for v in self.speeds.values()}
         self._steps: dict[tuple[tuple[object, ...], Action], Violation | None] = {}
         self._relative = _shapes(sound, grid)
         self._start_followers: frozenset[int] | None = None
@@ -580,6 +586,28 @@ class SoundRules:
                 return False
         return not (goal.oncoming_passed and any(
             not self.passed(v, x_m, t_s) for v in self.oncoming if v.index is not None))
+
+    def beyond_reach(self, state: SoundState, goal: GoalRule, actions_left: int) -> bool:
+        """Whether ``goal`` cannot hold within ``actions_left`` more actions after ``state`` (guards and safety
+        ignored): a target it leaves behind, or the nearest target it must come near, is farther ahead of the AV's
+        reference than the AV can gain on its fastest position in that many actions (``gain_per_action_m`` each,
+        plus what the first ramp can still add).
+
+        Sound for a search bounded by the horizon only: a search that proves "no plan of any length" counts such a
+        state as cut by the horizon, never as refused (``oracle.sound.shortest``)."""
+        if not self.targets or not (goal.targets_behind or goal.nearest_target_m is not None):
+            return False
+        t_s = state.t_units * self.unit_s
+        x_m = self.reference(state, None).position_m(t_s)
+        ramp = max(self.first_ramp_m.values()) if state.first_mps is None else self.first_ramp_m[state.first_mps]
+        most = max(0.0, self.gain_per_action_m) * actions_left + ramp
+        ex, length = self.sound.tracking.position_m, self.sound.safety.vehicle_length_m
+        if goal.targets_behind and any(self.same_high(self.sensed_same[i], t_s) + length + ex - x_m > most + EPS_M
+                                       for i in self.targets):
+            return True  # a target's fastest position still ahead of where it must be behind the AV
+        nearest = self.sensed_same[self.targets[0]]
+        return goal.nearest_target_m is not None and \
+            self.same_high(nearest, t_s) - (x_m - ex) - length - float(goal.nearest_target_m) > most + EPS_M
 
     def hopeless(self, state: SoundState, goal: GoalRule) -> bool:
         """Whether ``goal`` can hold neither in ``state`` nor in any state after it, so a search need not go on.

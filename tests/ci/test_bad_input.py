@@ -231,7 +231,7 @@ CASES: list[Case] = [
     _case("plan", "--engine=z3", "--strategy=sensible", named="--strategy"),
     no_spin("plan", "--engine=spin"), no_spin("plan", "--engine=all"),
     *unknown("plan"), *scenario_files("plan"),
-    *sound("plan"), _case("plan", "--bounds=default", "--engine=z3", "--strategy=shortest", named="--bounds"),
+    *sound("plan"), _case("plan", "--bounds=default", "--engine=z3", "--strategy=sensible", named="--strategy"),
     # validate
     *numbers("validate", "--cell-m"), *whole("validate", "--horizon", HORIZON), *choices("validate", "--model"),
     *(_case("validate", f"--actions={value}", named="--actions") for value in ("fly", ",,", "drive,,drive", ",drive")),

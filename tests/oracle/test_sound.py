@@ -18,6 +18,7 @@ from spec.actions import Action
 from spec.answers import Limits, Status, Strategy
 from spec.assumptions import Bounds, SpeedBounds, profile
 from spec.cost import COST_TERMS, action_cost
+from spec.engines import check_model, load_engines
 from spec.errors import OptionError, ScenarioError
 from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
@@ -256,12 +257,18 @@ def test_the_search_limit_makes_it_incomplete() -> None:
     assert answer.status is Status.INCOMPLETE
 
 
-@pytest.mark.parametrize("engine", ["spin", "z3"])
-def test_engines_without_the_sound_model_refuse_it_naming_both(engine: str) -> None:
+def test_every_registered_engine_answers_the_sound_model() -> None:
+    assert sorted(name for name, engine in load_engines().items() if engine.sound) == sorted(load_engines())
+
+
+def test_an_engine_without_the_sound_model_is_refused_naming_both() -> None:
     builtin = next(b for b in BUILTINS if b.name == "one_target")
     scenario = replace(builtin.load(), sound=Sound(profile("default")))
-    with pytest.raises(OptionError, match=f"engine {engine} answers the paper model only"):
-        solve(scenario, Strategy.SHORTEST, engine=engine)
+    paper_only = replace(load_engines()["interpreter"], name="paper-only", sound=False)
+    with pytest.raises(OptionError, match="engine paper-only answers the paper model only") as refused:
+        check_model(paper_only, scenario)
+    able = str(refused.value).split("the sound model is answered by: ")[1]
+    assert sorted(able.split(", ")) == sorted(load_engines())  # in the order they were loaded
 
 
 def test_a_plan_that_ends_in_the_right_lane_with_phantoms_has_no_safe_continuation() -> None:
