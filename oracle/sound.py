@@ -147,6 +147,25 @@ def done(problem: Problem, state: SoundState) -> bool:
     return rules.goal_holds(state, problem.goal) and rules.continuation_violation(state) is None
 
 
+#: The steps that keep the AV in the left lane without an overtake, in the order they are tried (``keep_lane``).
+KEEP_LANE: tuple[Action, ...] = (Action.DRIVE, Action.BRAKE)
+
+
+def keep_lane(problem: Problem) -> Action | None:
+    """The first step of ``KEEP_LANE`` that is safe from the start, its last state safe for ever (what the AV does
+    when the sound model has no overtake, or none yet); None when the AV is not in the left lane, the start itself
+    is unsafe, or no step is: the assumptions no longer give the AV a safe way on."""
+    state = start(problem)
+    rules = rules_for(problem)
+    if state.lane is not Lane.LEFT or rules.start_violation(state) is not None:
+        return None
+    for action in KEEP_LANE:
+        after = step(problem, state, action)
+        if isinstance(after, SoundState) and rules.continuation_violation(after) is None:
+            return action
+    return None
+
+
 def display(problem: Problem, state: SoundState) -> State:
     """The paper-style state shown for a sound state: every vehicle where the common speed puts its cell (the sound
     model's sets are wider; traces show the cells for reading, and ``oracle.reach`` checks the sets)."""

@@ -35,15 +35,20 @@ class Executor:
     def __init__(self, scene: Scene, car: WheeledCar, lane: Lane, grid: Grid) -> None:
         self.scene, self.car, self.lane, self.grid = scene, car, lane, grid
         self.x_ref_m = car.pose().x_m
+        self.v_ref_mps = 0.0  # the reference speed of the control step under way
+        self.lane_due: Lane | None = lane  # the lane the car must be wholly in now (None: a sideways move under way)
+        self.cut_short = False  # the last ``run`` ended early, when its ``stop`` said so
         self.dt_s = scene.dt_s * LOOP.control_every_steps
 
     def reset_reference(self, ahead_m: float = 0.0) -> None:
         """Start the position reference ``ahead_m`` in front of the car: where the new plan's frame puts it."""
         self.x_ref_m = self.car.pose().x_m + ahead_m
 
-    def run(self, action: Action, tick: Callable[[float], bool], profile: SpeedProfile | None = None) -> bool:
+    def run(self, action: Action, tick: Callable[[float], bool], profile: SpeedProfile | None = None,
+            stop: Callable[[], bool] | None = None) -> bool:
         """Execute ``action`` for its duration along ``profile`` (default: its speed throughout); False as soon
-        as ``tick`` reports a collision."""
+        as ``tick`` reports a collision. ``stop`` is asked after every control step once any sideways move is over;
+        when it says so the action ends there (``cut_short``), the AV in the action's lane."""
         rule = ACTION_RULES[action]
         if rule.from_lane is not None and rule.from_lane is not self.lane:
             raise EngineError(f"simulator: {action.value} asked of an AV in the {self.lane.value} lane "
@@ -56,23 +61,30 @@ class Executor:
         duration_s = float(rule.duration_s)
         steps = max(1, round(duration_s / self.dt_s))
         lateral_s = min(duration_s, LOOP.lane_change_lateral_s)
+        self.cut_short = False
         for k in range(steps):
             phase = min(1.0, (k + 1) * self.dt_s / lateral_s)
             y_ref = y_from + (y_to - y_from) * (1 - math.cos(math.pi * phase)) / 2
             vy_ref = (y_to - y_from) * math.pi * math.sin(math.pi * phase) / (2 * lateral_s)
+            self.lane_due = to_lane if phase >= 1 else None
             if not self.control(profile.at(k * self.dt_s), y_ref, vy_ref, tick):
                 return False
+            if stop is not None and phase >= 1 and stop():
+                self.cut_short = True
+                break
         self.lane = to_lane
         return True
 
     def hold(self, seconds: float, speed_mps: float, tick: Callable[[float], bool]) -> bool:
         """Keep the lane at ``speed_mps`` for ``seconds`` (start-up, or waiting without a plan)."""
         y_ref = self.scene.lane_y(self.lane)
+        self.lane_due = self.lane
         return all(self.control(speed_mps, y_ref, 0.0, tick) for _ in range(max(1, round(seconds / self.dt_s))))
 
     def control(self, speed_mps: float, y_ref: float, vy_ref: float, tick: Callable[[float], bool]) -> bool:
         pose = self.car.pose()
         self.x_ref_m += speed_mps * self.dt_s
+        self.v_ref_mps = speed_mps
         command = speed_mps + K_X * (self.x_ref_m - pose.x_m)
         command = max(0.0, min(MAX_SPEED_FACTOR * self.grid.speed, command))
         v = max(pose.speed_mps, 1.0)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -25,12 +25,14 @@ from sim.sensors import NoisySensor, RaySensor, Reading, SensorModel
 from sim.traffic import FollowingTraffic, PaperTraffic, SpreadTraffic, TrafficModel
 from sim.vehicle import WheeledCar
 from spec.answers import Answer, Strategy
-from spec.engines import Engine, check_strategy, get_engine, parse_strategy
+from spec.assumptions import Bounds, world_bounds
+from spec.engines import Engine, check_strategy, get_engine, load_engines, parse_strategy
 from spec.errors import OptionError, check_number
 from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
 from spec.physical import EVENTS, LOOP, MAX_STOP_RATE_PER_H, NOISE, EventSpec, NoiseSpec
 from spec.scenario import Scenario
+from spec.sound import Sound
 
 TrafficFactory = Callable[[Scene, np.random.Generator, float], TrafficModel]
 SensorFactory = Callable[[Scene, np.random.Generator], SensorModel]
@@ -39,6 +41,9 @@ SensorFactory = Callable[[Scene, np.random.Generator], SensorModel]
 TRAFFIC_MODELS: dict[str, TrafficFactory] = {"paper": PaperTraffic, "spread": SpreadTraffic,
                                              "following": FollowingTraffic}
 SENSOR_MODELS: dict[str, SensorFactory] = {"exact": RaySensor, "noisy": NoisySensor}
+#: The models a drive can plan with: the paper's rules, or the sound model under the world's bounds.
+PLANNING_MODELS: dict[str, str] = {"paper": "the paper's rules (cells, the common speed)",
+                                   "sound": "the sound model under the world's bounds (spec.assumptions.world_bounds)"}
 
 
 def check_name(option: str, name: str, known: dict[str, Any]) -> None:
@@ -49,19 +54,29 @@ def check_name(option: str, name: str, known: dict[str, Any]) -> None:
 
 @dataclass(frozen=True)
 class Planner:
-    """The planner a simulator consults: an engine, a strategy and the grid the snapshot is cut into."""
+    """The planner a simulator consults: an engine, a strategy, the grid the snapshot is cut into, and the sound
+    model's assumptions (None: the paper's rules)."""
 
     engine: Engine
     strategy: Strategy = Strategy.SENSIBLE
     grid: Grid = PAPER_GRID
+    sound: Sound | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "strategy", parse_strategy(self.strategy))
         check_strategy(self.engine, self.strategy)
+        if self.sound is not None and not self.engine.sound:
+            able = ", ".join(e.name for e in load_engines().values() if e.sound)
+            raise OptionError("--engine", self.engine.name, f"answers the paper model only, not --model sound "
+                              f"(the sound model is answered by: {able})")
 
-    def scenario(self, readings: tuple[Reading, ...], lane: Lane) -> Scenario:
-        """The snapshot as a scenario on this planner's grid (ScenarioError when it is inconsistent)."""
-        return discretise(readings, lane, self.grid)
+    def scenario(self, readings: tuple[Reading, ...], lane: Lane, speed_mps: float | None = None) -> Scenario:
+        """The snapshot as a scenario on this planner's grid (ScenarioError when it is inconsistent); under the
+        sound model, with the AV's measured speed as the plan's start."""
+        scenario = discretise(readings, lane, self.grid)
+        if self.sound is None:
+            return scenario
+        return replace(scenario, sound=replace(self.sound, start_mps=speed_mps))
 
     def plan(self, scenario: Scenario) -> Answer:
         return plan(scenario, self.strategy, engine=self.engine)
@@ -77,6 +92,7 @@ class Parts:
     traffic: TrafficFactory = PaperTraffic
     sensor: SensorFactory = RaySensor
     observers: tuple[Observer, ...] = field(default=())
+    bounds: Bounds | None = None  # the assumptions containment is measured against (None: not measured)
 
 
 @dataclass(frozen=True, slots=True)
@@ -100,17 +116,21 @@ class DriveConfig:
     snapshots: int = 0  # scenarios kept per run (every 10th plan's), to replay with every engine
     restart_after_collision: bool = False  # go on from a fresh start after a collision (the audit) or stop (default)
     opportunity_checks: int = 0  # decisions without an overtake replayed in physics per run (``sim.opportunity``)
+    model: str = "paper"  # which model decides: the paper's rules, or the sound model under ``bounds``
+    bounds_scale: float = 1.0  # the world's bounds' widths times this (``spec.assumptions.world_bounds``)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "strategy", parse_strategy(self.strategy))
         check_name("--traffic", self.traffic, TRAFFIC_MODELS)
         check_name("--sensor", self.sensor, SENSOR_MODELS)
+        check_name("--model", self.model, PLANNING_MODELS)
         grid_for(self.cell_m)
         for option, value, high in (("--km", self.km, math.inf), ("--stop-rate-per-h", self.stop_rate_per_h,
                                                                       MAX_STOP_RATE_PER_H),
                                     ("--min-spawn-gap-m", self.min_spawn_gap_m, math.inf),
                                     ("--range-sd-m", self.range_sd_m, math.inf), ("--miss-rate", self.miss_rate, 1.0)):
             check_number(option, value, high)
+        world_bounds(self.traffic, self.sensor, self.range_sd_m, self.bounds_scale)  # checked here, not in a worker
 
     @property
     def events(self) -> EventSpec:
@@ -124,15 +144,22 @@ class DriveConfig:
     def grid(self) -> Grid:
         return grid_for(self.cell_m)
 
+    @property
+    def bounds(self) -> Bounds:
+        """The assumptions of this world, by the rule stated once (``world_bounds``): the sound model plans under
+        them, and containment is measured against them under either model."""
+        return world_bounds(self.traffic, self.sensor, self.range_sd_m, self.bounds_scale)
+
     def parts(self, observers: tuple[Observer, ...] = ()) -> Parts:
         """The assembly this configuration names."""
-        planner = Planner(get_engine(self.engine), self.strategy, self.grid)
+        sound = Sound(self.bounds) if self.model == "sound" else None
+        planner = Planner(get_engine(self.engine), self.strategy, self.grid, sound)
         traffic, sensor = TRAFFIC_MODELS[self.traffic], SENSOR_MODELS[self.sensor]
         if self.traffic != "paper":
             traffic = functools.partial(traffic, events=self.events)  # type: ignore[call-arg]
         if self.sensor != "exact":
             sensor = functools.partial(sensor, noise=self.noise)  # type: ignore[call-arg]
-        return Parts(planner, traffic=traffic, sensor=sensor, observers=observers)
+        return Parts(planner, traffic=traffic, sensor=sensor, observers=observers, bounds=self.bounds)
 
     def to_json(self) -> dict[str, Any]:
         """The configuration as records keep it; event and noise parameters only where the models use them, so that
@@ -142,7 +169,8 @@ class DriveConfig:
             del data["stop_rate_per_h"], data["min_spawn_gap_m"]
         if self.sensor == "exact":
             del data["range_sd_m"], data["miss_rate"]
-        for key, default in (("restart_after_collision", False), ("opportunity_checks", 0)):
+        for key, default in (("restart_after_collision", False), ("opportunity_checks", 0), ("model", "paper"),
+                             ("bounds_scale", 1.0)):
             if data[key] == default:  # records written before these existed stay the same campaign
                 del data[key]
         return data
@@ -156,7 +184,7 @@ class DriveConfig:
                 "stop_rate_per_h": self.stop_rate_per_h, "min_spawn_gap_m": self.min_spawn_gap_m,
                 "range_sd_m": self.range_sd_m, "miss_rate": self.miss_rate, "snapshots": self.snapshots,
                 "restart_after_collision": self.restart_after_collision,
-                "opportunity_checks": self.opportunity_checks}
+                "opportunity_checks": self.opportunity_checks, "model": self.model, "bounds_scale": self.bounds_scale}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> DriveConfig:

@@ -43,6 +43,8 @@ class Encounter:
     gap_m: float  # the smallest true gap during the event
     ttc_s: float  # the smallest time to collision during the event (inf: never closing)
     implied_gap_m: float | None  # the gap the plan's cells implied when the event started
+    #: inside the drive's assumptions or after one broke (``sim.containment``), when the event started; None: no bounds
+    assumptions: str | None = None
 
     def to_json(self) -> dict[str, Any]:
         data = asdict(self)
@@ -67,6 +69,12 @@ class SafetyReport:
     near_misses: int = 0
     contacts: int = 0
     encounters: list[Encounter] = field(default_factory=list)  # the first MAX_RECORDS of them
+    #: exact counts of near misses and contacts by attribution: "near_miss inside", "contact after", ...
+    attributed: dict[str, int] = field(default_factory=dict)
+
+    def count(self, kind: str, inside: bool) -> int:
+        """Near misses or contacts (``kind``) inside the assumptions, or after one broke."""
+        return self.attributed.get(f"{kind} {'inside' if inside else 'after'}", 0)
 
     def to_json(self) -> dict[str, Any]:
         def num(v: float) -> float | None:
@@ -75,7 +83,8 @@ class SafetyReport:
         return {"min_gap_left_m": num(self.min_gap_left_m), "min_ttc_left_s": num(self.min_ttc_left_s),
                 "min_gap_oncoming_m": num(self.min_gap_oncoming_m),
                 "min_ttc_oncoming_s": num(self.min_ttc_oncoming_s), "near_misses": self.near_misses,
-                "contacts": self.contacts, "encounters": [e.to_json() for e in self.encounters]}
+                "contacts": self.contacts, "encounters": [e.to_json() for e in self.encounters],
+                "attributed": self.attributed}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> SafetyReport:
@@ -84,7 +93,7 @@ class SafetyReport:
 
         return cls(num(data["min_gap_left_m"]), num(data["min_ttc_left_s"]), num(data["min_gap_oncoming_m"]),
                    num(data["min_ttc_oncoming_s"]), data["near_misses"], data["contacts"],
-                   [Encounter.from_json(e) for e in data["encounters"]])
+                   [Encounter.from_json(e) for e in data["encounters"]], dict(data.get("attributed", {})))
 
 
 def ahead_in_lane(pose: Pose, lane: Lane, left: Sequence[KinematicCar],
@@ -110,7 +119,8 @@ class SafetyMonitor:
         self._open.clear()
 
     def observe(self, pose: Pose, lane: Lane, left: Sequence[KinematicCar], oncoming: Sequence[KinematicCar],
-                km: float, t_s: float, doing: str, implied_gap_m: Callable[[int], float | None]) -> None:
+                km: float, t_s: float, doing: str, implied_gap_m: Callable[[int], float | None],
+                assumptions: Callable[[int], str | None] = lambda body: None) -> None:
         car, gap, closing = ahead_in_lane(pose, lane, left, oncoming)
         ttc = gap / closing if closing > 0 and gap > 0 else (0.0 if gap <= 0 else math.inf)
         r = self.report
@@ -126,23 +136,26 @@ class SafetyMonitor:
         event = self._open.get(car.body)
         if event is None:
             event = Encounter("near_miss", round(km, 3), round(t_s, 1), _lane_name(lane), RULE[lane], doing, gap,
-                              ttc, implied_gap_m(car.body))
+                              ttc, implied_gap_m(car.body), assumptions(car.body))
             self._open[car.body] = event
             r.near_misses += 1
             self._keep(event)
         event.gap_m, event.ttc_s = min(event.gap_m, gap), min(event.ttc_s, ttc)
 
     def contact(self, car: KinematicCar, lane: Lane, pose: Pose, km: float, t_s: float, doing: str,
-                implied_gap_m: float | None) -> Encounter:
-        """A collision with ``car`` (in ``lane``): recorded with the gap its cells implied."""
+                implied_gap_m: float | None, assumptions: str | None = None) -> Encounter:
+        """A collision with ``car`` (in ``lane``): recorded with the gap its cells implied and its attribution."""
         gap = abs(car.x_m - pose.x_m) - CAR.length_m
         event = Encounter("contact", round(km, 3), round(t_s, 1), _lane_name(lane), RULE[lane], doing, gap, 0.0,
-                          implied_gap_m)
+                          implied_gap_m, assumptions)
         self.report.contacts += 1
         self._keep(event)
         return event
 
     def _keep(self, event: Encounter) -> None:
+        if event.assumptions is not None:
+            key = f"{event.kind} {'inside' if event.assumptions.startswith('inside') else 'after'}"
+            self.report.attributed[key] = self.report.attributed.get(key, 0) + 1
         if len(self.report.encounters) < MAX_RECORDS:
             self.report.encounters.append(event)
 

@@ -22,26 +22,31 @@ from pathlib import Path
 
 import numpy as np
 
+from oracle.sound import keep_lane
 from sim import opportunity
-from sim.discretiser import in_window, reading_cell
+from sim.containment import Containment
+from sim.discretiser import discretise, in_window, reading_cell
 from sim.executor import Executor
 from sim.observers import StepEvent, TraceWriter
 from sim.parts import DriveConfig, Parts
 from sim.safety import SafetyMonitor
-from sim.sensors import Reading, in_range
-from sim.summary import Failure, RunSummary
+from sim.sensors import RaySensor, Reading, in_range
+from sim.summary import Failure, RunSummary, Takeover
 from sim.tolerance import ToleranceReport, Violation
-from sim.vehicle import first_contact
+from sim.vehicle import KinematicCar, Pose, first_contact
 from spec.actions import Action
 from spec.answers import Answer, Status
+from spec.envelope import MINIMAL_RISK
 from spec.errors import ScenarioError
 from spec.files import scenario_to_dict
 from spec.kinds import FailureKind
 from spec.lanes import Lane
 from spec.models import ModelKind
-from spec.motion import action_speed_mps, plan_profiles, ramp_gain_m, reference_offset_m
+from spec.motion import SpeedProfile, action_speed_mps, plan_profiles, ramp_gain_m, reference_offset_m
 from spec.physical import CAR, LOOP
-from spec.scenario import Scenario
+from spec.safety import SAFETY
+from spec.scenario import Scenario, problem_for
+from spec.sound import Sound
 from spec.state import State
 
 RECENTRE_M = 1000.0
@@ -72,6 +77,8 @@ class Simulator:
         self.parts = parts
         self.planner, self.observers = parts.planner, parts.observers
         self.grid = parts.planner.grid
+        self.sound = parts.planner.sound  # None: the paper model decides (and containment is only measured)
+        self.watch = None if parts.bounds is None else Sound(parts.bounds)  # the sets containment is measured against
         self.summary = RunSummary(seed, tolerance=tolerance or ToleranceReport())
         self.safety = SafetyMonitor()
         self.summary.safety = self.safety.report
@@ -90,6 +97,13 @@ class Simulator:
         self.pending: tuple[Action, ...] = ()  # the rest of the plan under way when a re-plan starts
         self.doing = "start-up"  # what the AV was executing: recorded with every collision
         self._side = {car.body: car.x_m > 0 for car in self.traffic.left}
+        self.visible = RaySensor(self.scene, self.sensor_rng)  # exact rays, no draws: is a vehicle sensed now?
+        self.containment: Containment | None = None  # the sets of the decision under way
+        self.enveloped = False  # a sound decision's action is under way: the AV is held to its envelope
+        self.interrupt = False  # a breach asks the sound model's decision under way to end
+        self.breached_before: set[int] = set()  # vehicles that broke the previous decision's assumptions
+        self.takeover: Takeover | None = None  # the fallback's take-over under way
+        self.proved: Containment | None = None  # the containment of the last sound decision that was executed
 
     # -- the physics clock ------------------------------------------------------------------
     def _tick(self, dt_s: float) -> bool:
@@ -98,16 +112,21 @@ class Simulator:
         pose = self.car.pose()
         self.traffic.advance(dt_s, pose)
         x = pose.x_m
+        if self.containment is not None:
+            self._contain(pose, dt_s)
         self.safety.observe(pose, Executor.lane_of(pose.y_m), self.traffic.left, self.traffic.oncoming,
-                            self.summary.km, self.summary.sim_time_s, self.doing, self._implied.get)
+                            self.summary.km, self.summary.sim_time_s, self.doing, self._implied.get, self._attribution)
         car = first_contact(self.scene, self.car.body, self.traffic.cars())
         if car is not None:
             in_left = car in self.traffic.left
             self.safety.contact(car, Lane.LEFT if in_left else Lane.RIGHT, pose, self.summary.km,
-                                self.summary.sim_time_s, self.doing, self._implied.get(car.body))
+                                self.summary.sim_time_s, self.doing, self._implied.get(car.body),
+                                self._attribution(car.body))
             lane = "left-lane" if in_left else "oncoming"
             self._fail(FailureKind.COLLISION, f"collision with a{'n' if lane == 'oncoming' else ''} {lane} vehicle",
                        f"{car.x_m - x:+.1f} m ahead, during {self.doing}")
+            if self.takeover is not None:
+                self.takeover.outcome = "collision"
             return False
         for car in self.traffic.left:
             ahead = car.x_m > x
@@ -121,12 +140,71 @@ class Simulator:
             self.car.shift_x(-x)
             self.traffic.shift_x(-x)
             self.executor.x_ref_m -= x
+            if self.containment is not None:
+                self.containment.shift_x(-x)
             x = 0.0  # the car is now at the origin
         self.summary.km = self.origin_km + x / 1000
         if self.report and self.summary.km >= self._next_report_km:
             self.report((self.summary.seed, self.summary.km))
             self._next_report_km = int(self.summary.km) + 1
         return True
+
+    # -- containment (``sim.containment``) --------------------------------------------------------------------
+    def _watch(self, readings: tuple[Reading, ...], pose_x_m: float, lane: Lane) -> None:
+        """Containment from this snapshot on, against the drive's bounds (a snapshot that makes no scenario: none)."""
+        self.breached_before = {body for body, b in (self.containment.breached.items() if self.containment else ())
+                                if body != -1 and b.kind.ends_decision}
+        self.containment, self.interrupt = None, False
+        if self.watch is None:
+            return
+        try:
+            scenario = discretise(readings, lane, self.grid)
+        except ScenarioError:
+            return
+        self.summary.decisions += 1
+        self.containment = Containment(self.summary.decisions, self.watch, scenario, readings, self.grid, pose_x_m,
+                                       self.summary.sim_time_s, self.traffic.cars())
+
+    def _contain(self, pose: Pose, dt_s: float) -> None:
+        """One control step's containment check; under the sound model a breach by a vehicle (or of the AV's
+        envelope) ends the decision under way."""
+        c, report = self.containment, self.summary.containment
+        assert c is not None
+        report.checked_s += dt_s
+        if c.world_breached():
+            report.breached_s += dt_s
+        t, km = self.summary.sim_time_s, self.summary.km
+        found = c.check(t, km, pose, self.traffic.left, self.traffic.oncoming, self.doing, self._sensed)
+        if self.enveloped:
+            av = c.check_av(t, km, pose, self.executor.x_ref_m, self.executor.v_ref_mps, self.executor.lane_due,
+                            self.doing)
+            found += [av] if av is not None else []
+        for breach in found:
+            report.add(breach)
+        if any(b.kind.ends_decision for b in found) and self.sound is not None and self.takeover is None:
+            self.interrupt = True
+
+    def _sensed(self, car: KinematicCar) -> bool:
+        """Whether ``car`` is sensed now (exact rays, whatever the drive's sensor model: a vehicle the sensors could
+        report, so a decision could know it)."""
+        pose = self.car.pose()
+        truth = in_range(pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming)
+        return any(r.body == car.body for r in self.visible.read(truth))
+
+    def _attribution(self, body: int) -> str | None:
+        """Whether an encounter with ``body`` happened inside the assumptions (no breach by it under the decision
+        under way; the AV's own envelope breach counts as inside) or after one broke; None without bounds."""
+        if self.takeover is not None:
+            return (f"{'after an assumption broke' if self.takeover.after_breach else 'inside the assumptions'}: "
+                    f"fallback since {self.takeover.t_s:.1f} s ({self.takeover.cause})")
+        c = self.containment
+        if c is None:
+            return None if self.watch is None else "after an assumption broke: no scenario from the snapshot"
+        breach = c.breached.get(body)
+        if breach is None or breach.kind.inside:
+            return "inside the assumptions"
+        return (f"after an assumption broke: {breach.kind.value} by {breach.by_m:.1f} m, "
+                f"{self.summary.sim_time_s - breach.t_s:.1f} s before")
 
     def _event(self, kind: FailureKind, cause: str, detail: str) -> Failure:
         """A failure record stamped with where and when the drive is now."""
@@ -211,24 +289,23 @@ class Simulator:
         return replace(answer, elapsed_ms=both_ms), seen, scenario, common
 
     def _one_plan(self) -> bool:
+        if self.sound is not None:
+            return self._sound_decision()
         pending, self.pending = self.pending, ()
         pose = self.car.pose()
         lane = Executor.lane_of(pose.y_m)
         self.executor.lane = lane
+        readings = self._sense()
+        self._watch(readings, pose.x_m, lane)
         try:
-            answer, seen, scenario, frame_mps = self._decide(self._sense(), pose.speed_mps, lane)
+            answer, seen, scenario, frame_mps = self._decide(readings, pose.speed_mps, lane)
         except ScenarioError as err:
             if pending:
                 return self._keep(pending, FailureKind.SENSING, err.reason, str(err))
             self._fail(FailureKind.SENSING, err.reason, str(err))
             self.doing = "waiting after a sensing failure"
             return self.executor.hold(LOOP.wait_s, self.grid.speed, self._tick)
-        self.summary.plans += 1
-        self.summary.plan_ms.append(answer.elapsed_ms)
-        if lane is Lane.LEFT:
-            self._opportunity(answer, scenario)
-        if len(self.summary.snapshots) < self.snapshots and self.summary.plans % SNAPSHOT_EVERY == 1:
-            self.summary.snapshots.append(scenario_to_dict(scenario))
+        self._planned(answer, scenario, lane)
         if answer.status is not Status.PLAN and pending:
             return self._keep(pending, FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
         if answer.status is not Status.PLAN:
@@ -241,6 +318,155 @@ class Simulator:
             profile = plan_profiles((Action.DRIVE,), pose.speed_mps, self.grid)[0]
             return self.executor.run(Action.DRIVE, self._tick, profile)
         return self._execute(answer.actions, answer.states, seen, pose.speed_mps, frame_mps)
+
+    def _planned(self, answer: Answer, scenario: Scenario, lane: Lane) -> None:
+        """Count a plan, its latency and (in the AV's lane) its missed opportunity; keep every SNAPSHOT_EVERY-th
+        scenario."""
+        self.summary.plans += 1
+        self.summary.plan_ms.append(answer.elapsed_ms)
+        if lane is Lane.LEFT:
+            self._opportunity(answer, scenario)
+        if len(self.summary.snapshots) < self.snapshots and self.summary.plans % SNAPSHOT_EVERY == 1:
+            self.summary.snapshots.append(scenario_to_dict(scenario))
+
+    # -- the sound model's decisions ----------------------------------------------------------------------------
+    def _sound_decision(self) -> bool:
+        """One decision of the sound model from a fresh snapshot (the AV's measured speed is the plan's start): a
+        plan, executed while containment holds; without one, a safe step in lane (``oracle.sound.keep_lane``);
+        without that, the fallback (``spec.envelope.MinimalRisk``)."""
+        pose = self.car.pose()
+        lane = Executor.lane_of(pose.y_m)
+        self.executor.lane = lane
+        readings = self._sense()
+        self._watch(readings, pose.x_m, lane)
+        if self.containment is not None:
+            self._contain(pose, 0.0)  # the snapshot itself: sensed farther off than the error bound, or unknown
+        try:
+            scenario = self.planner.scenario(readings, lane, pose.speed_mps)
+        except ScenarioError as err:
+            self._fail(FailureKind.SENSING, err.reason, str(err))
+            return self._fallback(f"sensing: {err.reason}")
+        answer = self.planner.plan(scenario)
+        self._planned(answer, scenario, lane)
+        if answer.status is Status.PLAN and answer.actions:
+            return self._sound_execute(answer.actions, readings, pose.speed_mps, f"plan {self.summary.plans}")
+        if answer.status not in (Status.PLAN, *NO_OVERTAKE):
+            self._fail(FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
+        step = keep_lane(problem_for(scenario, ModelKind.FINAL))
+        if step is not None:
+            self.summary.keep_lane_steps += 1
+            return self._sound_execute((step,), readings, pose.speed_mps, f"keeping the lane ({answer.status.value})")
+        if self.proved is not None and not self.proved.world_breached():
+            return self._keep_proved(answer.status.value)
+        return self._fallback(f"{answer.status.value}, and no safe step in lane")
+
+    def _keep_proved(self, why: str) -> bool:
+        """No plan and no step from the fresh snapshot (its cells may be coarser than what the last decision knew),
+        while the last decision's assumptions still hold: go on with what that decision proved, under its
+        containment: the rest of its plan, or, after its end, its minimal-risk manoeuvre."""
+        assert self.proved is not None
+        self.containment, self.interrupt = self.proved, False
+        self.summary.kept_plans.append(self._event(FailureKind.PLANNER, why, "kept the last decision's proof"))
+        pending, self.pending = self.pending, ()
+        if pending:
+            return self._sound_execute(pending, (), self.car.pose().speed_mps, "the last plan, kept")
+        self.summary.minimal_risk_steps += 1
+        self.doing = f"minimal-risk manoeuvre (the last decision's, {why})"
+        self.enveloped = True
+        try:
+            return self._brake_in_lane(emergency=False)
+        finally:
+            self.enveloped = False
+
+    def _sound_execute(self, actions: tuple[Action, ...], readings: tuple[Reading, ...], speed_mps: float,
+                       what: str) -> bool:
+        """Execute a sound decision's actions from the car's own speed (its reference starts at the car), while
+        containment holds; a breach ends it at once (after any sideways move), and a vehicle that broke the previous
+        decision's assumptions and breaks this one's too hands the AV to the fallback."""
+        self._hand_back()
+        self.proved = self.containment
+        self.executor.reset_reference()
+        known = {r.body for r in readings} if readings else {r.body for r in self._sense()}
+        # a breach at the snapshot itself (sensed farther off than the error bound, a vehicle it missed): no step
+        executed = () if self.interrupt else actions[: LOOP.replan_after_actions]
+        self.pending = actions[len(executed):]
+        self.enveloped = True
+        try:
+            profiles = plan_profiles(executed, speed_mps, self.grid, to_common=False)
+            for k, (action, profile) in enumerate(zip(executed, profiles)):
+                self.doing = f"{action.value} ({what}, step {k + 1} of {len(actions)})"
+                self.pending = actions[k + 1:]
+                if not self.executor.run(action, self._tick, profile, stop=lambda: self.interrupt):
+                    return False
+                self.summary.actions += 1
+                if self.interrupt:
+                    break
+                if {r.body for r in self._sense()} - known:
+                    self.summary.replans += 1
+                    return True
+        finally:
+            self.enveloped = False
+        if not self.interrupt:
+            return True
+        self.summary.breach_replans += 1
+        assert self.containment is not None
+        again = [b for body, b in self.containment.breached.items()
+                 if body in self.breached_before and b.kind.ends_decision]
+        if again:
+            return self._fallback(f"{again[0].vehicle} broke the assumptions of two decisions running "
+                                  f"({again[0].kind.value})")
+        return True
+
+    def _fallback(self, cause: str) -> bool:
+        """The minimal-risk manoeuvre takes over for ``MINIMAL_RISK.takeover_s``: back to the left lane from the
+        right one, then brake in lane to the hold speed, and towards a standstill while the sensed vehicle ahead is
+        nearer than the safety specification allows (closing at the AV's whole speed: it may stand)."""
+        pose = self.car.pose()
+        if self.takeover is not None and self.takeover.outcome == "under way":
+            self.takeover.outcome = "taken over again"
+        broke = bool(self.breached_before) or (self.containment is not None and self.containment.world_breached())
+        self.takeover = Takeover(round(self.summary.km, 3), round(self.summary.sim_time_s, 1), cause,
+                                 Executor.lane_of(pose.y_m).value, broke)
+        self.summary.takeovers.append(self.takeover)
+        self.doing = f"fallback ({cause})"
+        if Executor.lane_of(pose.y_m) is Lane.RIGHT:
+            self.executor.reset_reference()
+            if not self.executor.run(Action.LEFT_LANE_CHANGE, self._tick, SpeedProfile(pose.speed_mps, ())):
+                return False
+        self.pending, self.proved = (), None
+        return self._brake_in_lane(emergency=True)
+
+    def _brake_in_lane(self, emergency: bool) -> bool:
+        """The minimal-risk manoeuvre for ``MINIMAL_RISK.takeover_s``: brake in lane to the hold speed; with
+        ``emergency`` (the fallback), towards a standstill while the sensed vehicle ahead is nearer than the safety
+        specification allows (closing at the AV's whole speed: it may stand). Without it (a proved continuation), a
+        breach ends it at once."""
+        mr = MINIMAL_RISK
+        assert self.watch is not None
+        hold = mr.hold_mps(self.car.pose().speed_mps, self.watch.bounds.same_mps.low_mps, self.watch.tracking)
+        command = self.car.pose().speed_mps
+        y_ref = self.scene.lane_y(self.executor.lane)
+        self.executor.lane_due = self.executor.lane
+        for _ in range(max(1, round(mr.takeover_s / self.executor.dt_s))):
+            target, decel = hold, mr.decel_mps2
+            if emergency:
+                ahead = [r.dx_m for r in self._sense() if r.lane is Lane.LEFT and r.dx_m > 0]
+                if ahead and SAFETY.violated(min(ahead) - CAR.length_m, self.car.pose().speed_mps):
+                    target, decel = 0.0, mr.emergency_decel_mps2
+            command = max(target, command - decel * self.executor.dt_s) if command > target else command
+            self.executor.reset_reference()
+            if not self.executor.control(command, y_ref, 0.0, self._tick):
+                return False
+            if not emergency and self.interrupt:
+                break
+        return True
+
+    def _hand_back(self) -> None:
+        """A decision found a plan or a safe step: the take-over under way (if any) ends here."""
+        if self.takeover is not None:
+            if self.takeover.outcome == "under way":
+                self.takeover.outcome = "handed back"
+            self.takeover = None
 
     def _opportunity(self, answer: Answer, scenario: Scenario) -> None:
         """A decision in the AV's own lane: when the planner does not start an overtake with a target in sight, count

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from sim.containment import ContainmentReport
 from sim.opportunity import OpportunityReport
 from sim.safety import SafetyReport
 from sim.tolerance import ToleranceReport
@@ -26,6 +27,18 @@ class Failure:
     detail: str
     km: float
     t_s: float
+
+
+@dataclass(slots=True)
+class Takeover:
+    """One take-over of the fallback (``spec.envelope.MinimalRisk``): where, why, from which lane, how it ended."""
+
+    km: float
+    t_s: float
+    cause: str
+    lane: str
+    after_breach: bool  # a vehicle had broken the assumptions of the decision before it
+    outcome: str = "under way"  # "handed back", "taken over again", "collision"
 
 
 @dataclass(slots=True)
@@ -50,6 +63,12 @@ class RunSummary:
     snapshots: list[dict[str, Any]] = field(default_factory=list)  # scenarios planned for, as files write them
     restarts: int = 0  # fresh starts after a collision (``restart_after_collision``)
     opportunities: OpportunityReport = field(default_factory=OpportunityReport)
+    decisions: int = 0  # snapshots containment was measured from (every decision, both models)
+    containment: ContainmentReport = field(default_factory=ContainmentReport)
+    breach_replans: int = 0  # sound decisions ended by a breach
+    keep_lane_steps: int = 0  # sound decisions without an overtake: one safe step in lane
+    minimal_risk_steps: int = 0  # sound decisions without a plan or a step: the last decision's proved continuation
+    takeovers: list[Takeover] = field(default_factory=list)
 
     def of_kind(self, kind: FailureKind) -> list[Failure]:
         return [f for f in self.failures if f.kind is kind]
@@ -83,7 +102,11 @@ class RunSummary:
                 "plan_latency_ms": self.latency_ms(), "failures": [failure_json(f) for f in self.failures],
                 "failure": failure_json(failure) if failure else None, "tolerance": self.tolerance.to_json(),
                 "safety": self.safety.to_json(), "traffic_collisions": self.traffic_collisions,
-                "snapshots": self.snapshots, "restarts": self.restarts, "opportunities": self.opportunities.to_json()}
+                "snapshots": self.snapshots, "restarts": self.restarts, "opportunities": self.opportunities.to_json(),
+                "decisions": self.decisions, "containment": self.containment.to_json(),
+                "breach_replans": self.breach_replans, "keep_lane_steps": self.keep_lane_steps,
+                "minimal_risk_steps": self.minimal_risk_steps,
+                "takeovers": [asdict(t) for t in self.takeovers]}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> RunSummary:
@@ -96,7 +119,11 @@ class RunSummary:
                    safety=SafetyReport.from_json(data["safety"]), traffic_collisions=data["traffic_collisions"],
                    snapshots=list(data["snapshots"]), restarts=data.get("restarts", 0),
                    opportunities=OpportunityReport.from_json(data["opportunities"]) if "opportunities" in data
-                   else OpportunityReport())
+                   else OpportunityReport(), decisions=data.get("decisions", 0),
+                   containment=ContainmentReport.from_json(data["containment"]) if "containment" in data
+                   else ContainmentReport(), breach_replans=data.get("breach_replans", 0),
+                   keep_lane_steps=data.get("keep_lane_steps", 0), minimal_risk_steps=data.get("minimal_risk_steps", 0),
+                   takeovers=[Takeover(**t) for t in data.get("takeovers", [])])
 
 
 def failure_json(failure: Failure) -> dict[str, Any]:

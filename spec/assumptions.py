@@ -95,6 +95,46 @@ PROFILES: dict[str, Bounds] = {b.name: check_bounds(b) for b in (
 )}
 DEFAULT_PROFILE = "default"
 
+#: The rule that gives a traffic model's lanes their speed bounds, written once per model (``world_bounds``): the
+#: speeds the model's own law keeps a vehicle at, its stated events (stops, wrecks) left out. ``paper``: every
+#: vehicle at the common speed; ``spread`` and ``following``: the desired-speed distribution where it is cut (a
+#: spread vehicle keeps its own speed or its slower leader's; an IDM vehicle converges to its desired speed or its
+#: leader's and never drives above its desired speed). A following vehicle braking below the cut (behind a stop,
+#: a wreck, a slow AV, or closing on a leader spawned near it) is outside: an assumption violation, counted.
+TRAFFIC_SPEEDS: dict[str, tuple[SpeedBounds, str]] = {
+    "paper": (SpeedBounds(_COMMON_MPS, _COMMON_MPS), "every vehicle at the common speed (spec.physical.TRAFFIC)"),
+    "spread": (_SPREAD, f"the desired speeds' cut (spec.physical.SPEEDS), mean +- {SPEEDS.cut_sd:g} sd"),
+    "following": (_SPREAD, f"the desired speeds' cut (spec.physical.SPEEDS), mean +- {SPEEDS.cut_sd:g} sd; IDM "
+                           "braking below it (stops, wrecks, a slow leader) is outside"),
+}
+#: The rule for each sensing model's error: ``exact`` none (a cell still means anywhere within it); ``noisy``
+#: ``SENSING_SDS`` times its range noise's sd. Missed readings are not bounded: a vehicle the plan did not know that
+#: turns up where its safety depends on is an assumption violation.
+SENSING_RULES: dict[str, str] = {"exact": "exact sensing: no error",
+                                 "noisy": f"{SENSING_SDS:g} x the noisy sensor's range sd"}
+
+
+def world_bounds(traffic: str, sensing: str, range_sd_m: float = NOISE.range_sd_m, scale: float = 1.0) -> Bounds:
+    """The planner's bounds for a world of ``traffic`` and ``sensing`` (``TRAFFIC_SPEEDS``, ``SENSING_RULES``), phantoms
+    on; ``scale`` multiplies each speed interval's half-width about its middle (never below a standstill) and the
+    sensing error: the bound-width sweep's one knob, 1 for the rule's own bounds."""
+    if traffic not in TRAFFIC_SPEEDS:
+        raise OptionError("--traffic", traffic, f"no bounds rule for this traffic model (known: "
+                          f"{', '.join(TRAFFIC_SPEEDS)})")
+    if sensing not in SENSING_RULES:
+        raise OptionError("--sensor", sensing, f"no bounds rule for this sensing model (known: "
+                          f"{', '.join(SENSING_RULES)})")
+    scale = check_number("--bounds-scale", scale)
+    speeds, why = TRAFFIC_SPEEDS[traffic]
+    middle, half = (speeds.low_mps + speeds.high_mps) / 2, (speeds.high_mps - speeds.low_mps) / 2
+    scaled = SpeedBounds(max(0.0, middle - scale * half), middle + scale * half)
+    error = scale * (SENSING_SDS * check_number("--range-sd-m", range_sd_m) if sensing == "noisy" else 0.0)
+    name = f"{traffic}+{sensing}" + ("" if scale == 1 else f" x{scale:g}")
+    source = (f"traffic {traffic}: {why} = {scaled.low_mps:g}..{scaled.high_mps:g} m/s, both lanes; sensing "
+              f"{sensing}: {SENSING_RULES[sensing]} = {error:g} m; phantoms at the sensors' ranges"
+              + ("" if scale == 1 else f"; widths x {scale:g} (--bounds-scale)"))
+    return check_bounds(Bounds(name, scaled, scaled, error, True, source))
+
 
 def profile(name: str, where: str = "--bounds") -> Bounds:
     """The named profile; an unknown name is bad input listing the known ones."""

@@ -51,9 +51,20 @@ EXACT_AV = Tracking(0.0, 0.0, 0.0, "the paper's AV: exactly on its reference, la
 @dataclass(frozen=True, slots=True)
 class MinimalRisk:
     """The minimal-risk manoeuvre after a plan (and the fallback's): stay in lane and brake, at the share of the
-    car's braking limit the executor's ramps use, down to a hold speed no vehicle ahead can be slower than."""
+    car's braking limit the executor's ramps use, down to a hold speed no vehicle ahead can be slower than.
+
+    The fallback (the simplex pattern; RSS's proper response) takes over in the closed loop when a decision from a
+    fresh snapshot has neither a plan nor a safe step in lane (``oracle.sound.keep_lane``), when the snapshot makes
+    no scenario, or when a vehicle that broke the assumptions under one decision breaks them again under the next.
+    It returns to the left lane when the AV is in the right one (a lane change at its speed), then brakes in lane
+    at ``decel_mps2`` to the hold speed and, while the sensed vehicle ahead is nearer than the safety
+    specification allows at the closing speed, at ``emergency_decel_mps2`` towards a standstill. It holds for
+    ``takeover_s``, then hands back to a new decision (which may take over again).
+    """
 
     decel_mps2: float = RAMP_SHARE * CAR.max_brake_mps2
+    emergency_decel_mps2: float = CAR.max_brake_mps2  # the car's own braking limit
+    takeover_s: float = LOOP.wait_s  # one take-over lasts as long as a wait without a plan
 
     def hold_mps(self, speed_mps: float, slowest_ahead_mps: float, tracking: Tracking) -> float:
         """The speed the manoeuvre brakes to: at most the slowest speed a vehicle ahead may keep, less the car's

@@ -80,11 +80,14 @@ class SpeedProfile:
         return self.start_mps * t + sum(r.integral_m(t) - r.integral_m(0.0) for r in self.ramps)
 
 
-def plan_profiles(actions: tuple[Action, ...], start_mps: float, grid: Grid) -> list[SpeedProfile]:
+def plan_profiles(actions: tuple[Action, ...], start_mps: float, grid: Grid, to_common: bool = True) -> list[
+        SpeedProfile]:
     """One profile per action of a plan: a ramp from the car's speed into the first action, starting now;
     between two actions a ramp centred on their boundary, so the distance lost on one side is made up on
     the other and the car is where the model puts it at every boundary (to within half the ramp's area);
-    and a ramp towards the common speed centred on the plan's end (the next plan's frame starts there).
+    and (``to_common``, the paper model's) a ramp towards the common speed centred on the plan's end (the next
+    plan's frame starts there). The sound model's reference has none: its last action keeps its speed to the end
+    (``spec.envelope``), and the next plan starts from the speed the car has.
     """
     speeds = [action_speed_mps(a, grid) for a in actions]
     starts, t = [], 0.0
@@ -93,7 +96,7 @@ def plan_profiles(actions: tuple[Action, ...], start_mps: float, grid: Grid) -> 
         t += float(ACTION_RULES[action].duration_s)
     edges = [(0.0, start_mps, speeds[0], False)]
     edges += [(starts[k], speeds[k - 1], speeds[k], True) for k in range(1, len(speeds))]
-    edges += [(t, speeds[-1], grid.speed, True)]
+    edges += [(t, speeds[-1], grid.speed, True)] if to_common else []
     ramps = tuple(Ramp(at - (ramp_s(v0, v1) / 2 if centred else 0.0), ramp_s(v0, v1), v1 - v0)
                   for at, v0, v1, centred in edges if v1 != v0)
     return [SpeedProfile(start_mps, ramps, start) for start in starts]

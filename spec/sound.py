@@ -188,6 +188,16 @@ def vehicles(lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Gr
     return tuple(out)
 
 
+def reach_m(v: Vehicle, bounds: Bounds, t_s: float) -> tuple[float, float]:
+    """Where ``v`` can be ``t_s`` after the snapshot under ``bounds``: its start interval grown by its lane's speeds
+    (what ``SoundRules.same_low`` and its three twins compute on the hot path, one end at a time)."""
+    if v.lane is Lane.LEFT:
+        same = bounds.same_mps
+        return v.lo_m + same.low_mps * t_s, v.hi_m + same.high_mps * t_s
+    onc = bounds.oncoming_mps
+    return v.lo_m - onc.high_mps * t_s, v.hi_m - onc.low_mps * t_s
+
+
 @dataclass(frozen=True, slots=True)
 class SoundState:
     """A state of the sound model: the AV's lane, its lane changes and steps so far, the time elapsed and its nominal

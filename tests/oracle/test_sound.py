@@ -300,3 +300,23 @@ def test_the_search_prune_changes_no_answer(monkeypatch: pytest.MonkeyPatch) -> 
         if (fast.status, slow.status) == (Status.NO_PLAN, Status.NO_PLAN_WITHIN_HORIZON):
             continue  # the prune cuts paths that can never reach the goal: it may prove what the full search cannot
         assert (fast.status, fast.actions) == (slow.status, slow.actions), scenario
+
+
+def test_keeping_the_lane_drives_on_a_clear_road_and_refuses_an_unsafe_start() -> None:
+    def keep(left: list[int], start_mps: float, lane: str = "left") -> Action | None:
+        sc = replace(make_scenario(lane, left, [], 1 if left else 0),
+                     sound=Sound(profile("default"), start_mps=start_mps))
+        return sound.keep_lane(problem_for(sc, ModelKind.FINAL))
+
+    assert keep([], 7.0) is Action.DRIVE
+    assert keep([14], 14.0) is Action.DRIVE  # four cells ahead: room to drive on, and to brake after
+    assert keep([11], 7.0) is None  # the vehicle's cell reaches the AV's bumper: the start itself is unsafe
+    assert keep([], 7.0, "right") is None  # keeping the oncoming lane is never a way on
+    for cells in range(12, 16):  # whatever it says is safe from the start, and its last state for ever
+        step = keep([cells], 7.0)
+        if step is not None:
+            sc = replace(make_scenario("left", [cells], [], 1), sound=Sound(profile("default"), start_mps=7.0))
+            problem = problem_for(sc, ModelKind.FINAL)
+            after = sound.step(problem, sound.start(problem), step)
+            assert not isinstance(after, sound.Violation | sound.Collision)
+            assert sound.rules_for(problem).continuation_violation(after) is None

@@ -55,3 +55,43 @@ def test_an_unusable_bound_is_bad_input_naming_the_key_the_value_and_why(bounds:
 def test_an_unknown_profile_is_bad_input_listing_the_known_ones() -> None:
     with pytest.raises(OptionError, match=r"--bounds='psychic'.*known: paper, default"):
         profile("psychic")
+
+
+def test_every_traffic_and_sensing_model_has_its_bounds_rule() -> None:
+    from sim.parts import SENSOR_MODELS, TRAFFIC_MODELS
+    from spec.assumptions import SENSING_RULES, TRAFFIC_SPEEDS
+
+    assert sorted(TRAFFIC_SPEEDS) == sorted(TRAFFIC_MODELS) and sorted(SENSING_RULES) == sorted(SENSOR_MODELS)
+
+
+def test_the_worlds_bounds_are_the_named_profiles_where_the_world_is_theirs() -> None:
+    from spec.assumptions import world_bounds
+
+    assert world_bounds("spread", "noisy") == profile("default")  # same numbers: the same assumptions
+    assert world_bounds("paper", "exact") == profile("paper")
+    following = world_bounds("following", "noisy")
+    assert following.same_mps == profile("default").same_mps and following.phantoms
+    assert world_bounds("spread", "noisy", range_sd_m=1.0).sensing_error_m == pytest.approx(3.0)
+
+
+def test_a_bounds_scale_widens_speeds_about_their_middle_never_below_a_standstill() -> None:
+    from spec.assumptions import world_bounds
+
+    wide, narrow = world_bounds("spread", "noisy", scale=2.0), world_bounds("spread", "noisy", scale=0.5)
+    assert (wide.same_mps.low_mps, wide.same_mps.high_mps) == pytest.approx((2.8, 11.2))
+    assert (narrow.same_mps.low_mps, narrow.same_mps.high_mps) == pytest.approx((5.95, 8.05))
+    assert wide.sensing_error_m == pytest.approx(3.0) and narrow.sensing_error_m == pytest.approx(0.75)
+    assert world_bounds("spread", "exact", scale=10.0).same_mps.low_mps == 0.0
+    assert world_bounds("paper", "exact", scale=2.0).same_mps == profile("paper").same_mps  # no width to scale
+
+
+@pytest.mark.parametrize(("args", "named"), [(("nosuch", "exact"), "--traffic"), (("paper", "nosuch"), "--sensor"),
+                                             (("paper", "exact", 0.5, -1.0), "--bounds-scale"),
+                                             (("paper", "exact", 0.5, float("nan")), "--bounds-scale"),
+                                             (("paper", "noisy", float("inf")), "--range-sd-m")])
+def test_the_worlds_bounds_refuse_unknown_models_and_unusable_numbers(args: tuple[object, ...], named: str) -> None:
+    from spec.assumptions import world_bounds
+
+    with pytest.raises(OptionError) as refused:
+        world_bounds(*args)  # type: ignore[arg-type]
+    assert refused.value.key == named

@@ -1,0 +1,209 @@
+"""Containment: is every vehicle a decision depends on, and the AV itself, still inside the set it was proved safe
+against? An observer of the simulator, checked every control step.
+
+A decision (a plan, a step in lane, or the paper model's plan, measured the same way) is made from one snapshot;
+under the drive's bounds (``spec.assumptions.world_bounds``) each vehicle of that snapshot is an interval that grows
+with its lane's speeds (``spec.sound.reach_m``), and where the sensors cannot see, a phantom's interval covers what
+may come from beyond. At every control step each vehicle's true position since the snapshot must be inside its own
+interval; a vehicle the decision did not know (missed, occluded, respawned) must be inside a phantom's, or behind
+the AV in the oncoming lane (past it). A same-direction vehicle behind the AV in its lane is assumed to follow it
+(``spec.sound``: a rear-end collision is the follower's to avoid): one nearer than the safety specification allows
+at its closing speed breaks that assumption. The AV must be inside its envelope (``spec.envelope.TRACKING``) around the
+executor's reference, its sideways move finished in the stated time. A departure is a ``Breach``, recorded once
+per decision and vehicle with the bound it broke and by how much; an AV envelope breach is an executor fault, which
+counts as inside the assumptions.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections import Counter
+from collections.abc import Callable, Iterable
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+from sim.discretiser import in_window, reading_cell
+from sim.scene import Scene
+from sim.sensors import Reading
+from sim.vehicle import KinematicCar, Pose
+from spec.grid import Grid
+from spec.lanes import Lane
+from spec.physical import CAR, ROAD
+from spec.safety import SAFETY
+from spec.scenario import Scenario
+from spec.sound import Sound, Vehicle, reach_m, vehicles
+
+#: Breach records kept per run (the counts are exact beyond it).
+MAX_RECORDS = 200
+
+
+class BreachKind(enum.Enum):
+    """Which assumption a breach broke."""
+
+    TOO_SLOW = "too slow"  # behind its interval's slow end: slower than its lane's lowest speed
+    TOO_FAST = "too fast"  # beyond its interval's fast end
+    SENSING = "sensing error"  # outside its interval at the snapshot itself: sensed farther off than the error bound
+    APPEARED = "appeared"  # a vehicle the decision did not know, where no phantom could be
+    FOLLOWER = "follower too close"  # one behind the AV in its lane nearer than the safety specification allows
+    AV_ENVELOPE = "AV envelope"  # the AV off its reference by more than its stated tracking, or its sideways move late
+
+    @property
+    def inside(self) -> bool:
+        """Whether a collision after this breach still counts as inside the assumptions (the executor's fault)."""
+        return self is BreachKind.AV_ENVELOPE
+
+    @property
+    def ends_decision(self) -> bool:
+        """Whether the sound model re-plans on it: not on a follower (avoiding the AV is the follower's task, and
+        braking would make it worse), on every other breach."""
+        return self is not BreachKind.FOLLOWER
+
+
+@dataclass(frozen=True, slots=True)
+class Breach:
+    """One vehicle (or the AV) outside its set: when, which bound, by how much, during what."""
+
+    decision: int
+    km: float
+    t_s: float  # the drive's clock
+    vehicle: str
+    body: int  # -1: the AV
+    kind: BreachKind
+    by_m: float  # metres (or m/s for an AV speed error) beyond the bound
+    doing: str
+
+    def to_json(self) -> dict[str, Any]:
+        return {**asdict(self), "kind": self.kind.value, "km": round(self.km, 3), "t_s": round(self.t_s, 2),
+                "by_m": round(self.by_m, 2)}
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> Breach:
+        return cls(**{**data, "kind": BreachKind(data["kind"])})
+
+
+@dataclass(slots=True)
+class ContainmentReport:
+    """One run's containment figures: breaches by kind, the first ``MAX_RECORDS`` of them, and the time checked."""
+
+    checked_s: float = 0.0  # simulated time under a decision's containment
+    breached_s: float = 0.0  # of it, time after a breach of that decision (until the next decision)
+    by_kind: Counter[str] = field(default_factory=Counter)
+    breaches: list[Breach] = field(default_factory=list)
+
+    @property
+    def count(self) -> int:
+        return sum(self.by_kind.values())
+
+    def add(self, breach: Breach) -> None:
+        self.by_kind[breach.kind.value] += 1
+        if len(self.breaches) < MAX_RECORDS:
+            self.breaches.append(breach)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"checked_s": round(self.checked_s, 1), "breached_s": round(self.breached_s, 1),
+                "by_kind": dict(self.by_kind), "breaches": [b.to_json() for b in self.breaches]}
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> ContainmentReport:
+        return cls(data["checked_s"], data["breached_s"], Counter(data["by_kind"]),
+                   [Breach.from_json(b) for b in data["breaches"]])
+
+
+class Containment:
+    """The sets one decision was made against, from its snapshot, and the breaches found since."""
+
+    def __init__(self, decision: int, sound: Sound, scenario: Scenario, seen: tuple[Reading, ...], grid: Grid,
+                 av_x_m: float, t_s: float, cars: Iterable[KinematicCar]) -> None:
+        self.decision, self.bounds, self.tracking = decision, sound.bounds, sound.tracking
+        self.x0_m, self.t0_s = av_x_m, t_s
+        found = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, grid, sound)
+        by_index = {(v.lane, v.index): v for v in found if v.index is not None}
+        self.phantoms = {lane: [v for v in found if v.index is None and v.lane is lane] for lane in Lane}
+        self.tracked: dict[int, Vehicle] = {}
+        for lane in Lane:  # a lane's readings in the window, nearest first, are its scenario's vehicles in order
+            readings = sorted((r for r in seen if r.lane is lane), key=lambda r: r.dx_m)
+            inside = [r for r in readings if in_window(reading_cell(r, scenario.lane, grid), grid)]
+            for index, reading in enumerate(inside):
+                self.tracked[reading.body] = by_index[(lane, index)]
+        self.generation = {car.body: car.respawns for car in cars}  # a respawned car is a new vehicle
+        self.breached: dict[int, Breach] = {}  # body (-1: the AV) -> its first breach under this decision
+
+    def shift_x(self, dx_m: float) -> None:
+        """The world was re-centred by ``dx_m``."""
+        self.x0_m += dx_m
+
+    def vehicles(self, t_s: float, lane: Lane, car: KinematicCar) -> tuple[str, Vehicle | None, list[Vehicle]]:
+        """The vehicle the decision knew ``car`` as (None: unknown), and the intervals it must be inside."""
+        known = self.tracked.get(car.body) if car.respawns == self.generation.get(car.body) else None
+        return (known.name if known else f"unknown {lane.value}-lane vehicle"), known, \
+            [known] if known else self.phantoms[lane]
+
+    def check(self, t_s: float, km: float, av: Pose, left: Iterable[KinematicCar], oncoming: Iterable[KinematicCar],
+              doing: str, sensed: Callable[[KinematicCar], bool]) -> list[Breach]:
+        """The new breaches of every vehicle at ``t_s`` (the drive's clock); each vehicle breaches at most once. A
+        vehicle the decision did not know counts only once ``sensed`` says the sensors see it (one hidden behind
+        another is no vehicle a decision could have known)."""
+        elapsed = t_s - self.t0_s
+        out = []
+        av_in_left = av.y_m >= 0
+        for lane, cars in ((Lane.LEFT, left), (Lane.RIGHT, oncoming)):
+            for car in cars:
+                if car.body in self.breached:
+                    continue
+                if lane is Lane.LEFT and av_in_left and car.x_m < av.x_m:
+                    gap_m = av.x_m - car.x_m - CAR.length_m
+                    closing_mps = car.velocity_mps - av.speed_mps
+                    if SAFETY.violated(gap_m, closing_mps):
+                        out.append(self._breach(Breach(self.decision, km, t_s, f"follower ({car.body})", car.body,
+                                                       BreachKind.FOLLOWER,
+                                                       SAFETY.required_gap_m(closing_mps) - gap_m, doing)))
+                        continue
+                name, known, sets = self.vehicles(t_s, lane, car)
+                if known is None and lane is Lane.RIGHT and car.x_m < av.x_m - CAR.length_m:
+                    continue  # an oncoming vehicle the AV has passed: no condition speaks of it
+                dx = car.x_m - self.x0_m
+                misses = [_outside(dx, *reach_m(v, self.bounds, elapsed)) for v in sets]
+                if not misses or min(abs(m) for m in misses) == 0.0:
+                    continue
+                miss = min(misses, key=abs)
+                if known is None and not sensed(car):
+                    continue
+                if known is None:
+                    kind = BreachKind.APPEARED
+                elif elapsed <= 0.0:
+                    kind = BreachKind.SENSING
+                else:  # behind the interval's slow end: too slow in the left lane, too fast in the oncoming one
+                    slow = (miss < 0) == (lane is Lane.LEFT)
+                    kind = BreachKind.TOO_SLOW if slow else BreachKind.TOO_FAST
+                out.append(self._breach(Breach(self.decision, km, t_s, name, car.body, kind, abs(miss), doing)))
+        return out
+
+    def check_av(self, t_s: float, km: float, av: Pose, x_ref_m: float, v_ref_mps: float, lane_due: Lane | None,
+                 doing: str) -> Breach | None:
+        """The AV's breach of its envelope, if new: off its reference by more than the stated tracking, or not
+        wholly in ``lane_due`` once its sideways move should be over."""
+        if -1 in self.breached:
+            return None
+        t = self.tracking
+        errors = [(abs(av.x_m - x_ref_m) - t.position_m, "position"), (abs(av.speed_mps - v_ref_mps) - t.speed_mps,
+                                                                          "speed")]
+        if lane_due is not None:
+            errors.append((abs(av.y_m - Scene.lane_y(lane_due)) - (ROAD.lane_width_m - CAR.width_m) / 2, "sideways"))
+        by, what = max(errors)
+        if by <= 0:
+            return None
+        return self._breach(Breach(self.decision, km, t_s, f"the AV ({what})", -1, BreachKind.AV_ENVELOPE, by,
+                                   doing))
+
+    def _breach(self, breach: Breach) -> Breach:
+        self.breached[breach.body] = breach
+        return breach
+
+    def world_breached(self) -> bool:
+        """Whether a vehicle (not the AV) has broken an assumption under this decision that ends it."""
+        return any(body != -1 and b.kind.ends_decision for body, b in self.breached.items())
+
+
+def _outside(x: float, low: float, high: float) -> float:
+    """How far ``x`` is outside ``[low, high]``: negative below, positive above, 0 inside."""
+    return x - low if x < low else x - high if x > high else 0.0

@@ -1,0 +1,132 @@
+"""Containment: a vehicle moving within its lane's bounds never breaches, one outside them does, with the bound it
+broke; unknown vehicles only where no phantom could be and only once sensed; followers too close; the AV's envelope."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from sim.containment import BreachKind, Containment, ContainmentReport
+from sim.sensors import Reading
+from sim.vehicle import Pose
+from spec.assumptions import world_bounds
+from spec.envelope import TRACKING
+from spec.grid import PAPER_GRID
+from spec.lanes import Lane
+from spec.physical import CAR, SENSORS
+from spec.scenario import make_scenario
+from spec.sound import Sound
+
+BOUNDS = world_bounds("spread", "exact")  # 4.9 .. 9.1 m/s both lanes, no sensing error
+SOUND = Sound(BOUNDS)
+AV = Pose(0.0, 1.8, 0.0, 7.0)
+
+
+def car(body: int, x_m: float, velocity_mps: float = 7.0, respawns: int = 0) -> SimpleNamespace:
+    return SimpleNamespace(body=body, x_m=x_m, velocity_mps=velocity_mps, respawns=respawns)
+
+
+def watch(left: dict[int, float], oncoming: dict[int, float]) -> Containment:
+    """Containment of a decision made from readings of ``left`` and ``oncoming`` (body -> metres ahead) at t = 0."""
+    readings = tuple(Reading(Lane.LEFT, b, dx) for b, dx in left.items()) + tuple(
+        Reading(Lane.RIGHT, b, dx) for b, dx in oncoming.items())
+    from sim.discretiser import discretise
+
+    scenario = discretise(readings, Lane.LEFT, PAPER_GRID)
+    cars = [car(b, dx) for b, dx in (left | oncoming).items()]
+    return Containment(1, SOUND, scenario, readings, PAPER_GRID, 0.0, 0.0, cars)  # type: ignore[arg-type]
+
+
+def never(_car: object) -> bool:
+    return False
+
+
+@given(speed=st.floats(BOUNDS.same_mps.low_mps, BOUNDS.same_mps.high_mps),
+       onc=st.floats(BOUNDS.oncoming_mps.low_mps, BOUNDS.oncoming_mps.high_mps), t_s=st.floats(0.0, 60.0),
+       ahead=st.floats(30.0, 90.0), away=st.floats(150.0, 300.0))
+def test_vehicles_moving_within_their_lanes_bounds_never_breach(speed: float, onc: float, t_s: float, ahead: float,
+                                                                 away: float) -> None:
+    c = watch({1: ahead}, {2: away})
+    left = [car(1, ahead + speed * t_s, speed)]
+    oncoming = [car(2, away - onc * t_s, -onc)]
+    assert c.check(t_s, 0.0, AV, left, oncoming, "drive", never) == []  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(("lane", "speed", "kind"), [(Lane.LEFT, 3.0, BreachKind.TOO_SLOW),
+                                                     (Lane.LEFT, 12.0, BreachKind.TOO_FAST),
+                                                     (Lane.RIGHT, 3.0, BreachKind.TOO_SLOW),
+                                                     (Lane.RIGHT, 12.0, BreachKind.TOO_FAST)])
+def test_a_vehicle_outside_its_bounds_breaches_once_naming_the_bound(lane: Lane, speed: float,
+                                                                     kind: BreachKind) -> None:
+    start = 60.0 if lane is Lane.LEFT else 250.0
+    c = watch({1: start} if lane is Lane.LEFT else {}, {} if lane is Lane.LEFT else {1: start})
+    sign = 1.0 if lane is Lane.LEFT else -1.0
+    found = []
+    for t_s in (5.0, 10.0, 20.0, 30.0):
+        moved = [car(1, start + sign * speed * t_s, sign * speed)]
+        left, oncoming = (moved, []) if lane is Lane.LEFT else ([], moved)
+        found += c.check(t_s, 0.0, AV, left, oncoming, "drive", never)  # type: ignore[arg-type]
+    assert [b.kind for b in found] == [kind] and found[0].body == 1 and found[0].by_m > 0
+    assert c.world_breached() and kind.ends_decision and not kind.inside
+
+
+def test_a_vehicle_sensed_farther_off_than_the_error_bound_breaches_at_the_snapshot() -> None:
+    c = watch({1: 60.0}, {})
+    (breach,) = c.check(0.0, 0.0, AV, [car(1, 90.0)], [], "drive", never)  # type: ignore[list-item]
+    assert breach.kind is BreachKind.SENSING
+
+
+def test_an_unknown_vehicle_breaches_only_where_no_phantom_could_be_and_only_once_sensed() -> None:
+    c = watch({}, {})
+    beyond = car(5, SENSORS.left_range_m + 10.0)  # where the left-lane phantom stands: inside the assumptions
+    within = car(6, 40.0)
+    passed = car(7, -30.0, -7.0)  # an oncoming vehicle behind the AV: no condition speaks of it
+    assert c.check(1.0, 0.0, AV, [beyond, within], [passed], "drive", never) == []  # type: ignore[list-item]
+    (breach,) = c.check(1.0, 0.0, AV, [beyond, within], [passed], "drive", lambda _c: True)  # type: ignore[list-item]
+    assert breach.kind is BreachKind.APPEARED and breach.body == 6
+
+
+def test_a_respawned_vehicle_is_a_new_one() -> None:
+    c = watch({1: 60.0}, {})
+    (breach,) = c.check(1.0, 0.0, AV, [car(1, 30.0, respawns=1)], [], "drive", lambda _c: True)  # type: ignore[list-item]
+    assert breach.kind is BreachKind.APPEARED
+
+
+def test_a_follower_too_close_breaks_its_assumption_without_ending_the_decision() -> None:
+    c = watch({}, {})
+    tailgater = car(3, -(CAR.length_m + 1.0), 7.0)  # 1 m behind the AV's bumper at the AV's speed
+    (breach,) = c.check(1.0, 0.0, AV, [tailgater], [], "brake", never)  # type: ignore[list-item]
+    assert breach.kind is BreachKind.FOLLOWER and breach.by_m == pytest.approx(1.0)
+    assert not breach.kind.ends_decision and not c.world_breached()
+
+
+@pytest.mark.parametrize(("pose", "what"), [(Pose(TRACKING.position_m + 0.1, 1.8, 0.0, 7.0), "position"),
+                                            (Pose(0.0, 1.8, 0.0, 7.0 + TRACKING.speed_mps + 0.1), "speed"),
+                                            (Pose(0.0, 0.0, 0.0, 7.0), "sideways")])
+def test_the_av_outside_its_envelope_is_an_executor_fault_inside_the_assumptions(pose: Pose, what: str) -> None:
+    c = watch({}, {})
+    assert c.check_av(1.0, 0.0, AV, 0.0, 7.0, Lane.LEFT, "drive") is None
+    breach = c.check_av(1.0, 0.0, pose, 0.0, 7.0, Lane.LEFT, "drive")
+    assert breach is not None and breach.kind is BreachKind.AV_ENVELOPE and what in breach.vehicle
+    assert breach.kind.inside and not c.world_breached()
+    assert c.check_av(2.0, 0.0, pose, 0.0, 7.0, Lane.LEFT, "drive") is None  # once per decision
+
+
+def test_the_report_counts_every_breach_and_reads_back_from_json() -> None:
+    c = watch({1: 60.0}, {})
+    report = ContainmentReport()
+    for breach in c.check(10.0, 0.1, AV, [car(1, 60.0, 0.0)], [], "drive", never):  # type: ignore[list-item]
+        report.add(breach)
+    again = ContainmentReport.from_json(report.to_json())
+    assert again.count == report.count == 1 and again.breaches == report.breaches
+
+
+def test_a_decision_under_the_paper_bounds_knows_its_vehicles_by_cell() -> None:
+    scenario = make_scenario(Lane.LEFT, [12], [20], 1)
+    readings = (Reading(Lane.LEFT, 1, 42.0), Reading(Lane.RIGHT, 2, 210.0))
+    c = Containment(1, Sound(world_bounds("paper", "exact")), scenario, readings, PAPER_GRID, 0.0, 0.0,
+                    [car(1, 42.0), car(2, 210.0, -7.0)])  # type: ignore[list-item]
+    assert set(c.tracked) == {1, 2} and c.tracked[1].index == 0 and c.tracked[2].lane is Lane.RIGHT

@@ -1,0 +1,75 @@
+"""The sound model in the closed loop: plans from the car's measured speed, containment every control step, no
+decision kept past a breach, the fallback when the world breaks the assumptions, every encounter attributed."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+
+from sim.parts import DriveConfig
+from sim.simulator import Simulator
+from sim.summary import RunSummary
+from spec.errors import OptionError
+from spec.physical import LOOP
+
+
+class Watched(Simulator):
+    """A simulator that checks, on every control step, that no action of a sound decision runs on after a breach by
+    a vehicle for longer than one control step and a sideways move."""
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        self.first_breach: dict[int, float] = {}  # decision -> when a vehicle broke its assumptions
+        self.longest_s = 0.0
+
+    def _tick(self, dt_s: float) -> bool:
+        ok = super()._tick(dt_s)
+        c = self.containment
+        if c is not None and c.world_breached() and self.enveloped:
+            since = self.first_breach.setdefault(c.decision, self.summary.sim_time_s)
+            self.longest_s = max(self.longest_s, self.summary.sim_time_s - since)
+        return ok
+
+
+def drive(config: DriveConfig, seed: int) -> tuple[Watched, RunSummary]:
+    sim = Watched(seed, config.parts(), restart_after_collision=True, snapshots=config.snapshots)
+    try:
+        return sim, sim.drive(config.km)
+    finally:
+        sim.close()
+
+
+def test_sound_plans_start_from_the_cars_measured_speed_and_nothing_inside_the_assumptions_is_hit() -> None:
+    _, summary = drive(DriveConfig(1.0, model="sound", snapshots=50), 3)
+    assert summary.plans > 0 and summary.snapshots
+    speeds = [s["bounds"]["av_speed_mps"] for s in summary.snapshots]
+    assert len(set(speeds)) > 1  # the measured speed, not the common speed
+    assert summary.safety.count("contact", True) == 0 and summary.safety.count("near_miss", True) == 0
+    assert RunSummary.from_json(summary.to_json()).to_json() == summary.to_json()
+
+
+def test_no_sound_decision_runs_on_past_a_breach_and_a_broken_world_is_counted() -> None:
+    config = DriveConfig(1.0, model="sound", traffic="spread", stop_rate_per_h=60.0)  # stops: too slow by far
+    sim, summary = drive(config, 2)
+    assert summary.containment.by_kind.get("too slow", 0) > 0
+    assert summary.breach_replans + len(summary.takeovers) > 0
+    assert sim.longest_s <= LOOP.lane_change_lateral_s + 2 * sim.executor.dt_s
+
+
+def test_paper_model_drives_measure_containment_without_acting_on_it() -> None:
+    _, summary = drive(DriveConfig(1.0, traffic="spread", stop_rate_per_h=300.0), 2)
+    assert summary.decisions > 0 and summary.containment.checked_s > 0
+    assert summary.breach_replans == summary.keep_lane_steps == summary.minimal_risk_steps == 0
+    assert not summary.takeovers
+
+
+def test_a_models_name_and_bounds_scale_are_part_of_a_drives_configuration() -> None:
+    config = DriveConfig(1.0, model="sound", bounds_scale=2.0)
+    assert DriveConfig.from_json(config.to_json()) == config
+    assert "model" not in DriveConfig(1.0).to_json()  # records of the paper model stay the same campaign
+    spread = DriveConfig(1.0, traffic="spread")
+    assert replace(spread, bounds_scale=2.0).bounds.same_mps.high_mps > spread.bounds.same_mps.high_mps
+    for bad in ({"model": "nosuch"}, {"bounds_scale": -1.0}, {"bounds_scale": float("nan")}):
+        with pytest.raises(OptionError):
+            DriveConfig(1.0, **bad)  # type: ignore[arg-type]
