@@ -33,7 +33,7 @@ matplotlib.use("Agg")  # files only, never a window
 import matplotlib.pyplot as plt
 
 from ci.executors import ExecutorChoice, run_jobs
-from ci.records import append, campaign_lock, open_for_append
+from ci.records import append, campaign_lock, open_for_append, read_records
 from ci.simulate import campaign_key, recorded_runs
 from oracle.planner import plan
 from sim.opportunity import Refusal
@@ -42,6 +42,7 @@ from sim.simulator import run_drive
 from sim.summary import RunSummary
 from sim.tolerance import HISTOGRAM_BIN, HISTOGRAM_BINS, histogram_quantile
 from spec.answers import Limits, Status, Strategy
+from spec.errors import OptionError
 from spec.files import scenario_from_dict
 from spec.grid import STANDARD_CELLS_M
 from spec.physical import LOOP
@@ -61,11 +62,36 @@ class AuditPlan:
     seeds: tuple[int, ...] = (1,)
     base: DriveConfig = field(default_factory=lambda: DriveConfig(km=25.0, snapshots=20, restart_after_collision=True,
                                                                   opportunity_checks=50))
+    models: tuple[str, ...] = ("paper",)
+    bounds_scales: tuple[float, ...] = (1.0,)
 
     def configs(self) -> list[DriveConfig]:
         """One drive configuration per combination, in table order (validated: bad input raises here)."""
-        return [replace(self.base, cell_m=cell, traffic=traffic, sensor=sensing)
-                for cell in self.cells_m for traffic in self.traffic for sensing in self.sensing]
+        return [replace(self.base, cell_m=cell, traffic=traffic, sensor=sensing, model=model, bounds_scale=scale)
+                for cell in self.cells_m for traffic in self.traffic for sensing in self.sensing
+                for model in self.models for scale in self.bounds_scales]
+
+
+#: What each combination sets itself; every other setting of a drive is the audit's, and must match to resume.
+PER_COMBINATION = ("cell_m", "traffic", "sensor", "model", "bounds_scale")
+
+
+def check_resume(log: Path, audit: AuditPlan, where: str) -> None:
+    """Refuse to resume an audit whose recorded runs were driven with other shared settings (``--km``, noise,
+    events ...), naming the first difference: runs of two configurations are never mixed into one figure."""
+    asked = {k: v for k, v in audit.base.all_json().items() if k not in PER_COMBINATION}
+    for record in read_records(log):
+        campaign = record.get("campaign") if isinstance(record, dict) else None
+        if not isinstance(campaign, dict):
+            continue
+        try:
+            recorded = DriveConfig.from_json(campaign).all_json()
+        except (TypeError, ValueError, OptionError):
+            continue  # a record of another version: run again, never mixed
+        for key, value in asked.items():
+            if recorded.get(key) != value:
+                raise OptionError(where, str(log.parent), f"holds runs with {key} = {recorded.get(key)!r}, this "
+                                  f"audit asks {value!r}; --fresh starts again, or use another --out")
 
 
 @dataclass(frozen=True, slots=True)
@@ -99,6 +125,7 @@ def _run_audit(audit: AuditPlan, out: Path, executor: ExecutorChoice, fresh: boo
     log = out / AUDIT_FILE
     if fresh:
         log.unlink(missing_ok=True)
+    check_resume(log, audit, "--out")
     jobs = [(config, seed) for config in audit.configs() for seed in audit.seeds]
     recorded = recorded_runs(log)
     results: dict[int, Done] = {}
@@ -141,6 +168,25 @@ class Row:
     plan_ms_median: float | None
     opportunities: dict[str, dict[str, int]]  # refusal -> qualifying, checked and each outcome's count
     missed_examples: list[dict[str, Any]]  # the first missed opportunities, each with its scenario
+    model: str = "paper"
+    bounds_scale: float = 1.0
+    overtakes: int = 0
+    decisions: int = 0  # snapshots decided from (containment measured from each)
+    attributed: dict[str, int] = field(default_factory=dict)  # "contact inside", "near_miss after", ...
+    breaches: dict[str, int] = field(default_factory=dict)  # by kind (``sim.containment.BreachKind``)
+    breached_share: float | None = None  # of the time under containment, the share after a breach that ends it
+    breach_replans: int = 0
+    keep_lane_steps: int = 0
+    minimal_risk_steps: int = 0
+    takeovers: int = 0
+    takeovers_after_breach: int = 0
+    waits_without_plan: int = 0  # planner failures (no plan, or none in time, and none under way)
+
+    def per_1000_km(self, count: float) -> float:
+        return 1000 * count / self.km if self.km else math.nan
+
+    def attributed_count(self, kind: str, inside: bool) -> int:
+        return self.attributed.get(f"{kind} {'inside' if inside else 'after'}", 0)
 
     @property
     def collisions_per_1000_km(self) -> float:
@@ -188,22 +234,33 @@ class Row:
                 "plan_ms_median": self.plan_ms_median, "opportunities": self.opportunities,
                 "missed_opportunities_per_1000_km_estimated": _num(self.missed_per_1000_km),
                 "delayed_overtakes_per_1000_km_estimated": _num(self.delayed_per_1000_km),
-                "missed_examples": self.missed_examples}
+                "missed_examples": self.missed_examples, "model": self.model, "bounds_scale": self.bounds_scale,
+                "overtakes": self.overtakes, "overtakes_per_km": _num(self.per_1000_km(self.overtakes) / 1000),
+                "decisions": self.decisions, "attributed": self.attributed, "breaches": self.breaches,
+                "breaches_per_1000_km": _num(self.per_1000_km(sum(self.breaches.values()))),
+                "breached_share": self.breached_share, "breach_replans": self.breach_replans,
+                "keep_lane_steps": self.keep_lane_steps, "minimal_risk_steps": self.minimal_risk_steps,
+                "takeovers": self.takeovers, "takeovers_after_breach": self.takeovers_after_breach,
+                "waits_without_plan": self.waits_without_plan}
 
 
 def _num(value: float | None) -> float | None:
     return None if value is None or not math.isfinite(value) else round(value, 2)
 
 
+Key = tuple[float, str, str, str, float]  # cell, traffic, sensing, model, bounds scale
+
+
 def rows(results: Iterable[Done]) -> list[Row]:
     """One row per combination, in the order the combinations were first met."""
-    groups: dict[tuple[float, str, str], list[RunSummary]] = {}
+    groups: dict[Key, list[RunSummary]] = {}
     for done in results:
-        groups.setdefault((done.config.cell_m, done.config.traffic, done.config.sensor), []).append(done.summary)
+        c = done.config
+        groups.setdefault((c.cell_m, c.traffic, c.sensor, c.model, c.bounds_scale), []).append(done.summary)
     return [_row(key, runs) for key, runs in groups.items()]
 
 
-def _row(key: tuple[float, str, str], runs: list[RunSummary]) -> Row:
+def _row(key: Key, runs: list[RunSummary]) -> Row:
     encounters = [e for r in runs for e in r.safety.encounters]
     causes = Counter(f"{e.kind}: {e.lane}, {e.rule}, {e.doing.split(' ')[0]}"
                      + (" (kept plan)" if "kept plan" in e.doing else "") for e in encounters)
@@ -230,7 +287,15 @@ def _row(key: tuple[float, str, str], runs: list[RunSummary]) -> Row:
                _num(min(gaps_left)) if gaps_left else None, _num(min(gaps_oncoming)) if gaps_oncoming else None,
                deviation, sum(r.tolerance.violation_count for r in runs),
                _num(float(np.median(plan_ms))) if plan_ms else None,
-               {k: dict(v) for k, v in sorted(opportunities.items())}, missed)
+               {k: dict(v) for k, v in sorted(opportunities.items())}, missed, key[3], key[4],
+               sum(r.overtakes for r in runs), sum(r.decisions for r in runs),
+               dict(sum((Counter(r.safety.attributed) for r in runs), Counter())),
+               dict(sum((Counter(r.containment.by_kind) for r in runs), Counter())),
+               _num(sum(r.containment.breached_s for r in runs) / checked) if (checked := sum(
+                   r.containment.checked_s for r in runs)) else None,
+               sum(r.breach_replans for r in runs), sum(r.keep_lane_steps for r in runs),
+               sum(r.minimal_risk_steps for r in runs), sum(len(r.takeovers) for r in runs),
+               sum(t.after_breach for r in runs for t in r.takeovers), sum(len(r.planner_failures) for r in runs))
 
 
 @dataclass(slots=True)
@@ -244,27 +309,36 @@ class Cost:
     p99_ms: float | None
     median_states: float | None
     incomplete: int
+    model: str = "paper"
 
     def to_json(self) -> dict[str, Any]:
-        return {"cell_m": self.cell_m, "engine": self.engine, "n": self.n, "median_ms": self.median_ms,
-                "p99_ms": self.p99_ms, "median_states_explored": self.median_states, "incomplete": self.incomplete}
+        return {"cell_m": self.cell_m, "model": self.model, "engine": self.engine, "n": self.n,
+                "median_ms": self.median_ms, "p99_ms": self.p99_ms, "median_states_explored": self.median_states,
+                "incomplete": self.incomplete}
+
+
+#: The sound model's snapshots whose planning cost is measured, per cell size, at most: the first in run order. Each
+#: one is its own verifier for Spin (the AV's measured speed is compiled in: about 2.5 s each on this machine).
+MAX_SOUND_SNAPSHOTS = 40
 
 
 def planning_cost(results: Iterable[Done], engines: Iterable[str], timeout_s: float = 10.0) -> list[Cost]:
-    """Every engine's shortest plan for the scenarios the planner saw, per cell size (an untimed run first for each
-    shape of problem: a verifier compiles once per shape)."""
-    by_cell: dict[float, list[dict[str, Any]]] = {}
+    """Every engine's shortest plan for the scenarios the planner saw, per cell size and model (an untimed run first
+    for each shape of problem: a verifier compiles once per shape)."""
+    by_cell: dict[tuple[float, str], list[dict[str, Any]]] = {}
     for done in results:
-        by_cell.setdefault(done.config.cell_m, []).extend(done.summary.snapshots)
+        by_cell.setdefault((done.config.cell_m, done.config.model), []).extend(done.summary.snapshots)
     costs = []
-    for cell_m, snapshots in by_cell.items():
+    for (cell_m, model), snapshots in by_cell.items():
         scenarios = [scenario_from_dict(s) for s in snapshots]
+        if model == "sound":
+            scenarios = scenarios[:MAX_SOUND_SNAPSHOTS]
         for engine in engines:
             if not scenarios:
-                costs.append(Cost(cell_m, engine, 0, None, None, None, 0))
+                costs.append(Cost(cell_m, engine, 0, None, None, None, 0, model))
                 continue
             limits = Limits(timeout_s=timeout_s)
-            kinds = {(s.lane, s.model): s for s in scenarios}  # one untimed run per shape (Spin compiles it once)
+            kinds = {(s.lane, s.model, s.sound): s for s in scenarios}  # one untimed run per shape (Spin compiles it)
             for scenario in kinds.values():
                 plan(scenario, Strategy.SHORTEST, engine=engine, limits=limits)
             ms, states, incomplete = [], [], 0
@@ -275,7 +349,7 @@ def planning_cost(results: Iterable[Done], engines: Iterable[str], timeout_s: fl
                 states.append(answer.states_explored)
                 incomplete += answer.status is Status.INCOMPLETE
             costs.append(Cost(cell_m, engine, len(ms), _num(float(np.median(ms))), _num(float(np.percentile(ms, 99))),
-                              float(np.median(states)), incomplete))
+                              float(np.median(states)), incomplete, model))
     return costs
 
 
@@ -288,38 +362,77 @@ def write_reports(audit_rows: list[Row], costs: list[Cost], audit: AuditPlan, ou
                  "seeds": list(audit.seeds)}
     data = {"settings": settings, "combinations": [r.to_json() for r in audit_rows],
             "planning_cost": [c.to_json() for c in costs]}
-    paths = [out / "audit.json", out / "audit.md", out / "audit-safety.png", out / "audit-latency.png"]
+    paths = [out / "audit.json", out / "audit.md", out / "audit-safety.png", out / "audit-latency.png",
+             out / "audit-models.png"]
     paths[0].write_text(json.dumps(data, indent=1))
     paths[1].write_text(markdown(audit_rows, costs, settings))
     _plot_safety(audit_rows, paths[2])
     _plot_latency(costs, paths[3])
+    _plot_models(audit_rows, paths[4])
     return paths
+
+
+def label(r: Row) -> str:
+    """A combination's model and bounds as tables name them."""
+    return r.model + ("" if r.bounds_scale == 1 else f" (bounds x{r.bounds_scale:g})")
+
+
+def models_markdown(audit_rows: list[Row]) -> list[str]:
+    """The models side by side: safety split inside / after the assumptions, containment, the price in overtakes."""
+    lines = ["", "## The models side by side: safety inside and outside the assumptions, and its price", "",
+             "Collisions and near misses are split by attribution (sim.containment): inside the assumptions (no "
+             "breach by the vehicle involved under the decision under way: a soundness failure, each one a bug) or "
+             "after an assumption broke. Containment is measured under both models against the world's bounds "
+             "(spec.assumptions.world_bounds); only the sound model acts on a breach (re-plan; the fallback when "
+             "the same vehicle breaks two decisions running, or no plan and no safe step is left).", "",
+             "| cell m | traffic | sensing | model | km | overtakes /km | collisions inside / after per 1,000 km | "
+             "near misses inside / after per 1,000 km | breaches /1,000 km (by kind) | time after a breach | "
+             "decisions | re-plans on a breach | keep-lane steps | minimal-risk | take-overs (after a breach) | "
+             "waits without a plan | delayed /1,000 km (est.) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in audit_rows:
+        kinds = ", ".join(f"{k} {v}" for k, v in sorted(r.breaches.items())) or "-"
+        share = "-" if r.breached_share is None else f"{100 * r.breached_share:.1f}%"
+        lines.append(
+            f"| {r.cell_m:g} | {r.traffic} | {r.sensing} | {label(r)} | {r.km:.1f} | "
+            f"{r.overtakes / r.km if r.km else math.nan:.2f} | "
+            f"{r.per_1000_km(r.attributed_count('contact', True)):.1f} / "
+            f"{r.per_1000_km(r.attributed_count('contact', False)):.1f} | "
+            f"{r.per_1000_km(r.attributed_count('near_miss', True)):.1f} / "
+            f"{r.per_1000_km(r.attributed_count('near_miss', False)):.1f} | "
+            f"{r.per_1000_km(sum(r.breaches.values())):.1f} ({kinds}) | {share} | {r.decisions} | "
+            f"{r.breach_replans} | {r.keep_lane_steps} | {r.minimal_risk_steps} | "
+            f"{r.takeovers} ({r.takeovers_after_breach}) | {r.waits_without_plan} | {r.delayed_per_1000_km:.1f} |")
+    return lines
 
 
 def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any]) -> str:
     """The audit's tables as Markdown."""
     lines = ["# Audit of the grid abstraction", "",
              "Settings: " + ", ".join(f"{k} {v}" for k, v in settings.items()), "",
-             "| cell m | traffic | sensing | runs | km | collisions | per 1,000 km | near misses | per 1,000 km | "
-             "overtakes not started, replays that succeeded (checked) | missed per 1,000 km (est.) | "
+             "| cell m | traffic | sensing | model | runs | km | collisions | per 1,000 km | near misses | "
+             "per 1,000 km | overtakes not started, replays that succeeded (checked) | missed per 1,000 km (est.) | "
              "delayed per 1,000 km (est.) | "
              "traffic collisions | min gap ahead m | min gap oncoming m | violations | plan ms median |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in audit_rows:
-        lines.append(f"| {r.cell_m:g} | {r.traffic} | {r.sensing} | {r.runs} | {r.km:.1f} | {r.collisions} | "
+        lines.append(f"| {r.cell_m:g} | {r.traffic} | {r.sensing} | {label(r)} | {r.runs} | {r.km:.1f} | "
+                     f"{r.collisions} | "
                      f"{r.collisions_per_1000_km:.1f} | {r.near_misses} | {r.near_misses_per_1000_km:.1f} | "
                      f"{r.opportunity_total('missed')} ({r.opportunity_total('checked')}) | "
                      f"{r.missed_per_1000_km:.1f} | {r.delayed_per_1000_km:.1f} | "
                      f"{r.traffic_collisions} | {r.min_gap_left_m} | {r.min_gap_oncoming_m} | {r.violations} | "
                      f"{r.plan_ms_median} |")
+    lines += models_markdown(audit_rows)
     lines += ["", "## Causes (contacts and near misses)", ""]
     for r in audit_rows:
         if r.causes:
-            lines.append(f"- {r.cell_m:g} m, {r.traffic}, {r.sensing}: "
+            lines.append(f"- {r.cell_m:g} m, {r.traffic}, {r.sensing}, {label(r)}: "
                          + "; ".join(f"{cause} x{n}" for cause, n in r.causes.items()))
             for e in r.worst[:3]:
                 lines.append(f"  - {e['kind']} at {e['km']} km during {e['doing']}: true gap {e['gap_m']} m, "
-                             f"the plan's cells implied {e['implied_gap_m']} m")
+                             f"the plan's cells implied {e['implied_gap_m']} m"
+                             + (f"; {e['assumptions']}" if e.get("assumptions") else ""))
     lines += ["", "## Missed opportunities (decisions without an overtake start, by reason; how the replays ended)", "",
               "Qualifying: in the AV's own lane, a vehicle ahead within 100 m, and no overtake started "
               "(refused: the final model found no plan; outside_window: nothing to overtake in the model's window; "
@@ -343,9 +456,11 @@ def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any])
                  for a in ACTIONS]
         lines.append(f"| {r.cell_m:g} | {r.traffic} | {r.sensing} | " + " | ".join(cells) + " |")
     lines += ["", "## Planning cost on the scenarios the planner saw (shortest, whole pipeline)", "",
-              "| cell m | engine | n | median ms | p99 ms | median states explored | incomplete |",
-              "|---|---|---|---|---|---|---|"]
-    lines += [f"| {c.cell_m:g} | {c.engine} | {c.n} | {c.median_ms} | {c.p99_ms} | {c.median_states} | "
+              f"Under the sound model, the first {MAX_SOUND_SNAPSHOTS} snapshots per cell size (Spin compiles a "
+              "verifier for each: the AV's measured speed is part of it; compilation is not in the figures).", "",
+              "| cell m | model | engine | n | median ms | p99 ms | median states explored | incomplete |",
+              "|---|---|---|---|---|---|---|---|"]
+    lines += [f"| {c.cell_m:g} | {c.model} | {c.engine} | {c.n} | {c.median_ms} | {c.p99_ms} | {c.median_states} | "
               f"{c.incomplete} |" for c in costs]
     return "\n".join(lines) + "\n"
 
@@ -358,18 +473,35 @@ def _edge(value: float | None) -> str:
 
 
 def _plot_safety(audit_rows: list[Row], png: Path) -> None:
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
-    for ax, what in zip(axes, ("collisions_per_1000_km", "near_misses_per_1000_km")):
-        for traffic in dict.fromkeys(r.traffic for r in audit_rows):
-            for sensing in dict.fromkeys(r.sensing for r in audit_rows):
-                mine = sorted((r.cell_m, getattr(r, what)) for r in audit_rows
-                              if r.traffic == traffic and r.sensing == sensing)
-                ax.plot(*zip(*mine), marker="o", label=f"{traffic}, {sensing}")
+    _plot_by_cell(audit_rows, png, (("collisions per 1000 km", lambda r: r.collisions_per_1000_km),
+                                    ("near misses per 1000 km", lambda r: r.near_misses_per_1000_km)),
+                  "the grid abstraction against traffic and sensing that do not keep to it")
+
+
+def _plot_models(audit_rows: list[Row], png: Path) -> None:
+    """Collisions per 1,000 km and overtakes per km against cell size: one line per model and traffic (sensing and
+    bound scales as separate lines where the audit has several)."""
+    _plot_by_cell(audit_rows, png, (("collisions per 1,000 km", lambda r: r.collisions_per_1000_km),
+                                    ("overtakes per km", lambda r: r.per_1000_km(r.overtakes) / 1000)),
+                  "the paper model (solid) and the sound model (dashed)")
+
+
+def _plot_by_cell(audit_rows: list[Row], png: Path, panels: tuple[tuple[str, Callable[[Row], float]], ...],
+                  title: str) -> None:
+    """One panel per figure against cell size, one line per traffic, sensing, model and bound scale."""
+    fig, axes = plt.subplots(1, len(panels), figsize=(11, 4))
+    lines = dict.fromkeys((r.traffic, r.sensing, r.model, r.bounds_scale) for r in audit_rows)
+    for ax, (what, value) in zip(axes, panels):
+        for traffic, sensing, model, scale in lines:
+            mine = sorted((r.cell_m, value(r)) for r in audit_rows
+                          if (r.traffic, r.sensing, r.model, r.bounds_scale) == (traffic, sensing, model, scale))
+            name = f"{traffic}, {sensing}, {model}{'' if scale == 1 else f' x{scale:g}'}"
+            ax.plot(*zip(*mine), "-" if model == "paper" else "--", marker="o", label=name)
         ax.set_xlabel("cell length (m)")
-        ax.set_ylabel(what.replace("_", " "))
+        ax.set_ylabel(what)
         ax.invert_xaxis()
     axes[0].legend(fontsize=7)
-    fig.suptitle("the grid abstraction against traffic and sensing that do not keep to it")
+    fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(png, dpi=100)
     plt.close(fig)
@@ -377,10 +509,11 @@ def _plot_safety(audit_rows: list[Row], png: Path) -> None:
 
 def _plot_latency(costs: list[Cost], png: Path) -> None:
     fig, ax = plt.subplots(figsize=(6, 4))
-    for engine in dict.fromkeys(c.engine for c in costs):
-        mine = sorted((c.cell_m, c.median_ms) for c in costs if c.engine == engine and c.median_ms is not None)
+    for engine, model in dict.fromkeys((c.engine, c.model) for c in costs):
+        mine = sorted((c.cell_m, c.median_ms) for c in costs
+                      if (c.engine, c.model) == (engine, model) and c.median_ms is not None)
         if mine:
-            ax.plot(*zip(*mine), marker="o", label=engine)
+            ax.plot(*zip(*mine), "-" if model == "paper" else "--", marker="o", label=f"{engine}, {model}")
     ax.set_xlabel("cell length (m)")
     ax.set_ylabel("median planning latency (ms), shortest")
     ax.set_yscale("log")

@@ -18,6 +18,7 @@ from ci.cli.options import (
     PER_HOUR,
     PER_RUN,
     RUNS,
+    SCALE,
     SCHEDULER,
     SEED,
     WORKERS,
@@ -39,6 +40,14 @@ def _models(option: str, text: str, known: dict[str, Any]) -> tuple[str, ...]:
     return names(option, text, lambda name: check_name(option, name, known))
 
 
+def _scales(text: str) -> tuple[float, ...]:
+    """Distinct bound-width factors (``spec.assumptions.world_bounds``), each finite and at least 0."""
+    scales = tuple(convert("--bounds-scale", SCALE, word) for word in names("--bounds-scale", text))
+    if len(set(scales)) < len(scales):
+        raise OptionError("--bounds-scale", text, "a factor given twice")
+    return scales
+
+
 def _cells(text: str) -> tuple[float, ...]:
     cells = []
     for word in names("--cells", text):
@@ -58,6 +67,12 @@ def _cells(text: str) -> tuple[float, ...]:
               help="Cell lengths in metres, comma-separated.")
 @click.option("--traffic", "traffic_text", default="paper,spread,following", show_default=True)
 @click.option("--sensing", "sensing_text", default="exact,noisy", show_default=True)
+@click.option("--model", "model_text", default="paper,sound", show_default=True,
+              help="The models that plan, compared over the same seeds: paper (its rules), sound (under the world's "
+                   "bounds, spec.assumptions.world_bounds).")
+@click.option("--bounds-scale", "scale_text", default="1", show_default=True,
+              help="Factors on the world's bounds' widths (speeds about their middle, the sensing error), "
+                   "comma-separated: 1 is the rule's own bounds. Every drive's containment is measured against them.")
 @click.option("--km", type=KM, default=25.0, show_default=True,
               help="Kilometres per run (a collision does not end a run: it starts again where it stands).")
 @click.option("--runs", type=RUNS, default=4, show_default=True, help="Seeds per combination.")
@@ -85,14 +100,15 @@ def _cells(text: str) -> tuple[float, ...]:
               help="audit.jsonl (resumable), audit.json, audit.md and plots.")
 @click.option("--fresh", is_flag=True, help="Forget the runs already recorded in --out instead of resuming.")
 @click.option("--json", "as_json", is_flag=True)
-def audit(cells: str, traffic_text: str, sensing_text: str, km: float, runs: int, seed: int, engine: str,
+def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, scale_text: str, km: float, runs: int,
+          seed: int, engine: str,
           cost_engines: str, snapshots: int, opportunity_checks: int, stop_rate_per_h: float,
           min_spawn_gap_m: float, range_sd_m: float, miss_rate: float, workers: int, executor_kind: str,
           scheduler: str | None, out_dir: str, fresh: bool, as_json: bool) -> None:
     """Audit the grid abstraction: cell size x traffic model x sensing model x seeds, driven closed-loop."""
-    from ci.audit import AuditPlan, planning_cost, rows, run_audit, write_reports
+    from ci.audit import AuditPlan, label, planning_cost, rows, run_audit, write_reports
     from ci.progress import km_progress
-    from sim.parts import SENSOR_MODELS, TRAFFIC_MODELS, DriveConfig
+    from sim.parts import PLANNING_MODELS, SENSOR_MODELS, TRAFFIC_MODELS, DriveConfig
     from spec.engines import get_engine
 
     executor = ExecutorChoice(ExecutorKind(executor_kind), workers, scheduler)
@@ -104,14 +120,17 @@ def audit(cells: str, traffic_text: str, sensing_text: str, km: float, runs: int
                        range_sd_m=range_sd_m, miss_rate=miss_rate, snapshots=snapshots, restart_after_collision=True,
                        opportunity_checks=opportunity_checks)
     plan = AuditPlan(_cells(cells), _models("--traffic", traffic_text, dict(TRAFFIC_MODELS)),
-                     _models("--sensing", sensing_text, dict(SENSOR_MODELS)), tuple(range(seed, seed + runs)), base)
+                     _models("--sensing", sensing_text, dict(SENSOR_MODELS)), tuple(range(seed, seed + runs)), base,
+                     _models("--model", model_text, dict(PLANNING_MODELS)), _scales(scale_text))
     configs = plan.configs()
-    configs[0].parts()  # the engine exists and answers: bad input before any run starts
+    for config in configs:
+        config.parts()  # the engine exists and answers each model: bad input before any run starts
     get_engine(engine).ready()  # its tools are installed (exit 4), or every plan of every run would fail
     total = len(configs) * runs
     err.print(f"audit: {len(configs)} combination(s) x seeds {seed}..{seed + runs - 1} = {total} run(s) of {km:g} km; "
               f"planner {engine}; on {executor.describe(total)}; results in {out_dir}")
-    labels = {i: f"{c.cell_m:g} m, {c.traffic}, {c.sensor}, seed {s}"
+    labels = {i: f"{c.cell_m:g} m, {c.traffic}, {c.sensor}, {c.model}"
+                 + ("" if c.bounds_scale == 1 else f" x{c.bounds_scale:g}") + f", seed {s}"
              for i, (c, s) in enumerate((c, s) for c in configs for s in plan.seeds)}
     with km_progress(err, total, km, "already in audit.jsonl (resumed; --fresh runs it again)") as bar:
         results = run_audit(plan, out_dir, executor, fresh,
@@ -123,24 +142,40 @@ def audit(cells: str, traffic_text: str, sensing_text: str, km: float, runs: int
         print_json({"combinations": [r.to_json() for r in audit_rows], "planning_cost": [c.to_json() for c in costs]})
     else:
         table = Table(title="the grid abstraction against traffic and sensing that do not keep to it")
-        for col in ("cell m", "traffic", "sensing", "km", "collisions /1000 km", "near misses /1000 km",
+        for col in ("cell m", "traffic", "sensing", "model", "km", "collisions /1000 km", "near misses /1000 km",
                     "not started: succeeded (checked)", "missed /1000 km est.", "delayed /1000 km est.",
                     "traffic collisions", "min gap ahead m", "violations",
                     "plan ms"):
             table.add_column(col, justify="right")
         for r in audit_rows:
-            table.add_row(f"{r.cell_m:g}", r.traffic, r.sensing, f"{r.km:.1f}",
+            table.add_row(f"{r.cell_m:g}", r.traffic, r.sensing, label(r), f"{r.km:.1f}",
                           f"{r.collisions} ({r.collisions_per_1000_km:.1f})",
                           f"{r.near_misses} ({r.near_misses_per_1000_km:.1f})",
                           f"{r.opportunity_total('missed')} ({r.opportunity_total('checked')})",
                           f"{r.missed_per_1000_km:.1f}", f"{r.delayed_per_1000_km:.1f}", str(r.traffic_collisions),
                           str(r.min_gap_left_m), str(r.violations), str(r.plan_ms_median))
         out.print(table)
+        models = Table(title="the models side by side: safety inside / after the assumptions, containment, price")
+        for col in ("cell m", "traffic", "sensing", "model", "overtakes /km", "collisions in / after /1000 km",
+                    "near misses in / after /1000 km", "breaches /1000 km", "re-plans on a breach", "keep-lane",
+                    "minimal-risk", "take-overs (after breach)", "waits without plan"):
+            models.add_column(col, justify="right")
+        for r in audit_rows:
+            models.add_row(f"{r.cell_m:g}", r.traffic, r.sensing, label(r),
+                           f"{r.per_1000_km(r.overtakes) / 1000:.2f}",
+                           f"{r.per_1000_km(r.attributed_count('contact', True)):.1f} / "
+                           f"{r.per_1000_km(r.attributed_count('contact', False)):.1f}",
+                           f"{r.per_1000_km(r.attributed_count('near_miss', True)):.1f} / "
+                           f"{r.per_1000_km(r.attributed_count('near_miss', False)):.1f}",
+                           f"{r.per_1000_km(sum(r.breaches.values())):.1f}", str(r.breach_replans),
+                           str(r.keep_lane_steps), str(r.minimal_risk_steps),
+                           f"{r.takeovers} ({r.takeovers_after_breach})", str(r.waits_without_plan))
+        out.print(models)
         cost_table = Table(title="planning cost on the scenarios the planner saw (shortest)")
-        for col in ("cell m", "engine", "n", "median ms", "p99 ms", "median states", "incomplete"):
+        for col in ("cell m", "model", "engine", "n", "median ms", "p99 ms", "median states", "incomplete"):
             cost_table.add_column(col, justify="right")
         for c in costs:
-            cost_table.add_row(f"{c.cell_m:g}", c.engine, str(c.n), str(c.median_ms), str(c.p99_ms),
+            cost_table.add_row(f"{c.cell_m:g}", c.model, c.engine, str(c.n), str(c.median_ms), str(c.p99_ms),
                                str(c.median_states), str(c.incomplete))
         out.print(cost_table)
         out.print("written: " + ", ".join(str(p) for p in paths))

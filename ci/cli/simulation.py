@@ -28,6 +28,9 @@ from spec.physical import LOOP
 @strategy_option(choices=(Strategy.SENSIBLE, Strategy.SHORTEST))
 @click.option("--cell-m", "cell_m", type=CELL_M, default=PAPER_GRID.cell, show_default=True,
               help="The planner's cell length in metres (21, 10.5, 7, 5.25); the world stays the paper's.")
+@click.option("--model", default="paper", show_default=True,
+              help="The model that plans: paper (its rules) or sound (under the world's bounds, "
+                   "spec.assumptions.world_bounds; containment is measured under both).")
 @click.option("--runs", type=RUNS, default=1, show_default=True)
 @click.option("--workers", type=WORKERS, default=1, show_default=True,
               help="Local processes (with --executor dask and no --scheduler: the local cluster's workers).")
@@ -45,7 +48,8 @@ from spec.physical import LOOP
 @click.option("--paper-replanning", is_flag=True,
               help="Re-plan only as the paper did (not when a deviation exceeds the tolerance).")
 @click.option("--json", "as_json", is_flag=True)
-def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: Strategy, cell_m: float, runs: int,
+def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: Strategy, cell_m: float, model: str,
+             runs: int,
              workers: int, executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool,
              step_tolerance: float, plan_tolerance: float, paper_replanning: bool, as_json: bool) -> None:
     """Drive the PyBullet simulator closed-loop and check every action against the model's prediction."""
@@ -62,11 +66,12 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: S
     if seed + runs - 1 >= 2**32:
         raise OptionError("--seed", seed, f"seed + runs - 1 must stay below 2**32 (runs {runs})")
     campaign = DriveConfig(km, until_failure, engine, strategy, not paper_replanning, step_tolerance, plan_tolerance,
-                           cell_m)
+                           cell_m, model=model)
     campaign.parts()  # the engine exists and answers the strategy: bad input before any run starts
     get_engine(engine).ready()  # its tools are installed (exit 4), or every plan of every run would fail
     limit = f"{km:g} km" + (" or until failure" if until_failure else "")
-    err.print(f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; engine {engine}, {strategy.value}, "
+    err.print(f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; {model} model; engine {engine}, "
+              f"{strategy.value}, "
               f"{campaign.grid.describe()}; on {executor.describe(runs)}; results in {Path(out_dir) / RUNS_FILE}")
     resumed = f"already in {RUNS_FILE} (resumed; --fresh runs it again)"
     with km_progress(err, runs, km, resumed) as bar:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -72,9 +73,11 @@ def test_the_audit_command_writes_its_reports(tmp_path: Path) -> None:
                timeout_s=300)
     assert done.returncode == 0, done.stderr
     result = json.loads(done.stdout)
-    assert [(c["cell_m"], c["sensing"]) for c in result["combinations"]] == [(21.0, "exact"), (21.0, "noisy")]
+    assert [(c["cell_m"], c["sensing"], c["model"]) for c in result["combinations"]] == [
+        (21.0, "exact", "paper"), (21.0, "exact", "sound"), (21.0, "noisy", "paper"), (21.0, "noisy", "sound")]
     assert result["planning_cost"][0]["engine"] == "interpreter" and result["planning_cost"][0]["n"] >= 2
-    for name in ("audit.json", "audit.md", "audit-safety.png", "audit-latency.png", AUDIT_FILE):
+    assert {c["model"] for c in result["planning_cost"]} == {"paper", "sound"}
+    for name in ("audit.json", "audit.md", "audit-safety.png", "audit-latency.png", "audit-models.png", AUDIT_FILE):
         assert (tmp_path / name).stat().st_size > 0
 
 
@@ -95,3 +98,32 @@ def test_bad_audit_input_is_one_line_exit_two(tmp_path: Path, args: tuple[str, .
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
     assert all(word in lines[0] for word in words), lines[0]
+
+
+def test_an_audit_resumed_with_other_shared_settings_is_refused_naming_the_difference(tmp_path: Path) -> None:
+    from ci.audit import check_resume
+    from spec.errors import OptionError
+
+    plan = AuditPlan((21.0,), ("paper",), ("exact",), (4,), DriveConfig(0.2), ("paper", "sound"))
+    run_audit(plan, str(tmp_path), ExecutorChoice())
+    check_resume(tmp_path / AUDIT_FILE, AuditPlan((21.0, 10.5), ("paper",), ("exact",), (4,), DriveConfig(0.2),
+                                                  ("sound",), (1.0, 2.0)), "--out")  # more combinations: resumes
+    with pytest.raises(OptionError, match=r"km = 0\.2.*asks 0\.3") as refused:
+        run_audit(AuditPlan((21.0,), ("paper",), ("exact",), (4,), DriveConfig(0.3)), str(tmp_path), ExecutorChoice())
+    assert refused.value.key == "--out"
+
+
+def test_rows_keep_models_and_bound_scales_apart_and_split_encounters_by_attribution() -> None:
+    from ci.audit import Done
+    from sim.safety import SafetyReport
+    from sim.summary import RunSummary
+
+    paper, sound = DriveConfig(1.0), DriveConfig(1.0, model="sound")
+    attributed = SafetyReport(attributed={"contact after": 2, "near_miss inside": 1})
+    done = [Done(paper, RunSummary(1, km=2.0, overtakes=8)), Done(sound, RunSummary(1, km=2.0, overtakes=2,
+                                                                                    safety=attributed)),
+            Done(replace(sound, bounds_scale=2.0), RunSummary(1, km=2.0))]
+    table = rows(done)
+    assert [(r.model, r.bounds_scale) for r in table] == [("paper", 1.0), ("sound", 1.0), ("sound", 2.0)]
+    assert table[1].attributed_count("contact", False) == 2 and table[1].attributed_count("near_miss", True) == 1
+    assert table[0].overtakes == 8 and table[1].per_1000_km(table[1].overtakes) == 1000.0

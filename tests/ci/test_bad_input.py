@@ -253,6 +253,7 @@ CASES: list[Case] = [
     *whole("simulate", "--seed", SEED), *whole("simulate", "--runs", RUNS),
     *whole("simulate", "--workers", WORKERS),
     *choices("simulate", "--engine"), *choices("simulate", "--strategy"), *choices("simulate", "--executor"),
+    *choices("simulate", "--model"),
     _case("simulate", "--strategy=optimal", named="--strategy"),
     *schedulers("simulate"),
     _case("simulate", "--seed=4294967295", "--runs=2", named="--seed"),
@@ -265,6 +266,9 @@ CASES: list[Case] = [
     *whole("audit", "--snapshots", PER_RUN), *whole("audit", "--opportunity-checks", PER_RUN),
     *whole("audit", "--workers", WORKERS),
     *choices("audit", "--traffic", lists=True), *choices("audit", "--sensing", lists=True),
+    *choices("audit", "--model", lists=True), _case("audit", "--model=paper,paper", named="--model"),
+    *(_case("audit", f"--bounds-scale={value}", named="--bounds-scale")
+      for value in (*NOT_NUMBERS, "", ",", "1,1", "101")),
     *choices("audit", "--engine"), *choices("audit", "--engines", lists=True), *choices("audit", "--executor"),
     _case("audit", "--miss-rate=1.5", named="--miss-rate"),
     *schedulers("audit"), *out_dirs("audit"), *unknown("audit"),
