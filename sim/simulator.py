@@ -392,7 +392,7 @@ class Simulator:
         self.pending = actions[len(executed):]
         self.enveloped = True
         try:
-            profiles = plan_profiles(executed, speed_mps, self.grid, to_common=False)
+            profiles = plan_profiles(executed, speed_mps, self.grid, to_common=False) if executed else []
             for k, (action, profile) in enumerate(zip(executed, profiles)):
                 self.doing = f"{action.value} ({what}, step {k + 1} of {len(actions)})"
                 self.pending = actions[k + 1:]

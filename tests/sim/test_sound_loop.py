@@ -57,6 +57,13 @@ def test_no_sound_decision_runs_on_past_a_breach_and_a_broken_world_is_counted()
     assert sim.longest_s <= LOOP.lane_change_lateral_s + 2 * sim.executor.dt_s
 
 
+def test_a_breach_at_the_snapshot_itself_ends_the_decision_before_its_first_step() -> None:
+    """Noisy sensing: a reading off by more than the error bound, or a vehicle missed, is out of the set at once."""
+    _, summary = drive(DriveConfig(2.0, model="sound", sensor="noisy", range_sd_m=3.0), 20261126)
+    at_snapshot = [b for b in summary.containment.breaches if b.kind.value in ("sensing error", "appeared")]
+    assert at_snapshot and summary.breach_replans > 0
+
+
 def test_paper_model_drives_measure_containment_without_acting_on_it() -> None:
     _, summary = drive(DriveConfig(1.0, traffic="spread", stop_rate_per_h=300.0), 2)
     assert summary.decisions > 0 and summary.containment.checked_s > 0
