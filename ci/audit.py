@@ -356,10 +356,9 @@ def planning_cost(results: Iterable[Done], engines: Iterable[str], timeout_s: fl
 def write_reports(audit_rows: list[Row], costs: list[Cost], audit: AuditPlan, out_dir: str) -> list[Path]:
     """``audit.json``, ``audit.md`` and the two plots in ``out_dir``; the files written."""
     out = Path(out_dir)
-    per_combination = ("cell_m", "traffic", "sensor")
-    settings = {k: v for k, v in audit.base.all_json().items() if k not in per_combination}
+    settings = {k: v for k, v in audit.base.all_json().items() if k not in PER_COMBINATION}
     settings |= {"cells_m": list(audit.cells_m), "traffic": list(audit.traffic), "sensing": list(audit.sensing),
-                 "seeds": list(audit.seeds)}
+                 "models": list(audit.models), "bounds_scales": list(audit.bounds_scales), "seeds": list(audit.seeds)}
     data = {"settings": settings, "combinations": [r.to_json() for r in audit_rows],
             "planning_cost": [c.to_json() for c in costs]}
     paths = [out / "audit.json", out / "audit.md", out / "audit-safety.png", out / "audit-latency.png",
@@ -491,12 +490,15 @@ def _plot_by_cell(audit_rows: list[Row], png: Path, panels: tuple[tuple[str, Cal
     """One panel per figure against cell size, one line per traffic, sensing, model and bound scale."""
     fig, axes = plt.subplots(1, len(panels), figsize=(11, 4))
     lines = dict.fromkeys((r.traffic, r.sensing, r.model, r.bounds_scale) for r in audit_rows)
+    worlds = list(dict.fromkeys((traffic, sensing) for traffic, sensing, _, _ in lines))  # a colour each
+    scales = list(dict.fromkeys(scale for _, _, _, scale in lines))  # a marker each
     for ax, (what, value) in zip(axes, panels):
         for traffic, sensing, model, scale in lines:
             mine = sorted((r.cell_m, value(r)) for r in audit_rows
                           if (r.traffic, r.sensing, r.model, r.bounds_scale) == (traffic, sensing, model, scale))
             name = f"{traffic}, {sensing}, {model}{'' if scale == 1 else f' x{scale:g}'}"
-            ax.plot(*zip(*mine), "-" if model == "paper" else "--", marker="o", label=name)
+            ax.plot(*zip(*mine), "-" if model == "paper" else "--", marker="osD^v<>"[scales.index(scale) % 7],
+                    color=f"C{worlds.index((traffic, sensing)) % 10}", label=name)
         ax.set_xlabel("cell length (m)")
         ax.set_ylabel(what)
         ax.invert_xaxis()

@@ -98,6 +98,8 @@ class Simulator:
         self.doing = "start-up"  # what the AV was executing: recorded with every collision
         self._side = {car.body: car.x_m > 0 for car in self.traffic.left}
         self.visible = RaySensor(self.scene, self.sensor_rng)  # exact rays, no draws: is a vehicle sensed now?
+        self._seen: set[int] = set()  # the bodies ``visible`` saw at ``_seen_at`` (the drive's clock)
+        self._seen_at = -1.0
         self.containment: Containment | None = None  # the sets of the decision under way
         self.enveloped = False  # a sound decision's action is under way: the AV is held to its envelope
         self.interrupt = False  # a breach asks the sound model's decision under way to end
@@ -186,10 +188,12 @@ class Simulator:
 
     def _sensed(self, car: KinematicCar) -> bool:
         """Whether ``car`` is sensed now (exact rays, whatever the drive's sensor model: a vehicle the sensors could
-        report, so a decision could know it)."""
-        pose = self.car.pose()
-        truth = in_range(pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming)
-        return any(r.body == car.body for r in self.visible.read(truth))
+        report, so a decision could know it); the rays are cast once per control step, when first asked."""
+        if self._seen_at != self.summary.sim_time_s:
+            pose = self.car.pose()
+            truth = in_range(pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming)
+            self._seen, self._seen_at = {r.body for r in self.visible.read(truth)}, self.summary.sim_time_s
+        return car.body in self._seen
 
     def _attribution(self, body: int) -> str | None:
         """Whether an encounter with ``body`` happened inside the assumptions (no breach by it under the decision
