@@ -426,9 +426,11 @@ class Simulator:
         right one, then brake in lane to the hold speed, and towards a standstill while the sensed vehicle ahead is
         nearer than the safety specification allows (closing at the AV's whole speed: it may stand)."""
         pose = self.car.pose()
-        if self.takeover is not None and self.takeover.outcome == "under way":
+        again = self.takeover is not None and self.takeover.outcome == "under way"
+        broke = bool(self.breached_before) or (self.containment is not None and self.containment.world_breached()) \
+            or (again and self.takeover is not None and self.takeover.after_breach)  # one take-over after another
+        if again and self.takeover is not None:
             self.takeover.outcome = "taken over again"
-        broke = bool(self.breached_before) or (self.containment is not None and self.containment.world_breached())
         self.takeover = Takeover(round(self.summary.km, 3), round(self.summary.sim_time_s, 1), cause,
                                  Executor.lane_of(pose.y_m).value, broke)
         self.summary.takeovers.append(self.takeover)

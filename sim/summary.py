@@ -37,7 +37,7 @@ class Takeover:
     t_s: float
     cause: str
     lane: str
-    after_breach: bool  # a vehicle had broken the assumptions of the decision before it
+    after_breach: bool  # a vehicle had broken the assumptions of the decision before it (or of the take-over before)
     outcome: str = "under way"  # "handed back", "taken over again", "collision"
 
 
