@@ -4,8 +4,11 @@ Two clocks: decisions (one per action, 3 or 6 s) and physics (``LOOP.physics_dt_
 Re-planning as in the paper: when a vehicle not in the current plan is sensed, when the
 plan runs out, and after ``replan_after_actions`` actions; and (``replan_on_violation``,
 on by default, not in the paper) as soon as a vehicle deviates from the prediction
-beyond the tolerance, since the plan's safety margins no longer hold. The world is re-centred on the
-AV every kilometre so coordinates stay small however far it drives.
+beyond the tolerance, since the plan's safety margins no longer hold. Under the sound model
+(``DriveConfig.model``) a decision is kept only while containment holds (``sim.containment``, checked
+every control step under both models): a breach ends it, and without a plan the AV keeps its lane
+safely, keeps what the last decision proved, or hands over to the fallback. The world is re-centred on
+the AV every kilometre so coordinates stay small however far it drives.
 
 Every part (scene, car, traffic, sensors, planner, observers) is passed in (``sim.parts``);
 the simulator owns its scene's ``BulletClient`` and one ``numpy`` generator seeded with the
@@ -370,9 +373,9 @@ class Simulator:
         containment: the rest of its plan, or, after its end, its minimal-risk manoeuvre."""
         assert self.proved is not None
         self.containment, self.interrupt = self.proved, False
-        self.summary.kept_plans.append(self._event(FailureKind.PLANNER, why, "kept the last decision's proof"))
         pending, self.pending = self.pending, ()
         if pending:
+            self.summary.kept_plans.append(self._event(FailureKind.PLANNER, why, "kept the rest of the last plan"))
             return self._sound_execute(pending, (), self.car.pose().speed_mps, "the last plan, kept")
         self.summary.minimal_risk_steps += 1
         self.doing = f"minimal-risk manoeuvre (the last decision's, {why})"
