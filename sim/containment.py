@@ -132,7 +132,7 @@ class Containment:
         """The world was re-centred by ``dx_m``."""
         self.x0_m += dx_m
 
-    def vehicles(self, lane: Lane, car: KinematicCar) -> tuple[str, Vehicle | None, list[Vehicle]]:
+    def _sets(self, lane: Lane, car: KinematicCar) -> tuple[str, Vehicle | None, list[Vehicle]]:
         """The vehicle the decision knew ``car`` as (None: unknown), and the intervals it must be inside."""
         known = self.tracked.get(car.body) if car.respawns == self.generation.get(car.body) else None
         return (known.name if known else f"unknown {lane.value}-lane vehicle"), known, \
@@ -158,7 +158,7 @@ class Containment:
                                                        BreachKind.FOLLOWER,
                                                        SAFETY.required_gap_m(closing_mps) - gap_m, doing)))
                         continue
-                name, known, sets = self.vehicles(lane, car)
+                name, known, sets = self._sets(lane, car)
                 if known is None and lane is Lane.RIGHT and car.x_m < av.x_m - CAR.length_m:
                     continue  # an oncoming vehicle the AV has passed: no condition speaks of it
                 dx = car.x_m - self.x0_m

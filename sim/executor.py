@@ -37,7 +37,6 @@ class Executor:
         self.x_ref_m = car.pose().x_m
         self.v_ref_mps = 0.0  # the reference speed of the control step under way
         self.lane_due: Lane | None = lane  # the lane the car must be wholly in now (None: a sideways move under way)
-        self.cut_short = False  # the last ``run`` ended early, when its ``stop`` said so
         self.dt_s = scene.dt_s * LOOP.control_every_steps
 
     def reset_reference(self, ahead_m: float = 0.0) -> None:
@@ -48,7 +47,7 @@ class Executor:
             stop: Callable[[], bool] | None = None) -> bool:
         """Execute ``action`` for its duration along ``profile`` (default: its speed throughout); False as soon
         as ``tick`` reports a collision. ``stop`` is asked after every control step once any sideways move is over;
-        when it says so the action ends there (``cut_short``), the AV in the action's lane."""
+        when it says so the action ends there, the AV in the action's lane."""
         rule = ACTION_RULES[action]
         if rule.from_lane is not None and rule.from_lane is not self.lane:
             raise EngineError(f"simulator: {action.value} asked of an AV in the {self.lane.value} lane "
@@ -61,7 +60,6 @@ class Executor:
         duration_s = float(rule.duration_s)
         steps = max(1, round(duration_s / self.dt_s))
         lateral_s = min(duration_s, LOOP.lane_change_lateral_s)
-        self.cut_short = False
         for k in range(steps):
             phase = min(1.0, (k + 1) * self.dt_s / lateral_s)
             y_ref = y_from + (y_to - y_from) * (1 - math.cos(math.pi * phase)) / 2
@@ -70,7 +68,6 @@ class Executor:
             if not self.control(profile.at(k * self.dt_s), y_ref, vy_ref, tick):
                 return False
             if stop is not None and phase >= 1 and stop():
-                self.cut_short = True
                 break
         self.lane = to_lane
         return True
