@@ -38,6 +38,7 @@ from ci.simulate import campaign_key, recorded_runs
 from oracle.planner import plan
 from sim.opportunity import Refusal
 from sim.parts import DriveConfig
+from sim.safety import attribution_key
 from sim.simulator import run_drive
 from sim.summary import RunSummary
 from sim.tolerance import HISTOGRAM_BIN, HISTOGRAM_BINS, histogram_quantile
@@ -186,15 +187,19 @@ class Row:
         return 1000 * count / self.km if self.km else math.nan
 
     def attributed_count(self, kind: str, inside: bool) -> int:
-        return self.attributed.get(f"{kind} {'inside' if inside else 'after'}", 0)
+        return self.attributed.get(attribution_key(kind, inside), 0)
+
+    def inside_after(self, kind: str) -> str:
+        """Contacts or near misses (``kind``) per 1,000 km, inside / after the assumptions, as tables print them."""
+        return " / ".join(f"{self.per_1000_km(self.attributed_count(kind, inside)):.1f}" for inside in (True, False))
 
     @property
     def collisions_per_1000_km(self) -> float:
-        return 1000 * self.collisions / self.km if self.km else math.nan
+        return self.per_1000_km(self.collisions)
 
     @property
     def near_misses_per_1000_km(self) -> float:
-        return 1000 * self.near_misses / self.km if self.km else math.nan
+        return self.per_1000_km(self.near_misses)
 
     def opportunity_total(self, what: str) -> int:
         return sum(counts.get(what, 0) for counts in self.opportunities.values())
@@ -395,10 +400,7 @@ def models_markdown(audit_rows: list[Row]) -> list[str]:
         lines.append(
             f"| {r.cell_m:g} | {r.traffic} | {r.sensing} | {label(r)} | {r.km:.1f} | "
             f"{r.overtakes / r.km if r.km else math.nan:.2f} | "
-            f"{r.per_1000_km(r.attributed_count('contact', True)):.1f} / "
-            f"{r.per_1000_km(r.attributed_count('contact', False)):.1f} | "
-            f"{r.per_1000_km(r.attributed_count('near_miss', True)):.1f} / "
-            f"{r.per_1000_km(r.attributed_count('near_miss', False)):.1f} | "
+            f"{r.inside_after('contact')} | {r.inside_after('near_miss')} | "
             f"{r.per_1000_km(sum(r.breaches.values())):.1f} ({kinds}) | {share} | {r.decisions} | "
             f"{r.breach_replans} | {r.keep_lane_steps} | {r.minimal_risk_steps} | "
             f"{r.takeovers} ({r.takeovers_after_breach}) | {r.waits_without_plan} | {r.delayed_per_1000_km:.1f} |")

@@ -74,7 +74,7 @@ class SafetyReport:
 
     def count(self, kind: str, inside: bool) -> int:
         """Near misses or contacts (``kind``) inside the assumptions, or after one broke."""
-        return self.attributed.get(f"{kind} {'inside' if inside else 'after'}", 0)
+        return self.attributed.get(attribution_key(kind, inside), 0)
 
     def to_json(self) -> dict[str, Any]:
         def num(v: float) -> float | None:
@@ -154,10 +154,15 @@ class SafetyMonitor:
 
     def _keep(self, event: Encounter) -> None:
         if event.assumptions is not None:
-            key = f"{event.kind} {'inside' if event.assumptions.startswith('inside') else 'after'}"
+            key = attribution_key(event.kind, event.assumptions.startswith("inside"))
             self.report.attributed[key] = self.report.attributed.get(key, 0) + 1
         if len(self.report.encounters) < MAX_RECORDS:
             self.report.encounters.append(event)
+
+
+def attribution_key(kind: str, inside: bool) -> str:
+    """How ``SafetyReport.attributed`` counts an encounter: "contact inside", "near_miss after", ..."""
+    return f"{kind} {'inside' if inside else 'after'}"
 
 
 def _lane_name(lane: Lane) -> str:

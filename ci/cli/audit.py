@@ -163,10 +163,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
         for r in audit_rows:
             models.add_row(f"{r.cell_m:g}", r.traffic, r.sensing, label(r),
                            f"{r.per_1000_km(r.overtakes) / 1000:.2f}",
-                           f"{r.per_1000_km(r.attributed_count('contact', True)):.1f} / "
-                           f"{r.per_1000_km(r.attributed_count('contact', False)):.1f}",
-                           f"{r.per_1000_km(r.attributed_count('near_miss', True)):.1f} / "
-                           f"{r.per_1000_km(r.attributed_count('near_miss', False)):.1f}",
+                           r.inside_after("contact"), r.inside_after("near_miss"),
                            f"{r.per_1000_km(sum(r.breaches.values())):.1f}", str(r.breach_replans),
                            str(r.keep_lane_steps), str(r.minimal_risk_steps),
                            f"{r.takeovers} ({r.takeovers_after_breach})", str(r.waits_without_plan))
