@@ -20,6 +20,7 @@ from sim.parts import DriveConfig
 from sim.report import plot_trace
 from sim.simulator import run_drive
 from sim.summary import RunSummary
+from spec.errors import OptionError
 
 RUNS_FILE = "runs.jsonl"
 
@@ -40,6 +41,7 @@ def _simulate(campaign: DriveConfig, seeds: list[int], out: Path, executor: Exec
     log = out / RUNS_FILE
     if fresh:
         log.unlink(missing_ok=True)
+    check_same_campaign(log, campaign)
     done = {seed: run for seed, run in recorded(log, campaign).items() if seed in seeds}
     for summary in done.values():
         if on_done:
@@ -80,6 +82,21 @@ def recorded_runs(log: Path) -> dict[tuple[str, int], RunSummary]:
             summary = RunSummary.from_json(record["run"])
             runs[(campaign_key(record["campaign"]), summary.seed)] = summary
     return runs
+
+
+def check_same_campaign(log: Path, campaign: DriveConfig) -> None:
+    """Refuse to go on in a folder whose recorded runs were driven with another configuration (faults, model, km
+    ...), naming the first difference: their traces and plots would be overwritten, and their runs never mix."""
+    asked = campaign.all_json()
+    for record in read_records(log):
+        try:
+            recorded_config = DriveConfig.from_json(record["campaign"]).all_json()
+        except (KeyError, TypeError, ValueError, OptionError):
+            continue  # a record of another version: run again, never mixed
+        for key, value in asked.items():
+            if recorded_config.get(key) != value:
+                raise OptionError("--out", str(log.parent), f"holds runs with {key} = {recorded_config.get(key)!r}, "
+                                  f"this campaign asks {value!r}; --fresh starts again, or use another --out")
 
 
 def recorded(log: Path, campaign: DriveConfig) -> dict[int, RunSummary]:

@@ -38,6 +38,7 @@ class Executor:
         self.v_ref_mps = 0.0  # the reference speed of the control step under way
         self.lane_due: Lane | None = lane  # the lane the car must be wholly in now (None: a sideways move under way)
         self.dt_s = scene.dt_s * LOOP.control_every_steps
+        self.steer_offset_rad = 0.0  # a steering fault's offset on every command (``sim.faults.SteeringFault``)
 
     def reset_reference(self, ahead_m: float = 0.0) -> None:
         """Start the position reference ``ahead_m`` in front of the car: where the new plan's frame puts it."""
@@ -87,7 +88,7 @@ class Executor:
         v = max(pose.speed_mps, 1.0)
         vy = v * math.sin(pose.yaw_rad)
         lateral_accel = K_Y * (y_ref - pose.y_m) + K_VY * (vy_ref - vy)
-        steer = math.atan(self.car.spec.wheelbase_m * lateral_accel / (v * v))
+        steer = math.atan(self.car.spec.wheelbase_m * lateral_accel / (v * v)) + self.steer_offset_rad
         for _ in range(LOOP.control_every_steps):
             self.car.command(command, steer, self.scene.dt_s)
             self.scene.step()

@@ -28,6 +28,7 @@ from spec.answers import Answer, Strategy
 from spec.assumptions import Bounds, world_bounds
 from spec.engines import Engine, check_strategy, get_engine, load_engines, parse_strategy
 from spec.errors import OptionError, check_number
+from spec.faults import DEFAULT_STEERING_OFFSET_DEG, NO_FAULTS, FaultKind, FaultSpec, parse_faults
 from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
 from spec.physical import EVENTS, LOOP, MAX_STOP_RATE_PER_H, NOISE, EventSpec, NoiseSpec
@@ -93,6 +94,7 @@ class Parts:
     sensor: SensorFactory = RaySensor
     observers: tuple[Observer, ...] = field(default=())
     bounds: Bounds | None = None  # the assumptions containment is measured against (None: not measured)
+    faults: FaultSpec = NO_FAULTS  # what the fault injectors do to the sensors and the steering (``sim.faults``)
 
 
 @dataclass(frozen=True, slots=True)
@@ -118,6 +120,8 @@ class DriveConfig:
     opportunity_checks: int = 0  # decisions without an overtake replayed in physics per run (``sim.opportunity``)
     model: str = "paper"  # which model decides: the paper's rules, or the sound model under ``bounds``
     bounds_scale: float = 1.0  # the world's bounds' widths times this (``spec.assumptions.world_bounds``)
+    faults: str = ""  # the fault injectors, as ``--faults`` takes them (``spec.faults.parse_faults``); kept canonical
+    steering_offset_deg: float = DEFAULT_STEERING_OFFSET_DEG  # the steering fault's size
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "strategy", parse_strategy(self.strategy))
@@ -131,6 +135,7 @@ class DriveConfig:
                                     ("--range-sd-m", self.range_sd_m, math.inf), ("--miss-rate", self.miss_rate, 1.0)):
             check_number(option, value, high)
         world_bounds(self.traffic, self.sensor, self.range_sd_m, self.bounds_scale)  # checked here, not in a worker
+        object.__setattr__(self, "faults", parse_faults(self.faults, "--faults", self.steering_offset_deg).text())
 
     @property
     def events(self) -> EventSpec:
@@ -139,6 +144,10 @@ class DriveConfig:
     @property
     def noise(self) -> NoiseSpec:
         return NoiseSpec(range_sd_m=self.range_sd_m, miss_rate=self.miss_rate)
+
+    @property
+    def fault_spec(self) -> FaultSpec:
+        return parse_faults(self.faults, "--faults", self.steering_offset_deg)
 
     @property
     def grid(self) -> Grid:
@@ -159,7 +168,8 @@ class DriveConfig:
             traffic = functools.partial(traffic, events=self.events)  # type: ignore[call-arg]
         if self.sensor != "exact":
             sensor = functools.partial(sensor, noise=self.noise)  # type: ignore[call-arg]
-        return Parts(planner, traffic=traffic, sensor=sensor, observers=observers, bounds=self.bounds)
+        return Parts(planner, traffic=traffic, sensor=sensor, observers=observers, bounds=self.bounds,
+                     faults=self.fault_spec)
 
     def to_json(self) -> dict[str, Any]:
         """The configuration as records keep it; event and noise parameters only where the models use them, so that
@@ -169,8 +179,10 @@ class DriveConfig:
             del data["stop_rate_per_h"], data["min_spawn_gap_m"]
         if self.sensor == "exact":
             del data["range_sd_m"], data["miss_rate"]
+        if not self.fault_spec.of(FaultKind.STEERING):
+            del data["steering_offset_deg"]
         for key, default in (("restart_after_collision", False), ("opportunity_checks", 0), ("model", "paper"),
-                             ("bounds_scale", 1.0)):
+                             ("bounds_scale", 1.0), ("faults", "")):
             if data[key] == default:  # records written before these existed stay the same campaign
                 del data[key]
         return data
@@ -184,7 +196,8 @@ class DriveConfig:
                 "stop_rate_per_h": self.stop_rate_per_h, "min_spawn_gap_m": self.min_spawn_gap_m,
                 "range_sd_m": self.range_sd_m, "miss_rate": self.miss_rate, "snapshots": self.snapshots,
                 "restart_after_collision": self.restart_after_collision,
-                "opportunity_checks": self.opportunity_checks, "model": self.model, "bounds_scale": self.bounds_scale}
+                "opportunity_checks": self.opportunity_checks, "model": self.model, "bounds_scale": self.bounds_scale,
+                "faults": self.faults, "steering_offset_deg": self.steering_offset_deg}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> DriveConfig:

@@ -18,6 +18,7 @@ drive's seed, which every random part draws from.
 from __future__ import annotations
 
 import contextlib
+import math
 import time
 from collections.abc import Callable
 from dataclasses import replace
@@ -30,10 +31,11 @@ from sim import opportunity
 from sim.containment import Containment
 from sim.discretiser import discretise, in_window, reading_cell
 from sim.executor import Executor
+from sim.faults import FaultEvent, FaultySensor, SteeringFault, attribute
 from sim.observers import StepEvent, TraceWriter
 from sim.parts import DriveConfig, Parts
 from sim.safety import SafetyMonitor
-from sim.sensors import RaySensor, Reading, in_range
+from sim.sensors import RaySensor, Reading, SensorModel, in_range
 from sim.summary import Failure, RunSummary, Takeover
 from sim.tolerance import ToleranceReport, Violation
 from sim.vehicle import KinematicCar, Pose, first_contact
@@ -41,12 +43,13 @@ from spec.actions import Action
 from spec.answers import Answer, Status
 from spec.envelope import MINIMAL_RISK
 from spec.errors import ScenarioError
+from spec.faults import lost_control
 from spec.files import scenario_to_dict
 from spec.kinds import FailureKind
 from spec.lanes import Lane
 from spec.models import ModelKind
 from spec.motion import SpeedProfile, action_speed_mps, plan_profiles, ramp_gain_m, reference_offset_m
-from spec.physical import CAR, LOOP
+from spec.physical import CAR, LOOP, SENSORS
 from spec.safety import SAFETY
 from spec.scenario import Scenario, problem_for
 from spec.sound import Sound
@@ -86,6 +89,12 @@ class Simulator:
         self.safety = SafetyMonitor()
         self.summary.safety = self.safety.report
         self.origin_km = 0.0
+        self.faults = parts.faults
+        self.faulty: FaultySensor | None = None  # the sensing faults' injectors, kept over restarts (their log too)
+        self.steering = SteeringFault(parts.faults, seed)
+        self.manoeuvre_faults: list[FaultEvent] = []  # sensing faults in the snapshots of the manoeuvre under way
+        self.steered: list[FaultEvent] = []  # steering faults under way during it
+        self.sweep_every = max(1, round(1 / (SENSORS.sweep_hz * LOOP.physics_dt_s * LOOP.control_every_steps)))
         self._assemble()
 
     def _assemble(self) -> None:
@@ -93,7 +102,11 @@ class Simulator:
         self.scene = self.parts.scene()
         self.car = self.parts.car(self.scene, 0.0, self.scene.lane_y(Lane.LEFT))
         self.traffic = self.parts.traffic(self.scene, self.rng, 0.0)
-        self.sensor = self.parts.sensor(self.scene, self.sensor_rng)
+        self.sensor: SensorModel | FaultySensor = self.parts.sensor(self.scene, self.sensor_rng)
+        if self.faults.sensing:
+            if self.faulty is None:
+                self.faulty = FaultySensor(self.sensor, self.faults, self.grid, self.summary.seed)
+            self.faulty.inner, self.sensor = self.sensor, self.faulty
         self.executor = Executor(self.scene, self.car, Lane.LEFT, self.grid)
         self.safety.forget()
         self._implied: dict[int, float] = {}  # body -> the gap the plan under way implies at the action's end
@@ -109,6 +122,9 @@ class Simulator:
         self.breached_before: set[int] = set()  # vehicles that broke the previous decision's assumptions
         self.takeover: Takeover | None = None  # the fallback's take-over under way
         self.proved: Containment | None = None  # the containment of the last sound decision that was executed
+        self.sweep: tuple[Reading, ...] | None = ()  # the last sweep the sensors delivered (None: it was dropped)
+        self.controls = 0  # control steps since the scene was assembled: the sensors sweep on every ``sweep_every``-th
+        self._on_sweep()
 
     # -- the physics clock ------------------------------------------------------------------
     def _tick(self, dt_s: float) -> bool:
@@ -121,6 +137,12 @@ class Simulator:
             self._contain(pose, dt_s)
         self.safety.observe(pose, Executor.lane_of(pose.y_m), self.traffic.left, self.traffic.oncoming,
                             self.summary.km, self.summary.sim_time_s, self.doing, self._implied.get, self._attribution)
+        lost = lost_control(pose.y_m, pose.yaw_rad)
+        if lost is not None:
+            self._fail(FailureKind.LOSS_OF_CONTROL, lost, f"during {self.doing}" + (
+                f", steering offset {math.degrees(self.executor.steer_offset_rad):+.0f} degrees"
+                if self.executor.steer_offset_rad else ""))
+            return False
         car = first_contact(self.scene, self.car.body, self.traffic.cars())
         if car is not None:
             in_left = car in self.traffic.left
@@ -129,7 +151,7 @@ class Simulator:
                                 self._attribution(car.body))
             lane = "left-lane" if in_left else "oncoming"
             self._fail(FailureKind.COLLISION, f"collision with a{'n' if lane == 'oncoming' else ''} {lane} vehicle",
-                       f"{car.x_m - x:+.1f} m ahead, during {self.doing}")
+                       f"{car.x_m - x:+.1f} m ahead, during {self.doing}", car.body)
             if self.takeover is not None:
                 self.takeover.outcome = "collision"
             return False
@@ -149,6 +171,9 @@ class Simulator:
                 self.containment.shift_x(-x)
             x = 0.0  # the car is now at the origin
         self.summary.km = self.origin_km + x / 1000
+        self.controls += 1
+        if self.swept():
+            self._on_sweep()
         if self.report and self.summary.km >= self._next_report_km:
             self.report((self.summary.seed, self.summary.km))
             self._next_report_km = int(self.summary.km) + 1
@@ -217,8 +242,20 @@ class Simulator:
         """A failure record stamped with where and when the drive is now."""
         return Failure(kind, cause, detail, round(self.summary.km, 3), round(self.summary.sim_time_s, 1))
 
-    def _fail(self, kind: FailureKind, cause: str, detail: str) -> None:
-        self.summary.failures.append(self._event(kind, cause, detail))
+    def _fail(self, kind: FailureKind, cause: str, detail: str, body: int | None = None) -> None:
+        fault = attribute(body, self.manoeuvre_faults, self.steered)
+        self.summary.failures.append(replace(self._event(kind, cause, detail),
+                                             fault=None if fault is None else fault.kind.value))
+
+    def _decided(self, lane: Lane) -> None:
+        """A decision was taken from the last sweep: a decision in the left lane starts a new manoeuvre; the faults
+        that changed its snapshot are remembered for the attribution (``sim.faults.attribute``)."""
+        if lane is Lane.LEFT:
+            self.manoeuvre_faults = []
+            self.steered = [] if self.steering.active is None else [self.steering.active]
+        for event in self.faulty.in_sweep() if self.faulty else ():
+            if event not in self.manoeuvre_faults:
+                self.manoeuvre_faults.append(event)
 
     # -- the decision clock ------------------------------------------------------------------
     def drive(self, km: float, until_failure: bool = False) -> RunSummary:
@@ -227,7 +264,7 @@ class Simulator:
         started = time.perf_counter()
         ok = self.executor.hold(START_UP_S, self.grid.speed, self._tick)  # start-up: reach the common speed
         episode_km = 0.0
-        while self.summary.km < km and not (until_failure and self.summary.failures):
+        while self.summary.km < km and not (until_failure and self.summary.crash):
             if not ok:
                 if not self.restart_after_collision or self.summary.km - episode_km < MIN_EPISODE_KM:
                     break  # a collision ends the drive; so does one that comes again before the AV has moved
@@ -237,6 +274,9 @@ class Simulator:
             ok = self._one_plan()
         self.summary.wall_s = time.perf_counter() - started
         self.summary.traffic_collisions += self.traffic.collisions
+        injectors = [*(self.faulty.injectors.values() if self.faulty else ()), *filter(None, [self.steering.injector])]
+        self.summary.faults = {i.fault.kind.value: {"offered": i.offered, "started": i.started,
+                                                   "sweeps": sum(e.sweeps for e in i.events)} for i in injectors}
         return self.summary
 
     def _restart(self) -> bool:
@@ -246,14 +286,46 @@ class Simulator:
         self.summary.restarts += 1
         self.summary.traffic_collisions += self.traffic.collisions
         self.origin_km = self.summary.km
+        self.steering.end()
         self.scene.close()
         self._assemble()
         self.doing = "start-up after a collision"
         return self.executor.hold(START_UP_S, self.grid.speed, self._tick)
 
-    def _sense(self) -> tuple[Reading, ...]:
+    # -- the sensors' clock (``spec.physical.SENSORS.sweep_hz``) ------------------------------------------------
+    def swept(self) -> bool:
+        """Whether the sensors swept at the end of this control step: a decision is made only then, so its
+        snapshot is never older than the car's pose."""
+        return self.controls % self.sweep_every == 0
+
+    def _on_sweep(self) -> None:
+        """A sweep: the sensors read the truth (through any fault injectors), and the steering fault moves on."""
         pose = self.car.pose()
-        return self.sensor.read(in_range(pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming))
+        self.summary.sweeps += 1
+        self.sweep = self.sensor.read(in_range(pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming))
+        self.executor.steer_offset_rad = self.steering.on_sweep()
+        if self.steering.active is not None and self.steering.active not in self.steered:
+            self.steered.append(self.steering.active)
+
+    def _await_sweep(self) -> bool:
+        """Hold the lane and the reference speed until the sensors' next sweep (at most two control steps: an action
+        whose time is not a whole number of sweeps, as on 5.25 m cells), so a decision's snapshot is never older than
+        the car's pose; False on a collision."""
+        y_ref = self.scene.lane_y(Executor.lane_of(self.car.pose().y_m))
+        while not self.swept():
+            if not self.executor.control(self.executor.v_ref_mps, y_ref, 0.0, self._tick):
+                return False
+        return True
+
+    def _sense(self) -> tuple[Reading, ...]:
+        """The last sweep's readings (a dropped sweep: none)."""
+        return self.sweep or ()
+
+    def _snapshot(self) -> tuple[Reading, ...]:
+        """The last sweep as a decision's snapshot; a dropped sweep is a snapshot that cannot be read."""
+        if self.sweep is None:
+            raise ScenarioError("snapshot", "dropped sweep", "the sensors' last sweep never arrived")
+        return self.sweep
 
     def _frame(self, readings: tuple[Reading, ...], speed_mps: float, first_mps: float) -> tuple[Reading, ...]:
         """The readings as the model's AV sees them: a car at the plan's first speed from the start.
@@ -296,13 +368,25 @@ class Simulator:
         return replace(answer, elapsed_ms=both_ms), seen, scenario, common
 
     def _one_plan(self) -> bool:
+        if not self._await_sweep():
+            return False
         if self.sound is not None:
             return self._sound_decision()
         pending, self.pending = self.pending, ()
         pose = self.car.pose()
         lane = Executor.lane_of(pose.y_m)
         self.executor.lane = lane
-        readings = self._sense()
+        self._decided(lane)
+        try:
+            readings = self._snapshot()
+        except ScenarioError as err:
+            readings = ()
+            self._watch(readings, pose.x_m, lane)
+            if pending:
+                return self._keep(pending, FailureKind.SENSING, err.reason, str(err))
+            self._fail(FailureKind.SENSING, err.reason, str(err))
+            self.doing = "waiting after a sensing failure"
+            return self.executor.hold(LOOP.wait_s, self.grid.speed, self._tick)
         self._watch(readings, pose.x_m, lane)
         try:
             answer, seen, scenario, frame_mps = self._decide(readings, pose.speed_mps, lane)
@@ -344,7 +428,13 @@ class Simulator:
         pose = self.car.pose()
         lane = Executor.lane_of(pose.y_m)
         self.executor.lane = lane
-        readings = self._sense()
+        self._decided(lane)
+        try:
+            readings = self._snapshot()
+        except ScenarioError as err:
+            self._watch((), pose.x_m, lane)
+            self._fail(FailureKind.SENSING, err.reason, str(err))
+            return self._fallback(f"sensing: {err.reason}")
         self._watch(readings, pose.x_m, lane)
         if self.containment is not None:
             self._contain(pose, 0.0)  # the snapshot itself: sensed farther off than the error bound, or unknown
@@ -403,7 +493,7 @@ class Simulator:
             for k, (action, profile) in enumerate(zip(executed, profiles)):
                 self.doing = f"{action.value} ({what}, step {k + 1} of {len(actions)})"
                 self.pending = actions[k + 1:]
-                if not self.executor.run(action, self._tick, profile, stop=lambda: self.interrupt):
+                if not self.executor.run(action, self._tick, profile, stop=lambda: self.interrupt and self.swept()):
                     return False
                 self.summary.actions += 1
                 if self.interrupt:
@@ -466,7 +556,7 @@ class Simulator:
             self.executor.reset_reference()
             if not self.executor.control(command, y_ref, 0.0, self._tick):
                 return False
-            if not emergency and self.interrupt:
+            if not emergency and self.interrupt and self.swept():
                 break
         return True
 
@@ -539,10 +629,11 @@ class Simulator:
                  speed_mps: float, frame_mps: float) -> bool:
         plan_id = self.summary.plans
         self.executor.reset_reference(reference_offset_m(speed_mps, frame_mps, action_speed_mps(actions[0], self.grid)))
-        tracked = self._tracked(seen, states[0])
+        cars = {car.body: car for car in self.traffic.cars()}
+        # the tolerance check follows vehicles; a ghost a fault injected is none (``sim.faults``)
+        tracked = {key: v for key, v in self._tracked(seen, states[0]).items() if key[2] in cars}
         deviation = dict.fromkeys(tracked, 0.0)
         known = {r.body for r in seen}
-        cars = {car.body: car for car in self.traffic.cars()}
         generation = {body: cars[body].respawns for body in cars}
         executed = actions[: LOOP.replan_after_actions]
         for k, (action, profile) in enumerate(zip(executed, plan_profiles(executed, speed_mps, self.grid))):

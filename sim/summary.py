@@ -27,6 +27,7 @@ class Failure:
     detail: str
     km: float
     t_s: float
+    fault: str | None = None  # the fault it is attributed to (``sim.faults.attribute``), if any
 
 
 @dataclass(slots=True)
@@ -69,6 +70,8 @@ class RunSummary:
     keep_lane_steps: int = 0  # sound decisions without an overtake: one safe step in lane
     minimal_risk_steps: int = 0  # sound decisions without a plan or a step: the last decision's proved continuation
     takeovers: list[Takeover] = field(default_factory=list)
+    sweeps: int = 0  # the sensors' sweeps (``spec.physical.SENSORS.sweep_hz``)
+    faults: dict[str, dict[str, int]] = field(default_factory=dict)  # per kind: sweeps that offered it, starts, sweeps
 
     def of_kind(self, kind: FailureKind) -> list[Failure]:
         return [f for f in self.failures if f.kind is kind]
@@ -85,6 +88,16 @@ class RunSummary:
     def failure(self) -> Failure | None:
         """The first failure of the most serious kind, if the drive had one."""
         return next((f for kind in FailureKind for f in self.of_kind(kind)), None)
+
+    @property
+    def crash(self) -> Failure | None:
+        """The first failure proper (a collision or a loss of control: ``FailureKind.ends_run``), if any."""
+        return next((f for f in self.failures if f.kind.ends_run), None)
+
+    @property
+    def stops(self) -> list[Failure]:
+        """Stops that are no failure: a snapshot that could not be read, no plan found."""
+        return [f for f in self.failures if not f.kind.ends_run]
 
     def latency_ms(self) -> dict[str, float]:
         """Median, p99 and max planning time, from the samples as recorded (to the microsecond)."""
@@ -106,7 +119,7 @@ class RunSummary:
                 "decisions": self.decisions, "containment": self.containment.to_json(),
                 "breach_replans": self.breach_replans, "keep_lane_steps": self.keep_lane_steps,
                 "minimal_risk_steps": self.minimal_risk_steps,
-                "takeovers": [asdict(t) for t in self.takeovers]}
+                "takeovers": [asdict(t) for t in self.takeovers], "sweeps": self.sweeps, "faults": self.faults}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> RunSummary:
@@ -123,7 +136,8 @@ class RunSummary:
                    containment=ContainmentReport.from_json(data["containment"]) if "containment" in data
                    else ContainmentReport(), breach_replans=data.get("breach_replans", 0),
                    keep_lane_steps=data.get("keep_lane_steps", 0), minimal_risk_steps=data.get("minimal_risk_steps", 0),
-                   takeovers=[Takeover(**t) for t in data.get("takeovers", [])])
+                   takeovers=[Takeover(**t) for t in data.get("takeovers", [])], sweeps=data.get("sweeps", 0),
+                   faults={k: dict(v) for k, v in data.get("faults", {}).items()})
 
 
 def failure_json(failure: Failure) -> dict[str, Any]:

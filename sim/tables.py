@@ -9,6 +9,7 @@ from rich.table import Table
 
 from sim.paper import MEDIAN_KM, MEDIAN_OVERTAKEN, TABLE_1
 from sim.summary import RunSummary
+from spec.kinds import FailureKind
 
 
 def hours_minutes(seconds: float) -> str:
@@ -79,17 +80,38 @@ def deviations_table(results: list[RunSummary]) -> Table:
 def paper_table(results: list[RunSummary], cap_km: float) -> Table:
     """Our runs beside the paper's Table 1, row by row, with both medians between failures."""
     table = Table(title=f"the paper's experiment: our runs (true sensor readings, cap {cap_km:g} km) beside Table 1")
-    for col in ("run", "sim time", "overtaken", "km", "failure", "paper: time", "overtaken", "km", "failure"):
+    for col in ("run", "sim time", "overtaken", "km", "failure", "stops: sensing / no plan", "paper: time",
+                "overtaken", "km", "failure"):
         table.add_column(col, overflow="fold")
     for i in range(max(len(results), len(TABLE_1))):
-        ours = ["", "", "", ""]
+        ours = ["", "", "", "", ""]
         if i < len(results):
             r = results[i]
+            crash = r.crash
             ours = [hours_minutes(r.sim_time_s), str(r.overtakes), f"{r.km:.1f}",
-                    r.failure.cause if r.failure else "none (cap)"]
+                    (crash.cause + (f" (fault: {crash.fault})" if crash.fault else " (no fault)")) if crash
+                    else "none (censored at the cap)",
+                    f"{len(r.of_kind(FailureKind.SENSING))} / {len(r.of_kind(FailureKind.PLANNER))}"]
         paper = TABLE_1[i] if i < len(TABLE_1) else None
         theirs = [paper.runtime, str(paper.overtaken), f"{paper.km:.1f}", paper.failure] if paper else [""] * 4
         table.add_row(str(i + 1), *ours, *theirs)
     table.add_row("median", "", f"{np.median([r.overtakes for r in results]):.1f}",
-                  f"{np.median([r.km for r in results]):.1f}", "", "", f"{MEDIAN_OVERTAKEN}", f"{MEDIAN_KM}", "")
+                  f"{np.median([r.km for r in results]):.1f}", "", "", "", f"{MEDIAN_OVERTAKEN}", f"{MEDIAN_KM}", "")
+    return table
+
+
+def faults_table(results: list[RunSummary]) -> Table:
+    """Per fault kind: the sweeps that offered it a target, the faults started, the sweeps they changed, and the
+    failures (collisions, losses of control) attributed to it (``sim.faults.attribute``); then failures without."""
+    table = Table(title="faults injected and the failures attributed to them")
+    for col in ("fault", "sweeps offering a target", "started", "sweeps changed", "failures", "per 1000 km"):
+        table.add_column(col, justify="right")
+    km = sum(r.km for r in results)
+    crashes = Counter(c.fault for r in results if (c := r.crash) is not None)
+    kinds = sorted({k for r in results for k in r.faults})
+    for kind in kinds:
+        stats = [r.faults.get(kind, {}) for r in results]
+        table.add_row(kind, *(str(sum(x.get(key, 0) for x in stats)) for key in ("offered", "started", "sweeps")),
+                      str(crashes[kind]), f"{1000 * crashes[kind] / km:.1f}" if km else "-")
+    table.add_row("(no fault)", "", "", "", str(crashes[None]), f"{1000 * crashes[None] / km:.1f}" if km else "-")
     return table

@@ -9,8 +9,16 @@ class FailureKind(enum.Enum):
     """What ended or marred a drive, most serious first (the order a drive's first failure is reported in)."""
 
     COLLISION = "collision"
+    LOSS_OF_CONTROL = "loss of control"  # the AV spun or left the road (``spec.faults.lost_control``)
     PLANNER = "planner"  # no plan (or none usable) and no plan under way
-    SENSING = "sensing"  # the readings made no valid scenario
+    SENSING = "sensing"  # the readings made no valid scenario, or the sweep never arrived
+
+    @property
+    def ends_run(self) -> bool:
+        """A failure proper (a collision, a loss of control) ends a run ``--until-failure``; a stop because the
+        snapshot could not be read or no plan was found is counted apart, never as a failure (the paper's Table 1
+        counts the car's failures, and a car that waits in lane has not failed)."""
+        return self in (FailureKind.COLLISION, FailureKind.LOSS_OF_CONTROL)
 
 
 class ViolationKind(enum.Enum):

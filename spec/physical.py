@@ -50,6 +50,9 @@ class SensorSpec:
     right_range_m: float = 17 * _PAPER_CELL_M  # front-right long-range sensor: 357 m, 17 cells
     side_range_m: float = 2 * _PAPER_CELL_M  # right-side sensor: what the front-right one cannot see
     height_m: float = 0.8  # rays are cast at this height, through the other cars' bodies
+    # Sweeps per second, whenever the planner decides: a common automotive radar and lidar cycle (the paper does not
+    # state its sensors' rate); every third control step of the 30 Hz controller.
+    sweep_hz: float = 10.0
 
 
 @dataclass(frozen=True, slots=True)

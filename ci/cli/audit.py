@@ -9,7 +9,7 @@ from typing import Any
 import click
 from rich.table import Table
 
-from ci.cli.common import err, out, print_json
+from ci.cli.common import err, faults_options, out, print_json
 from ci.cli.options import (
     CELL_M,
     FRACTION,
@@ -99,12 +99,14 @@ def _cells(text: str) -> tuple[float, ...]:
 @click.option("--out", "out_dir", default="out/audit", show_default=True,
               help="audit.jsonl (resumable), audit.json, audit.md and plots.")
 @click.option("--fresh", is_flag=True, help="Forget the runs already recorded in --out instead of resuming.")
+@faults_options
 @click.option("--json", "as_json", is_flag=True)
 def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, scale_text: str, km: float, runs: int,
           seed: int, engine: str,
           cost_engines: str, snapshots: int, opportunity_checks: int, stop_rate_per_h: float,
           min_spawn_gap_m: float, range_sd_m: float, miss_rate: float, workers: int, executor_kind: str,
-          scheduler: str | None, out_dir: str, fresh: bool, as_json: bool) -> None:
+          scheduler: str | None, out_dir: str, fresh: bool, faults: str, steering_offset_deg: float,
+          as_json: bool) -> None:
     """Audit the grid abstraction: cell size x traffic model x sensing model x seeds, driven closed-loop."""
     from ci.audit import AuditPlan, label, planning_cost, rows, run_audit, write_reports
     from ci.progress import km_progress
@@ -118,7 +120,8 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
     engines = names("--engines", cost_engines, lambda name: get_engine(name).ready())  # installed, or exit 4
     base = DriveConfig(km, engine=engine, stop_rate_per_h=stop_rate_per_h, min_spawn_gap_m=min_spawn_gap_m,
                        range_sd_m=range_sd_m, miss_rate=miss_rate, snapshots=snapshots, restart_after_collision=True,
-                       opportunity_checks=opportunity_checks)
+                       opportunity_checks=opportunity_checks, faults=faults,
+                       steering_offset_deg=steering_offset_deg)
     plan = AuditPlan(_cells(cells), _models("--traffic", traffic_text, dict(TRAFFIC_MODELS)),
                      _models("--sensing", sensing_text, dict(SENSOR_MODELS)), tuple(range(seed, seed + runs)), base,
                      _models("--model", model_text, dict(PLANNING_MODELS)), _scales(scale_text))
@@ -128,7 +131,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
     get_engine(engine).ready()  # its tools are installed (exit 4), or every plan of every run would fail
     total = len(configs) * runs
     err.print(f"audit: {len(configs)} combination(s) x seeds {seed}..{seed + runs - 1} = {total} run(s) of {km:g} km; "
-              f"planner {engine}; on {executor.describe(total)}; results in {out_dir}")
+              f"planner {engine}; faults {base.faults or 'none'}; on {executor.describe(total)}; results in {out_dir}")
     labels = {i: f"{c.cell_m:g} m, {c.traffic}, {c.sensor}, {c.model}"
                  + ("" if c.bounds_scale == 1 else f" x{c.bounds_scale:g}") + f", seed {s}"
              for i, (c, s) in enumerate((c, s) for c in configs for s in plan.seeds)}

@@ -45,6 +45,21 @@ def strategy_option(default: Strategy = Strategy.SENSIBLE, choices: tuple[Strate
                         show_default=True, callback=lambda _ctx, _param, value: Strategy(value))
 
 
+def faults_options(command: Any) -> Any:
+    """``--faults KIND=RATE[/SWEEPS],...`` and ``--steering-offset-deg``: the fault injectors of every drive
+    (``spec.faults``), checked when the campaign's configuration is made."""
+    from ci.cli.options import DEGREES
+    from spec.faults import DEFAULT_STEERING_OFFSET_DEG, FaultKind
+
+    kinds = ", ".join(k.value for k in FaultKind)
+    command = click.option("--steering-offset-deg", type=DEGREES, default=DEFAULT_STEERING_OFFSET_DEG,
+                           show_default=True,
+                           help="The steering fault's offset (the default spins the car at 14 m/s).")(command)
+    return click.option("--faults", "faults", default="", show_default=False,
+                        help=f"Faults injected, KIND=RATE[/SWEEPS],... : a rate per sensor sweep (10 Hz) and how "
+                             f"many sweeps one lasts (default 30; steering 20). Kinds: {kinds}.")(command)
+
+
 def horizon_option() -> Any:
     from ci.cli.options import HORIZON
 

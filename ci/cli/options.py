@@ -131,6 +131,7 @@ PER_HOUR = Number(0.0, MAX_STOP_RATE_PER_H)  # events per vehicle-hour: at most 
 METRES = Number(0.0, 1000.0)  # a gap or a noise in metres: the sensed window is a kilometre
 FRACTION = Number(0.0, 1.0)  # a probability
 SPEED = Number(0.0, 100.0)  # m/s: no car on this road goes faster than 360 km/h
+DEGREES = Number(0.0, 90.0)  # a steering offset: past a right angle the wheels point backwards
 SCALE = Number(0.0, 100.0)  # a factor on the bounds' widths: 0 is the rule's middle speed alone
 
 

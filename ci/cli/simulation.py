@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from ci.cli.common import err, out, print_json, strategy_option
+from ci.cli.common import err, faults_options, out, print_json, strategy_option
 from ci.cli.options import CELL_M, KM, RUNS, SCHEDULER, SEED, TOLERANCE, WORKERS
 from ci.cli.options import out_dir as out_dir_checked
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
@@ -22,7 +22,9 @@ from spec.physical import LOOP
 @click.command()
 @click.option("--km", type=KM, default=5.0, show_default=True,
               help="Kilometres per run (with --until-failure: the cap).")
-@click.option("--until-failure", is_flag=True, help="Stop each run at its first failure (capped by --km).")
+@click.option("--until-failure", is_flag=True,
+              help="Stop each run at its first failure, a collision or a loss of control (capped by --km); a "
+                   "snapshot that could not be read and a wait without a plan are counted apart.")
 @click.option("--seed", type=SEED, default=1, show_default=True, help="Run i uses seed + i.")
 @click.option("--engine", default="interpreter", show_default=True)
 @strategy_option(choices=(Strategy.SENSIBLE, Strategy.SHORTEST))
@@ -47,17 +49,19 @@ from spec.physical import LOOP
               show_default=True, help="Cells a vehicle may deviate over a plan.")
 @click.option("--paper-replanning", is_flag=True,
               help="Re-plan only as the paper did (not when a deviation exceeds the tolerance).")
+@faults_options
 @click.option("--json", "as_json", is_flag=True)
 def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: Strategy, cell_m: float, model: str,
              runs: int,
              workers: int, executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool,
-             step_tolerance: float, plan_tolerance: float, paper_replanning: bool, as_json: bool) -> None:
+             step_tolerance: float, plan_tolerance: float, paper_replanning: bool, faults: str,
+             steering_offset_deg: float, as_json: bool) -> None:
     """Drive the PyBullet simulator closed-loop and check every action against the model's prediction."""
     from ci.progress import km_progress
     from ci.simulate import RUNS_FILE
     from ci.simulate import simulate as run_campaign
     from sim.parts import DriveConfig
-    from sim.tables import deviations_table, paper_table, runs_table, totals_table
+    from sim.tables import deviations_table, faults_table, paper_table, runs_table, totals_table
 
     executor = ExecutorChoice(ExecutorKind(executor_kind), workers, scheduler)
     check_executor(executor)
@@ -66,13 +70,13 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: S
     if seed + runs - 1 >= 2**32:
         raise OptionError("--seed", seed, f"seed + runs - 1 must stay below 2**32 (runs {runs})")
     campaign = DriveConfig(km, until_failure, engine, strategy, not paper_replanning, step_tolerance, plan_tolerance,
-                           cell_m, model=model)
+                           cell_m, model=model, faults=faults, steering_offset_deg=steering_offset_deg)
     campaign.parts()  # the engine exists and answers the strategy: bad input before any run starts
     get_engine(engine).ready()  # its tools are installed (exit 4), or every plan of every run would fail
     limit = f"{km:g} km" + (" or until failure" if until_failure else "")
     err.print(f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; {model} model; engine {engine}, "
-              f"{strategy.value}, "
-              f"{campaign.grid.describe()}; on {executor.describe(runs)}; results in {Path(out_dir) / RUNS_FILE}")
+              f"{strategy.value}, {campaign.grid.describe()}; faults {campaign.faults or 'none'}; "
+              f"on {executor.describe(runs)}; results in {Path(out_dir) / RUNS_FILE}")
     resumed = f"already in {RUNS_FILE} (resumed; --fresh runs it again)"
     with km_progress(err, runs, km, resumed) as bar:
         results = run_campaign(campaign, list(range(seed, seed + runs)), out_dir, executor, bar.done, fresh,
@@ -84,6 +88,8 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: S
             out.print(table)
         if until_failure:
             out.print(paper_table(results, km))
+        if campaign.faults:
+            out.print(faults_table(results))
     sys.exit(ExitCode.NO if any(r.failures for r in results) else ExitCode.OK)
 
 

@@ -111,6 +111,9 @@ def test_an_audit_resumed_with_other_shared_settings_is_refused_naming_the_diffe
     with pytest.raises(OptionError, match=r"km = 0\.2.*asks 0\.3") as refused:
         run_audit(AuditPlan((21.0,), ("paper",), ("exact",), (4,), DriveConfig(0.3)), str(tmp_path), ExecutorChoice())
     assert refused.value.key == "--out"
+    with pytest.raises(OptionError, match=r"faults = ''.*asks 'fake-gap=0\.1/30'"):
+        check_resume(tmp_path / AUDIT_FILE, AuditPlan((21.0,), ("paper",), ("exact",), (4,),
+                                                      DriveConfig(0.2, faults="fake-gap=0.1")), "--out")
 
 
 def test_rows_keep_models_and_bound_scales_apart_and_split_encounters_by_attribution() -> None:

@@ -91,6 +91,15 @@ def _case(command: str, *extra: str, named: str, code: int = ExitCode.BAD_INPUT,
 NO_TOOLS = (("PATH", "/nonexistent"),)  # spin and gcc are not installed
 
 
+def faults(command: str) -> list[Case]:
+    """Unknown fault kinds, rates outside [0, 1], persistences below one sweep, a bad steering offset: exit 2."""
+    bad = ("fake=0.1", "fake-gap", "fake-gap=1.5", "fake-gap=-0.1", "fake-gap=nan", "fake-gap=x", "fake-gap=0.1/0",
+           "fake-gap=0.1/-2", "fake-gap=0.1/2.5", "split=0.1,split=0.2")
+    return [*(_case(command, f"--faults={value}", named="--faults") for value in bad),
+            *(_case(command, f"--steering-offset-deg={value}", named="--steering-offset-deg")
+              for value in ("nan", "inf", "-1", "91", "x"))]
+
+
 def no_spin(command: str, *extra: str) -> Case:
     """An engine whose tools are missing is exit 4 naming the tool, before any work."""
     return _case(command, *extra, named="spin", code=ExitCode.TOOL_MISSING, env=NO_TOOLS)
@@ -257,7 +266,7 @@ CASES: list[Case] = [
     _case("simulate", "--strategy=optimal", named="--strategy"),
     *schedulers("simulate"),
     _case("simulate", "--seed=4294967295", "--runs=2", named="--seed"),
-    *out_dirs("simulate"), *unknown("simulate"), no_spin("simulate", "--engine=spin"),
+    *out_dirs("simulate"), *unknown("simulate"), no_spin("simulate", "--engine=spin"), *faults("simulate"),
     # audit
     *numbers("audit", "--km", "--min-spawn-gap-m", "--range-sd-m", "--miss-rate"),
     *numbers("audit", "--stop-rate-per-h"),  # at most one stop starting per vehicle and control step
@@ -272,7 +281,7 @@ CASES: list[Case] = [
     *choices("audit", "--engine"), *choices("audit", "--engines", lists=True), *choices("audit", "--executor"),
     _case("audit", "--miss-rate=1.5", named="--miss-rate"),
     *schedulers("audit"), *out_dirs("audit"), *unknown("audit"),
-    no_spin("audit", "--engine=spin"), no_spin("audit", "--engines=spin"),
+    no_spin("audit", "--engine=spin"), no_spin("audit", "--engines=spin"), *faults("audit"),
     # crossval
     *numbers("crossval", "--timeout", "--cell-m"),
     *whole("crossval", "--workers", WORKERS), *whole("crossval", "--seed", SEED),

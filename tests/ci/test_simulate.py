@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -12,6 +13,7 @@ from ci.executors import ExecutorChoice, ExecutorKind
 from ci.simulate import RUNS_FILE, simulate
 from sim.parts import DriveConfig
 from sim.summary import Failure, RunSummary
+from spec.errors import OptionError
 from spec.kinds import FailureKind
 
 SHORT = DriveConfig(km=0.2)
@@ -39,8 +41,11 @@ def test_a_campaign_resumes_from_its_record_without_running_finished_seeds(tmp_p
     seen: list[tuple[int, bool]] = []
     again = simulate(SHORT, [3], str(tmp_path), on_done=lambda s, resumed: seen.append((s.seed, resumed)))
     assert [r.to_json() for r in again] == [r.to_json() for r in first] and seen == [(3, True)]
-    with pytest.raises(AssertionError, match="run again"):  # other parameters: not the same campaign
+    # other parameters: not the same campaign; its traces would overwrite these, so it is refused, naming why
+    with pytest.raises(OptionError, match=r"km = 0\.2, this campaign asks 0\.3"):
         simulate(DriveConfig(km=0.3), [3], str(tmp_path))
+    with pytest.raises(OptionError, match=r"faults = '', this campaign asks 'dropped-sweep=0\.5/30'"):
+        simulate(replace(SHORT, faults="dropped-sweep=0.5"), [3], str(tmp_path))
 
 
 def test_a_half_written_record_is_run_again_and_fresh_forgets_the_record(tmp_path: Path) -> None:
