@@ -179,14 +179,18 @@ class FaultySensor:
 
 
 def attribute(body: int | None, in_snapshots: list[FaultEvent], steering: list[FaultEvent]) -> FaultEvent | None:
-    """The fault a failure is attributed to, by a rule stated once. ``in_snapshots``: the sensing faults that changed
-    a snapshot a decision of the manoeuvre under way planned from (from its first decision in the left lane), in
-    order; ``steering``: the steering faults under way during it. First a steering fault (it moves the AV whatever the
-    plan); else the last sensing fault that touched the vehicle in the collision (``body``); else the last one that
-    touched no vehicle (a ghost, a dropped sweep: what it hid or added is not a body); else none."""
+    """The fault a failure or stop is attributed to, by a rule stated once. ``in_snapshots``: the sensing faults that
+    changed a snapshot a decision of the manoeuvre under way planned from (from its first decision in the left lane;
+    for a stop, the snapshot it could not read), in order; ``steering``: the steering faults under way during it.
+    First a steering fault (it moves the AV whatever the plan); then, for a collision (``body``: the vehicle in it),
+    the last sensing fault that touched that vehicle, else the last one that touched no vehicle (a ghost, a dropped
+    sweep: what it added or hid is no body); without a vehicle (a stop, a loss of control), the last sensing fault;
+    else none."""
     if steering:
         return steering[-1]
-    touched = [e for e in in_snapshots if body is not None and body in e.bodies]
+    if body is None:
+        return in_snapshots[-1] if in_snapshots else None
+    touched = [e for e in in_snapshots if body in e.bodies]
     if touched:
         return touched[-1]
     bodiless = [e for e in in_snapshots if not e.bodies]

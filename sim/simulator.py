@@ -243,7 +243,9 @@ class Simulator:
         return Failure(kind, cause, detail, round(self.summary.km, 3), round(self.summary.sim_time_s, 1))
 
     def _fail(self, kind: FailureKind, cause: str, detail: str, body: int | None = None) -> None:
-        fault = attribute(body, self.manoeuvre_faults, self.steered)
+        in_snapshot = self.faulty.in_sweep() if self.faulty else []
+        fault = attribute(body, self.manoeuvre_faults if kind.ends_run else in_snapshot,
+                          self.steered if kind.ends_run else [])
         self.summary.failures.append(replace(self._event(kind, cause, detail),
                                              fault=None if fault is None else fault.kind.value))
 

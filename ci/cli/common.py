@@ -57,7 +57,8 @@ def faults_options(command: Any) -> Any:
                            help="The steering fault's offset (the default spins the car at 14 m/s).")(command)
     return click.option("--faults", "faults", default="", show_default=False,
                         help=f"Faults injected, KIND=RATE[/SWEEPS],... : a rate per sensor sweep (10 Hz) and how "
-                             f"many sweeps one lasts (default 30; steering 20). Kinds: {kinds}.")(command)
+                             f"many sweeps one lasts (default 30; steering 20); or 'paper', the rates calibrated "
+                             f"against the paper's failures (docs/faults.md). Kinds: {kinds}.")(command)
 
 
 def horizon_option() -> Any:
