@@ -46,6 +46,7 @@ from spec.answers import Limits, Status, Strategy
 from spec.errors import OptionError
 from spec.files import scenario_from_dict
 from spec.grid import STANDARD_CELLS_M
+from spec.kinds import FailureKind
 from spec.physical import LOOP
 
 AUDIT_FILE = "audit.jsonl"
@@ -182,6 +183,9 @@ class Row:
     takeovers: int = 0
     takeovers_after_breach: int = 0
     waits_without_plan: int = 0  # planner failures (no plan, or none in time, and none under way)
+    losses_of_control: int = 0  # the AV spun or left the road (``spec.faults.lost_control``)
+    unreadable: int = 0  # snapshots that could not be read (a sensing stop, never a failure)
+    faults: dict[str, dict[str, int]] = field(default_factory=dict)  # kind -> started, sweeps changed, failures
 
     def per_1000_km(self, count: float) -> float:
         return 1000 * count / self.km if self.km else math.nan
@@ -246,7 +250,8 @@ class Row:
                 "breached_share": self.breached_share, "breach_replans": self.breach_replans,
                 "keep_lane_steps": self.keep_lane_steps, "minimal_risk_steps": self.minimal_risk_steps,
                 "takeovers": self.takeovers, "takeovers_after_breach": self.takeovers_after_breach,
-                "waits_without_plan": self.waits_without_plan}
+                "waits_without_plan": self.waits_without_plan, "losses_of_control": self.losses_of_control,
+                "unreadable_snapshots": self.unreadable, "faults": self.faults}
 
 
 def _num(value: float | None) -> float | None:
@@ -300,7 +305,21 @@ def _row(key: Key, runs: list[RunSummary]) -> Row:
                    r.containment.checked_s for r in runs)) else None,
                sum(r.breach_replans for r in runs), sum(r.keep_lane_steps for r in runs),
                sum(r.minimal_risk_steps for r in runs), sum(len(r.takeovers) for r in runs),
-               sum(t.after_breach for r in runs for t in r.takeovers), sum(len(r.planner_failures) for r in runs))
+               sum(t.after_breach for r in runs for t in r.takeovers), sum(len(r.planner_failures) for r in runs),
+               sum(len(r.of_kind(FailureKind.LOSS_OF_CONTROL)) for r in runs),
+               sum(len(r.of_kind(FailureKind.SENSING)) for r in runs), _fault_counts(runs))
+
+
+def _fault_counts(runs: list[RunSummary]) -> dict[str, dict[str, int]]:
+    """Per fault kind injected: faults started, sweeps they changed, failures (collisions, losses of control)
+    attributed to it (``sim.faults.attribute``); failures without a fault under the key "none"."""
+    failures = Counter(f.fault for r in runs for f in r.failures if f.kind.ends_run)
+    counts = {kind: {"started": sum(r.faults.get(kind, {}).get("started", 0) for r in runs),
+                     "sweeps": sum(r.faults.get(kind, {}).get("sweeps", 0) for r in runs),
+                     "failures": failures[kind]} for kind in sorted({k for r in runs for k in r.faults})}
+    if counts:
+        counts["none"] = {"started": 0, "sweeps": 0, "failures": failures[None]}
+    return counts
 
 
 @dataclass(slots=True)
@@ -425,6 +444,20 @@ def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any])
                      f"{r.traffic_collisions} | {r.min_gap_left_m} | {r.min_gap_oncoming_m} | {r.violations} | "
                      f"{r.plan_ms_median} |")
     lines += models_markdown(audit_rows)
+    if any(r.faults for r in audit_rows):
+        lines += ["", "## Faults injected (docs/faults.md) and the failures attributed to them", "",
+                  "Per fault kind: faults started / sweeps they changed / failures (collisions, losses of control) "
+                  "attributed to it; then failures without a fault, losses of control, and snapshots that could not "
+                  "be read (stops, not failures).", "",
+                  "| cell m | traffic | sensing | model | km | " + " | ".join(_fault_kinds(audit_rows)) +
+                  " | no fault | losses of control | unreadable snapshots |",
+                  "|---|---|---|---|---|" + "---|" * (len(_fault_kinds(audit_rows)) + 3)]
+        for r in audit_rows:
+            cells = [" / ".join(str(r.faults.get(k, {}).get(x, 0)) for x in ("started", "sweeps", "failures"))
+                     for k in _fault_kinds(audit_rows)]
+            lines.append(f"| {r.cell_m:g} | {r.traffic} | {r.sensing} | {label(r)} | {r.km:.1f} | " + " | ".join(cells)
+                         + f" | {r.faults.get('none', {}).get('failures', 0)} | {r.losses_of_control} | "
+                         f"{r.unreadable} |")
     lines += ["", "## Causes (contacts and near misses)", ""]
     for r in audit_rows:
         if r.causes:
@@ -464,6 +497,10 @@ def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any])
     lines += [f"| {c.cell_m:g} | {c.model} | {c.engine} | {c.n} | {c.median_ms} | {c.p99_ms} | {c.median_states} | "
               f"{c.incomplete} |" for c in costs]
     return "\n".join(lines) + "\n"
+
+
+def _fault_kinds(audit_rows: list[Row]) -> list[str]:
+    return sorted({k for r in audit_rows for k in r.faults if k != "none"})
 
 
 def _edge(value: float | None) -> str:

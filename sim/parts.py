@@ -95,6 +95,7 @@ class Parts:
     observers: tuple[Observer, ...] = field(default=())
     bounds: Bounds | None = None  # the assumptions containment is measured against (None: not measured)
     faults: FaultSpec = NO_FAULTS  # what the fault injectors do to the sensors and the steering (``sim.faults``)
+    tracking: bool = False  # the tracking layer between the sensors and the discretiser (``sim.tracking``)
 
 
 @dataclass(frozen=True, slots=True)
@@ -122,6 +123,7 @@ class DriveConfig:
     bounds_scale: float = 1.0  # the world's bounds' widths times this (``spec.assumptions.world_bounds``)
     faults: str = ""  # the fault injectors, as ``--faults`` takes them (``spec.faults.parse_faults``); kept canonical
     steering_offset_deg: float = DEFAULT_STEERING_OFFSET_DEG  # the steering fault's size
+    tracking: bool = False  # the planner sees the tracker's vehicles, not each sweep's readings (``sim.tracking``)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "strategy", parse_strategy(self.strategy))
@@ -169,7 +171,7 @@ class DriveConfig:
         if self.sensor != "exact":
             sensor = functools.partial(sensor, noise=self.noise)  # type: ignore[call-arg]
         return Parts(planner, traffic=traffic, sensor=sensor, observers=observers, bounds=self.bounds,
-                     faults=self.fault_spec)
+                     faults=self.fault_spec, tracking=self.tracking)
 
     def to_json(self) -> dict[str, Any]:
         """The configuration as records keep it; event and noise parameters only where the models use them, so that
@@ -182,7 +184,7 @@ class DriveConfig:
         if not self.fault_spec.of(FaultKind.STEERING):
             del data["steering_offset_deg"]
         for key, default in (("restart_after_collision", False), ("opportunity_checks", 0), ("model", "paper"),
-                             ("bounds_scale", 1.0), ("faults", "")):
+                             ("bounds_scale", 1.0), ("faults", ""), ("tracking", False)):
             if data[key] == default:  # records written before these existed stay the same campaign
                 del data[key]
         return data
@@ -197,7 +199,7 @@ class DriveConfig:
                 "range_sd_m": self.range_sd_m, "miss_rate": self.miss_rate, "snapshots": self.snapshots,
                 "restart_after_collision": self.restart_after_collision,
                 "opportunity_checks": self.opportunity_checks, "model": self.model, "bounds_scale": self.bounds_scale,
-                "faults": self.faults, "steering_offset_deg": self.steering_offset_deg}
+                "faults": self.faults, "steering_offset_deg": self.steering_offset_deg, "tracking": self.tracking}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> DriveConfig:

@@ -31,13 +31,14 @@ from sim import opportunity
 from sim.containment import Containment
 from sim.discretiser import discretise, in_window, reading_cell
 from sim.executor import Executor
-from sim.faults import FaultEvent, FaultySensor, SteeringFault, attribute
+from sim.faults import GHOST_BODY, FaultEvent, FaultySensor, SteeringFault, attribute
 from sim.observers import StepEvent, TraceWriter
 from sim.parts import DriveConfig, Parts
 from sim.safety import SafetyMonitor
 from sim.sensors import RaySensor, Reading, SensorModel, in_range
 from sim.summary import Failure, RunSummary, Takeover
 from sim.tolerance import ToleranceReport, Violation
+from sim.tracking import Detection, Tracker
 from sim.vehicle import KinematicCar, Pose, first_contact
 from spec.actions import Action
 from spec.answers import Answer, Status
@@ -93,6 +94,8 @@ class Simulator:
         self.faulty: FaultySensor | None = None  # the sensing faults' injectors, kept over restarts (their log too)
         self.steering = SteeringFault(parts.faults, seed)
         self.manoeuvre_faults: list[FaultEvent] = []  # sensing faults in the snapshots of the manoeuvre under way
+        self.tracking = parts.tracking and parts.bounds is not None
+        self.flagged = False  # the tracker flagged a contradiction at a decision of the manoeuvre under way
         self.steered: list[FaultEvent] = []  # steering faults under way during it
         self.sweep_every = max(1, round(1 / (SENSORS.sweep_hz * LOOP.physics_dt_s * LOOP.control_every_steps)))
         self._assemble()
@@ -123,6 +126,10 @@ class Simulator:
         self.takeover: Takeover | None = None  # the fallback's take-over under way
         self.proved: Containment | None = None  # the containment of the last sound decision that was executed
         self.sweep: tuple[Reading, ...] | None = ()  # the last sweep the sensors delivered (None: it was dropped)
+        # with tracking, the planner sees the tracker's vehicles (``sim.tracking``); bodies only for bookkeeping
+        self.tracker = Tracker(self.parts.bounds) if self.tracking and self.parts.bounds is not None else None
+        self.track_body: dict[int, int] = {}  # track -> the body of the reading last assigned to it (bookkeeping)
+        self.unresolved: frozenset[Lane] = frozenset()  # lanes where the tracker holds a contradiction
         self.controls = 0  # control steps since the scene was assembled: the sensors sweep on every ``sweep_every``-th
         self._on_sweep()
 
@@ -169,6 +176,8 @@ class Simulator:
             self.executor.x_ref_m -= x
             if self.containment is not None:
                 self.containment.shift_x(-x)
+            if self.tracker is not None:
+                self.tracker.shift_x(-x)
             x = 0.0  # the car is now at the origin
         self.summary.km = self.origin_km + x / 1000
         self.controls += 1
@@ -247,7 +256,8 @@ class Simulator:
         fault = attribute(body, self.manoeuvre_faults if kind.ends_run else in_snapshot,
                           self.steered if kind.ends_run else [])
         self.summary.failures.append(replace(self._event(kind, cause, detail),
-                                             fault=None if fault is None else fault.kind.value))
+                                             fault=None if fault is None else fault.kind.value,
+                                             flagged=self.flagged if self.tracker is not None else None))
 
     def _decided(self, lane: Lane) -> None:
         """A decision was taken from the last sweep: a decision in the left lane starts a new manoeuvre; the faults
@@ -255,6 +265,8 @@ class Simulator:
         if lane is Lane.LEFT:
             self.manoeuvre_faults = []
             self.steered = [] if self.steering.active is None else [self.steering.active]
+            self.flagged = False
+        self.flagged = self.flagged or bool(self.unresolved)
         for event in self.faulty.in_sweep() if self.faulty else ():
             if event not in self.manoeuvre_faults:
                 self.manoeuvre_faults.append(event)
@@ -304,7 +316,18 @@ class Simulator:
         """A sweep: the sensors read the truth (through any fault injectors), and the steering fault moves on."""
         pose = self.car.pose()
         self.summary.sweeps += 1
-        self.sweep = self.sensor.read(in_range(pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming))
+        raw = self.sensor.read(in_range(pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming))
+        if self.tracker is None:
+            self.sweep = raw
+        else:
+            view = self.tracker.update(self.summary.sim_time_s, pose.x_m, pose.speed_mps,
+                                       None if raw is None else [Detection(r.lane, r.dx_m) for r in raw], pose.y_m)
+            for track in (*view.planned, *view.held):
+                if raw is not None and track.detection is not None:
+                    self.track_body[track.id] = raw[track.detection].body
+            self.sweep = tuple(Reading(t.lane, self.track_body.get(t.id, GHOST_BODY), t.place_m - pose.x_m)
+                               for t in view.planned)
+            self.unresolved = view.unresolved
         self.executor.steer_offset_rad = self.steering.on_sweep()
         if self.steering.active is not None and self.steering.active not in self.steered:
             self.steered.append(self.steering.active)
@@ -318,6 +341,25 @@ class Simulator:
             if not self.executor.control(self.executor.v_ref_mps, y_ref, 0.0, self._tick):
                 return False
         return True
+
+    def _refused(self, actions: tuple[Action, ...]) -> bool:
+        """With tracking, a plan that would start an overtake (a lane change out of the left lane) does not start
+        while a lane holds an unresolved contradiction (the return's gap is part of the overtake): the AV drives on
+        in its lane at the common speed until the next sweep and decides again. A plan under way goes on."""
+        if self.tracker is None or not self.unresolved or Action.RIGHT_LANE_CHANGE not in actions:
+            return False
+        self.summary.refusals += 1
+        self.pending = ()
+        self.doing = "driving on in lane (an overtake refused: the tracker holds a contradiction)"
+        return True
+
+    def _hold_a_sweep(self) -> bool:
+        """Drive on in lane at the common speed until the next sweep (at least one control step)."""
+        y_ref = self.scene.lane_y(Executor.lane_of(self.car.pose().y_m))
+        self.executor.reset_reference()
+        if not self.executor.control(float(self.grid.speed), y_ref, 0.0, self._tick):
+            return False
+        return self._await_sweep()
 
     def _sense(self) -> tuple[Reading, ...]:
         """The last sweep's readings (a dropped sweep: none)."""
@@ -492,6 +534,8 @@ class Simulator:
         self.enveloped = True
         try:
             profiles = plan_profiles(executed, speed_mps, self.grid, to_common=False) if executed else []
+            if executed and self._refused(actions):
+                return self._hold_a_sweep()
             for k, (action, profile) in enumerate(zip(executed, profiles)):
                 self.doing = f"{action.value} ({what}, step {k + 1} of {len(actions)})"
                 self.pending = actions[k + 1:]
@@ -638,6 +682,8 @@ class Simulator:
         known = {r.body for r in seen}
         generation = {body: cars[body].respawns for body in cars}
         executed = actions[: LOOP.replan_after_actions]
+        if self._refused(actions):
+            return self._hold_a_sweep()
         for k, (action, profile) in enumerate(zip(executed, plan_profiles(executed, speed_mps, self.grid))):
             self.doing = f"{action.value} (plan {plan_id}, step {k + 1} of {len(actions)})"
             self._implied = self._implied_gaps({key: v for key, v in tracked.items()

@@ -28,6 +28,7 @@ class Failure:
     km: float
     t_s: float
     fault: str | None = None  # the fault it is attributed to (``sim.faults.attribute``), if any
+    flagged: bool | None = None  # with tracking: whether the tracker flagged a contradiction in its manoeuvre
 
 
 @dataclass(slots=True)
@@ -71,6 +72,7 @@ class RunSummary:
     minimal_risk_steps: int = 0  # sound decisions without a plan or a step: the last decision's proved continuation
     takeovers: list[Takeover] = field(default_factory=list)
     sweeps: int = 0  # the sensors' sweeps (``spec.physical.SENSORS.sweep_hz``)
+    refusals: int = 0  # with tracking: overtakes not started while a lane held a contradiction (no failure)
     faults: dict[str, dict[str, int]] = field(default_factory=dict)  # per kind: sweeps that offered it, starts, sweeps
 
     def of_kind(self, kind: FailureKind) -> list[Failure]:
@@ -119,7 +121,8 @@ class RunSummary:
                 "decisions": self.decisions, "containment": self.containment.to_json(),
                 "breach_replans": self.breach_replans, "keep_lane_steps": self.keep_lane_steps,
                 "minimal_risk_steps": self.minimal_risk_steps,
-                "takeovers": [asdict(t) for t in self.takeovers], "sweeps": self.sweeps, "faults": self.faults}
+                "takeovers": [asdict(t) for t in self.takeovers], "sweeps": self.sweeps, "faults": self.faults,
+                "refusals": self.refusals}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> RunSummary:
@@ -137,6 +140,7 @@ class RunSummary:
                    else ContainmentReport(), breach_replans=data.get("breach_replans", 0),
                    keep_lane_steps=data.get("keep_lane_steps", 0), minimal_risk_steps=data.get("minimal_risk_steps", 0),
                    takeovers=[Takeover(**t) for t in data.get("takeovers", [])], sweeps=data.get("sweeps", 0),
+                   refusals=data.get("refusals", 0),
                    faults={k: dict(v) for k, v in data.get("faults", {}).items()})
 
 

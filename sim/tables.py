@@ -104,14 +104,17 @@ def faults_table(results: list[RunSummary]) -> Table:
     """Per fault kind: the sweeps that offered it a target, the faults started, the sweeps they changed, and the
     failures (collisions, losses of control) attributed to it (``sim.faults.attribute``); then failures without."""
     table = Table(title="faults injected and the failures attributed to them")
-    for col in ("fault", "sweeps offering a target", "started", "sweeps changed", "failures", "per 1000 km"):
+    for col in ("fault", "sweeps offering a target", "started", "sweeps changed", "failures", "per 1000 km",
+                "flagged by the tracker"):
         table.add_column(col, justify="right")
     km = sum(r.km for r in results)
     crashes = Counter(c.fault for r in results if (c := r.crash) is not None)
+    flagged = Counter(c.fault for r in results if (c := r.crash) is not None and c.flagged)
+    tracked = any(c.flagged is not None for r in results if (c := r.crash) is not None)
     kinds = sorted({k for r in results for k in r.faults})
-    for kind in kinds:
-        stats = [r.faults.get(kind, {}) for r in results]
-        table.add_row(kind, *(str(sum(x.get(key, 0) for x in stats)) for key in ("offered", "started", "sweeps")),
-                      str(crashes[kind]), f"{1000 * crashes[kind] / km:.1f}" if km else "-")
-    table.add_row("(no fault)", "", "", "", str(crashes[None]), f"{1000 * crashes[None] / km:.1f}" if km else "-")
+    for kind in (*kinds, None):
+        stats = [r.faults.get(kind, {}) for r in results] if kind else []
+        counts = [str(sum(x.get(key, 0) for x in stats)) if kind else "" for key in ("offered", "started", "sweeps")]
+        table.add_row(kind or "(no fault)", *counts, str(crashes[kind]),
+                      f"{1000 * crashes[kind] / km:.1f}" if km else "-", str(flagged[kind]) if tracked else "-")
     return table

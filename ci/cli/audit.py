@@ -106,7 +106,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
           cost_engines: str, snapshots: int, opportunity_checks: int, stop_rate_per_h: float,
           min_spawn_gap_m: float, range_sd_m: float, miss_rate: float, workers: int, executor_kind: str,
           scheduler: str | None, out_dir: str, fresh: bool, faults: str, steering_offset_deg: float,
-          as_json: bool) -> None:
+          tracking: bool, as_json: bool) -> None:
     """Audit the grid abstraction: cell size x traffic model x sensing model x seeds, driven closed-loop."""
     from ci.audit import AuditPlan, label, planning_cost, rows, run_audit, write_reports
     from ci.progress import km_progress
@@ -121,7 +121,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
     base = DriveConfig(km, engine=engine, stop_rate_per_h=stop_rate_per_h, min_spawn_gap_m=min_spawn_gap_m,
                        range_sd_m=range_sd_m, miss_rate=miss_rate, snapshots=snapshots, restart_after_collision=True,
                        opportunity_checks=opportunity_checks, faults=faults,
-                       steering_offset_deg=steering_offset_deg)
+                       steering_offset_deg=steering_offset_deg, tracking=tracking)
     plan = AuditPlan(_cells(cells), _models("--traffic", traffic_text, dict(TRAFFIC_MODELS)),
                      _models("--sensing", sensing_text, dict(SENSOR_MODELS)), tuple(range(seed, seed + runs)), base,
                      _models("--model", model_text, dict(PLANNING_MODELS)), _scales(scale_text))
@@ -131,7 +131,8 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
     get_engine(engine).ready()  # its tools are installed (exit 4), or every plan of every run would fail
     total = len(configs) * runs
     err.print(f"audit: {len(configs)} combination(s) x seeds {seed}..{seed + runs - 1} = {total} run(s) of {km:g} km; "
-              f"planner {engine}; faults {base.faults or 'none'}; on {executor.describe(total)}; results in {out_dir}")
+              f"planner {engine}; faults {base.faults or 'none'}; tracking {'on' if tracking else 'off'}; "
+              f"on {executor.describe(total)}; results in {out_dir}")
     labels = {i: f"{c.cell_m:g} m, {c.traffic}, {c.sensor}, {c.model}"
                  + ("" if c.bounds_scale == 1 else f" x{c.bounds_scale:g}") + f", seed {s}"
              for i, (c, s) in enumerate((c, s) for c in configs for s in plan.seeds)}
@@ -171,6 +172,17 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
                            str(r.keep_lane_steps), str(r.minimal_risk_steps),
                            f"{r.takeovers} ({r.takeovers_after_breach})", str(r.waits_without_plan))
         out.print(models)
+        kinds = sorted({k for r in audit_rows for k in r.faults if k != "none"})
+        if kinds:
+            faults_table = Table(title="faults: started / sweeps changed / failures attributed")
+            for col in ("cell m", "traffic", "sensing", "model", *kinds, "no fault", "lost control", "unreadable"):
+                faults_table.add_column(col, justify="right")
+            for r in audit_rows:
+                faults_table.add_row(f"{r.cell_m:g}", r.traffic, r.sensing, label(r), *(
+                    " / ".join(str(r.faults.get(k, {}).get(x, 0)) for x in ("started", "sweeps", "failures"))
+                    for k in kinds), str(r.faults.get("none", {}).get("failures", 0)), str(r.losses_of_control),
+                    str(r.unreadable))
+            out.print(faults_table)
         cost_table = Table(title="planning cost on the scenarios the planner saw (shortest)")
         for col in ("cell m", "model", "engine", "n", "median ms", "p99 ms", "median states", "incomplete"):
             cost_table.add_column(col, justify="right")

@@ -55,6 +55,9 @@ def faults_options(command: Any) -> Any:
     command = click.option("--steering-offset-deg", type=DEGREES, default=DEFAULT_STEERING_OFFSET_DEG,
                            show_default=True,
                            help="The steering fault's offset (the default spins the car at 14 m/s).")(command)
+    command = click.option("--tracking", type=click.Choice(["on", "off"]), default="off", show_default=True,
+                           callback=lambda _ctx, _param, value: value == "on",
+                           help="The tracking layer between the sensors and the planner (docs/faults.md).")(command)
     return click.option("--faults", "faults", default="", show_default=False,
                         help=f"Faults injected, KIND=RATE[/SWEEPS],... : a rate per sensor sweep (10 Hz) and how "
                              f"many sweeps one lasts (default 30; steering 20); or 'paper', the rates calibrated "

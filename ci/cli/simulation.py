@@ -55,7 +55,7 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: S
              runs: int,
              workers: int, executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool,
              step_tolerance: float, plan_tolerance: float, paper_replanning: bool, faults: str,
-             steering_offset_deg: float, as_json: bool) -> None:
+             steering_offset_deg: float, tracking: bool, as_json: bool) -> None:
     """Drive the PyBullet simulator closed-loop and check every action against the model's prediction."""
     from ci.progress import km_progress
     from ci.simulate import RUNS_FILE
@@ -70,12 +70,14 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: S
     if seed + runs - 1 >= 2**32:
         raise OptionError("--seed", seed, f"seed + runs - 1 must stay below 2**32 (runs {runs})")
     campaign = DriveConfig(km, until_failure, engine, strategy, not paper_replanning, step_tolerance, plan_tolerance,
-                           cell_m, model=model, faults=faults, steering_offset_deg=steering_offset_deg)
+                           cell_m, model=model, faults=faults, steering_offset_deg=steering_offset_deg,
+                           tracking=tracking)
     campaign.parts()  # the engine exists and answers the strategy: bad input before any run starts
     get_engine(engine).ready()  # its tools are installed (exit 4), or every plan of every run would fail
     limit = f"{km:g} km" + (" or until failure" if until_failure else "")
     err.print(f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; {model} model; engine {engine}, "
               f"{strategy.value}, {campaign.grid.describe()}; faults {campaign.faults or 'none'}; "
+              f"tracking {'on' if tracking else 'off'}; "
               f"on {executor.describe(runs)}; results in {Path(out_dir) / RUNS_FILE}")
     resumed = f"already in {RUNS_FILE} (resumed; --fresh runs it again)"
     with km_progress(err, runs, km, resumed) as bar:

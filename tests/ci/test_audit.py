@@ -130,3 +130,29 @@ def test_rows_keep_models_and_bound_scales_apart_and_split_encounters_by_attribu
     assert [(r.model, r.bounds_scale) for r in table] == [("paper", 1.0), ("sound", 1.0), ("sound", 2.0)]
     assert table[1].attributed_count("contact", False) == 2 and table[1].attributed_count("near_miss", True) == 1
     assert table[0].overtakes == 8 and table[1].per_1000_km(table[1].overtakes) == 1000.0
+
+
+def test_rows_count_faults_their_failures_losses_of_control_and_unreadable_snapshots() -> None:
+    from ci.audit import Done, markdown
+    from sim.summary import Failure, RunSummary
+    from spec.kinds import FailureKind
+
+    config = DriveConfig(1.0, faults="fake-gap=0.01,steering=0.001")
+    failures = [Failure(FailureKind.COLLISION, "collision", "", 0.5, 10.0, "fake-gap"),
+                Failure(FailureKind.LOSS_OF_CONTROL, "spun", "", 0.7, 12.0, "steering"),
+                Failure(FailureKind.COLLISION, "collision", "", 0.9, 14.0, None),
+                Failure(FailureKind.SENSING, "dropped", "", 0.95, 15.0, "fake-gap")]  # a stop: no failure
+    summaries = [RunSummary(1, km=2.0, failures=failures, faults={"fake-gap": {"offered": 90, "started": 3,
+                                                                              "sweeps": 60},
+                                                                 "steering": {"offered": 900, "started": 1,
+                                                                              "sweeps": 20}}),
+                 RunSummary(2, km=2.0, faults={"fake-gap": {"offered": 80, "started": 2, "sweeps": 40}})]
+    (row,) = rows([Done(config, s) for s in summaries])
+    assert row.faults == {"fake-gap": {"started": 5, "sweeps": 100, "failures": 1},
+                          "steering": {"started": 1, "sweeps": 20, "failures": 1},
+                          "none": {"started": 0, "sweeps": 0, "failures": 1}}
+    assert (row.losses_of_control, row.unreadable) == (1, 1)
+    text = markdown([row], [], {})
+    assert "| 21 | paper | exact | paper | 4.0 | 5 / 100 / 1 | 1 / 20 / 1 | 1 | 1 | 1 |" in text
+    (plain,) = rows([Done(DriveConfig(1.0), RunSummary(1, km=2.0))])
+    assert plain.faults == {} and "Faults injected" not in markdown([plain], [], {})

@@ -95,7 +95,7 @@ def faults(command: str) -> list[Case]:
     """Unknown fault kinds, rates outside [0, 1], persistences below one sweep, a bad steering offset: exit 2."""
     bad = ("fake=0.1", "fake-gap", "fake-gap=1.5", "fake-gap=-0.1", "fake-gap=nan", "fake-gap=x", "fake-gap=0.1/0",
            "fake-gap=0.1/-2", "fake-gap=0.1/2.5", "split=0.1,split=0.2")
-    return [*(_case(command, f"--faults={value}", named="--faults") for value in bad),
+    return [*(_case(command, f"--faults={value}", named="--faults") for value in bad), *choices(command, "--tracking"),
             *(_case(command, f"--steering-offset-deg={value}", named="--steering-offset-deg")
               for value in ("nan", "inf", "-1", "91", "x"))]
 

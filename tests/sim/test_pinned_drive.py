@@ -27,7 +27,7 @@ def test_the_default_assembly_drives_the_pinned_drive_exactly(tmp_path: Path) ->
     assert set(summary) - set(golden) - set(WALL_CLOCK) == {"safety", "traffic_collisions", "snapshots", "restarts",
                                                             "opportunities", "decisions", "containment",
                                                             "breach_replans", "keep_lane_steps", "minimal_risk_steps",
-                                                            "takeovers", "sweeps", "faults"}
+                                                            "takeovers", "sweeps", "faults", "refusals"}
     assert summary["traffic_collisions"] == 0 and summary["safety"]["contacts"] == 0 and summary["restarts"] == 0
     assert (tmp_path / "trace-seed3.jsonl").read_text() == (GOLDEN / "drive-seed3-2km-trace.jsonl").read_text()
 
