@@ -190,6 +190,10 @@ class Row:
     def per_1000_km(self, count: float) -> float:
         return 1000 * count / self.km if self.km else math.nan
 
+    def fault_cell(self, kind: str) -> str:
+        """One fault kind's faults started / sweeps changed / failures attributed, as the tables print them."""
+        return " / ".join(str(self.faults.get(kind, {}).get(x, 0)) for x in ("started", "sweeps", "failures"))
+
     def attributed_count(self, kind: str, inside: bool) -> int:
         return self.attributed.get(attribution_key(kind, inside), 0)
 
@@ -453,8 +457,7 @@ def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any])
                   " | no fault | losses of control | unreadable snapshots |",
                   "|---|---|---|---|---|" + "---|" * (len(_fault_kinds(audit_rows)) + 3)]
         for r in audit_rows:
-            cells = [" / ".join(str(r.faults.get(k, {}).get(x, 0)) for x in ("started", "sweeps", "failures"))
-                     for k in _fault_kinds(audit_rows)]
+            cells = [r.fault_cell(k) for k in _fault_kinds(audit_rows)]
             lines.append(f"| {r.cell_m:g} | {r.traffic} | {r.sensing} | {label(r)} | {r.km:.1f} | " + " | ".join(cells)
                          + f" | {r.faults.get('none', {}).get('failures', 0)} | {r.losses_of_control} | "
                          f"{r.unreadable} |")

@@ -17,9 +17,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from sim.scene import Scene
 from spec.assumptions import Bounds
 from spec.lanes import Lane
-from spec.physical import CAR, ROAD, SENSORS, SensorSpec
+from spec.physical import CAR, SENSORS, SensorSpec
 from spec.sound import Vehicle, reach_m
 from spec.tracking import CONFIRM_SWEEPS, GATE_EPS_M, Explained, TrackState
 
@@ -34,16 +35,12 @@ def hides(av_y_m: float, lane: Lane, dx_m: float, other_lane: Lane, other_dx_m: 
         return False
     if (other_dx_m > 0) != (dx_m > 0) or abs(other_dx_m) >= abs(dx_m):
         return False
-    y_to, y_other = _lane_y(lane), _lane_y(other_lane)
+    y_to, y_other = Scene.lane_y(lane), Scene.lane_y(other_lane)
     half_l, half_w = CAR.length_m / 2, CAR.width_m / 2
     ys = [av_y_m + (y_to - av_y_m) * (x / dx_m) for x in (other_dx_m - half_l, other_dx_m + half_l)
           if (x > 0) == (dx_m > 0) and abs(x) <= abs(dx_m)]
     return any(abs(y - y_other) <= half_w for y in ys) or (
         len(ys) == 2 and min(ys) <= y_other - half_w and max(ys) >= y_other + half_w)
-
-
-def _lane_y(lane: Lane) -> float:
-    return ROAD.lane_width_m / 2 if lane is Lane.LEFT else -ROAD.lane_width_m / 2
 
 
 @dataclass(frozen=True, slots=True)

@@ -178,10 +178,9 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
             for col in ("cell m", "traffic", "sensing", "model", *kinds, "no fault", "lost control", "unreadable"):
                 faults_table.add_column(col, justify="right")
             for r in audit_rows:
-                faults_table.add_row(f"{r.cell_m:g}", r.traffic, r.sensing, label(r), *(
-                    " / ".join(str(r.faults.get(k, {}).get(x, 0)) for x in ("started", "sweeps", "failures"))
-                    for k in kinds), str(r.faults.get("none", {}).get("failures", 0)), str(r.losses_of_control),
-                    str(r.unreadable))
+                faults_table.add_row(f"{r.cell_m:g}", r.traffic, r.sensing, label(r), *(r.fault_cell(k) for k in kinds),
+                                     str(r.faults.get("none", {}).get("failures", 0)), str(r.losses_of_control),
+                                     str(r.unreadable))
             out.print(faults_table)
         cost_table = Table(title="planning cost on the scenarios the planner saw (shortest)")
         for col in ("cell m", "model", "engine", "n", "median ms", "p99 ms", "median states", "incomplete"):
