@@ -94,7 +94,6 @@ class Simulator:
         self.faulty: FaultySensor | None = None  # the sensing faults' injectors, kept over restarts (their log too)
         self.steering = SteeringFault(parts.faults, seed)
         self.manoeuvre_faults: list[FaultEvent] = []  # sensing faults in the snapshots of the manoeuvre under way
-        self.tracking = parts.tracking and parts.bounds is not None
         self.flagged = False  # the tracker flagged a contradiction at a decision of the manoeuvre under way
         self.steered: list[FaultEvent] = []  # steering faults under way during it
         self.sweep_every = max(1, round(1 / (SENSORS.sweep_hz * LOOP.physics_dt_s * LOOP.control_every_steps)))
@@ -127,7 +126,7 @@ class Simulator:
         self.proved: Containment | None = None  # the containment of the last sound decision that was executed
         self.sweep: tuple[Reading, ...] | None = ()  # the last sweep the sensors delivered (None: it was dropped)
         # with tracking, the planner sees the tracker's vehicles (``sim.tracking``); bodies only for bookkeeping
-        self.tracker = Tracker(self.parts.bounds) if self.tracking and self.parts.bounds is not None else None
+        self.tracker = Tracker(self.parts.bounds) if self.parts.tracking and self.parts.bounds is not None else None
         self.track_body: dict[int, int] = {}  # track -> the body of the reading last assigned to it (bookkeeping)
         self.unresolved: frozenset[Lane] = frozenset()  # lanes where the tracker holds a contradiction
         self.controls = 0  # control steps since the scene was assembled: the sensors sweep on every ``sweep_every``-th
@@ -424,22 +423,13 @@ class Simulator:
         try:
             readings = self._snapshot()
         except ScenarioError as err:
-            readings = ()
-            self._watch(readings, pose.x_m, lane)
-            if pending:
-                return self._keep(pending, FailureKind.SENSING, err.reason, str(err))
-            self._fail(FailureKind.SENSING, err.reason, str(err))
-            self.doing = "waiting after a sensing failure"
-            return self.executor.hold(LOOP.wait_s, self.grid.speed, self._tick)
+            self._watch((), pose.x_m, lane)
+            return self._sensing_stop(pending, err)
         self._watch(readings, pose.x_m, lane)
         try:
             answer, seen, scenario, frame_mps = self._decide(readings, pose.speed_mps, lane)
         except ScenarioError as err:
-            if pending:
-                return self._keep(pending, FailureKind.SENSING, err.reason, str(err))
-            self._fail(FailureKind.SENSING, err.reason, str(err))
-            self.doing = "waiting after a sensing failure"
-            return self.executor.hold(LOOP.wait_s, self.grid.speed, self._tick)
+            return self._sensing_stop(pending, err)
         self._planned(answer, scenario, lane)
         if answer.status is not Status.PLAN and pending:
             return self._keep(pending, FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
@@ -453,6 +443,15 @@ class Simulator:
             profile = plan_profiles((Action.DRIVE,), pose.speed_mps, self.grid)[0]
             return self.executor.run(Action.DRIVE, self._tick, profile)
         return self._execute(answer.actions, answer.states, seen, pose.speed_mps, frame_mps)
+
+    def _sensing_stop(self, pending: tuple[Action, ...], err: ScenarioError) -> bool:
+        """The paper model's snapshot could not be read (or made no scenario): the plan under way goes on, else the
+        stop is recorded and the AV waits in lane."""
+        if pending:
+            return self._keep(pending, FailureKind.SENSING, err.reason, str(err))
+        self._fail(FailureKind.SENSING, err.reason, str(err))
+        self.doing = "waiting after a sensing failure"
+        return self.executor.hold(LOOP.wait_s, self.grid.speed, self._tick)
 
     def _planned(self, answer: Answer, scenario: Scenario, lane: Lane) -> None:
         """Count a plan, its latency and (in the AV's lane) its missed opportunity; keep every SNAPSHOT_EVERY-th
