@@ -68,8 +68,8 @@ def _speed_choices() -> tuple[SpeedBounds, ...]:
 #: The bounds the hypothesis source draws with each scenario (``--model sound`` with no bounds option), stated: each
 #: lane's speeds from the paper profile's single speed to the default profile's interval (the spread traffic's
 #: cut-off), in three steps (the ends and halfway); the sensing error none or the default profile's; phantoms on or
-#: off. A lattice, not a continuum: every distinct set of bounds is a verifier Spin compiles (36 here, cached), and
-#: the ends are the profiles the suite ships.
+#: off; followers that react or keep their speed. A lattice, not a continuum: every distinct set of bounds is a
+#: verifier Spin compiles (72 here, cached), and the ends are the profiles the suite ships.
 SPEED_CHOICES = _speed_choices()
 ERROR_CHOICES = (assumptions.PROFILES["paper"].sensing_error_m,
                  assumptions.PROFILES[assumptions.DEFAULT_PROFILE].sensing_error_m)
@@ -80,10 +80,12 @@ def drawn_sound(draw: st.DrawFn) -> Sound:
     """Bounds from the stated choices (shrinking towards the paper profile's)."""
     same, oncoming = draw(st.sampled_from(SPEED_CHOICES)), draw(st.sampled_from(SPEED_CHOICES))
     error, phantoms = draw(st.sampled_from(ERROR_CHOICES)), draw(st.sampled_from((True, False)))
+    react = draw(st.sampled_from((True, False)))
     name = (f"drawn: same {same.low_mps:g}..{same.high_mps:g}, oncoming {oncoming.low_mps:g}..{oncoming.high_mps:g}, "
-            f"error {error:g} m, phantoms {'on' if phantoms else 'off'}")
+            f"error {error:g} m, phantoms {'on' if phantoms else 'off'}, followers "
+            f"{'react' if react else 'keep their speed'}")
     return Sound(Bounds(name, same, oncoming, error, phantoms, "drawn by the hypothesis source (ci.hypo.SPEED_CHOICES, "
-                                                               "ERROR_CHOICES)"))
+                                                               "ERROR_CHOICES)", react))
 
 
 def scenarios(grid: Grid, horizon: int | None, model: Sound | str | None = None) -> st.SearchStrategy[Scenario]:

@@ -61,7 +61,7 @@ from spec.models import ModelKind, models_for
 from spec.rules import disabled_guard
 from spec.safety import Conflict
 from spec.scenario import Problem, Scenario, problem_for
-from spec.sound import Sound, SoundRules, SoundState, Vehicle, Violation, vehicles
+from spec.sound import Sound, SoundRules, SoundState, Vehicle, Violation, follower_limit_m, rear_binds, vehicles
 
 DEFAULT_SPACE = "left=2@8..20,right=1@12..30,lanes=both"
 #: The profiles measured: the paper's world stated as bounds, and the default one (``spec.assumptions``).
@@ -285,8 +285,14 @@ def judge(scenario: Scenario, path: Path, car: Vehicle, chunk: _Chunk, start_m: 
     y = start_m + speed_mps * t_s
     if chunk.entry_s is not None:
         at_entry = start_m + speed_mps * chunk.entry_s
-        if at_entry + length <= path.position(chunk.entry_s) - ex:
-            return None  # behind every position of the AV, bumpers clear, when it got into the lane: it follows
+        if chunk.entry_s == 0.0 and scenario.lane is Lane.LEFT:  # in the lane from the start: it can never be ahead
+            follows = at_entry <= follower_limit_m(0.0, spec)
+        else:  # behind every position of the AV, bumpers clear, when it got into the lane
+            follows = at_entry + length <= path.position(chunk.entry_s) - ex
+        if follows:  # a follower: a conflict only where it keeps its speed and the AV is slower (BEHIND)
+            if rear_binds(scenario.sound.bounds, path.speed(t_s)):
+                return Conflict.BEHIND, x - y - length, spec.required_gap_m(speed_mps - v)
+            return None
         return Conflict.AHEAD, y - x - length, spec.required_gap_m(v - speed_mps)
     if y >= x:
         return Conflict.AHEAD, y - x - length, spec.required_gap_m(v - speed_mps)
@@ -312,6 +318,14 @@ def witness(scenario: Scenario, refusal: Refusal, dt_s: float = MAX_DT_S, path: 
     at_s = refusal.violation.time_s
     spec, tr, b = sound.safety, sound.tracking, sound.bounds
     length, ex, ev = spec.vehicle_length_m, tr.position_m, tr.speed_mps
+    if refusal.violation.conflict is Conflict.BEHIND:  # a follower: its worst motion is the corner, at every instant
+        for chunk in _chunks(path, scenario.lane, w0, w1):
+            if Lane.LEFT in chunk.lanes and math.isfinite(car.hi_m):
+                for t_s in _sample_times(chunk.t0_s, chunk.t1_s, dt_s, at_s, path):
+                    found = _judged(scenario, path, car, chunk, car.hi_m, b.same_mps.high_mps, -ex, -ev, float(t_s))
+                    if found is not None:
+                        return found
+        return None
     same = car.lane is Lane.LEFT
     low, high = (b.same_mps.low_mps, b.same_mps.high_mps) if same else (b.oncoming_mps.low_mps,
                                                                         b.oncoming_mps.high_mps)
@@ -402,7 +416,8 @@ def corner_witness(scenario: Scenario, refusal: Refusal, path: Path | None = Non
     start_m, speed, dx, dv = {
         Conflict.AHEAD: (car.lo_m, speeds.low_mps, tr.position_m, tr.speed_mps),
         Conflict.ONCOMING: (car.lo_m, speeds.high_mps, tr.position_m, tr.speed_mps),
-        Conflict.CUT_IN: (car.hi_m, speeds.high_mps, -tr.position_m, -tr.speed_mps)}[v.conflict]
+        Conflict.CUT_IN: (car.hi_m, speeds.high_mps, -tr.position_m, -tr.speed_mps),
+        Conflict.BEHIND: (car.hi_m, speeds.high_mps, -tr.position_m, -tr.speed_mps)}[v.conflict]
     if not math.isfinite(start_m):
         return None
     path = path or plan_path(scenario, refusal)
@@ -434,7 +449,7 @@ def rounding_only(problem: Problem, refusal: Refusal) -> bool:
     v, cell = refusal.violation, problem.grid.cell
     if v.vehicle.index is None or not v.required_m - v.gap_m <= cell + 1e-9:
         return False
-    rules = shifted_rules(problem, v.vehicle, -cell if v.conflict is Conflict.CUT_IN else cell)
+    rules = shifted_rules(problem, v.vehicle, -cell if v.conflict in (Conflict.CUT_IN, Conflict.BEHIND) else cell)
     if refusal.where is Where.START:
         return rules.start_violation(refusal.state) is None
     if refusal.where is Where.END:
@@ -463,7 +478,7 @@ def diagnose(scenario: Scenario, refusal: Refusal, path: Path | None = None) -> 
     b, tr, length = sound.bounds, sound.tracking, sound.safety.vehicle_length_m
     if refusal.where is Where.END and v.conflict is Conflict.AHEAD and path.final_lane is Lane.LEFT:
         _, end_s = window_s(refusal, path)
-        if path.speed(end_s) + tr.speed_mps <= b.same_mps.low_mps + TOLERANCE_M:
+        if not sound.minimal_risk.closes_in(path.speed(end_s) - TOLERANCE_M, b.same_mps.low_mps):
             return Finding.NOTHING_CLOSES_IN
     if v.conflict is Conflict.AHEAD and v.vehicle.lane is Lane.LEFT:
         for chunk in _chunks(path, scenario.lane, v.time_s, v.time_s):

@@ -71,7 +71,7 @@ from spec.errors import EngineError
 from spec.lanes import Lane
 from spec.motion import ramp_s
 from spec.scenario import Problem, Scenario
-from spec.sound import EPS_M, EPS_MPS, Checks
+from spec.sound import EPS_M, Checks, follower_limit_m, rear_binds
 from spec.state import State
 from spec.windows import NO_SPEED, Instant, Stretch, Window, sound_table
 
@@ -347,15 +347,22 @@ class SoundEncoding:
         return out
 
     def _ahead(self, s: Stretch, frame: Frame, follows: Sequence[Cond]) -> list[Cond]:
-        """AHEAD: a vehicle not a follower, held ahead at a piece's start and short of the gap at its worst instant.
+        """AHEAD: a vehicle not a follower, held ahead at a piece's start and short of the gap at its worst instant;
+        BEHIND: a follower over the pieces where followers bind (``spec.sound.rear_binds``), nearer than a cut-in's.
         Both are bounds on the same term (``lo + low dt - dx``), so each piece refuses an interval of it; their
         union, merged, is what the stretch refuses (fewer atoms, the same condition)."""
         refused = []
         for b in s.pieces:
             need = self._ahead_need(b.ahead) + EPS_M
             refused.append((self._held_from(b.start), need))
-        return [_or(follower, self._atom(v.lo, self.low, frame, "<", lo), self._atom(v.lo, self.low, frame, ">=", hi))
-                for lo, hi in _union(refused) for v, follower in zip(self.same, follows, strict=True)]
+        out = [_or(follower, self._atom(v.lo, self.low, frame, "<", lo), self._atom(v.lo, self.low, frame, ">=", hi))
+               for lo, hi in _union(refused) for v, follower in zip(self.same, follows, strict=True)]
+        rear = [self._behind_allow(b.behind) for b in s.pieces if b.rear]
+        if rear:  # BEHIND: each follower behind as a cut-in must be, at the strictest of those pieces
+            allow = min(rear)
+            out += [_or(_not(follower), self._atom(v.hi, self.high, frame, "<=", allow - EPS_M))
+                    for v, follower in zip(self.same, follows, strict=True)]
+        return out
 
     def _oncoming(self, s: Stretch, frame: Frame) -> list[Cond]:
         """ONCOMING: a vehicle not passed at a piece's start and short of the gap at its worst instant. A piece whose
@@ -371,13 +378,13 @@ class SoundEncoding:
 
     def _entering(self, s: Stretch, frame: Frame) -> list[Cond]:
         """Each same-direction vehicle certainly ahead at every piece, or certainly behind at every piece (at the
-        plan's start: bumpers clear behind)."""
+        plan's start: one that cannot be clear ahead, ``spec.sound.follower_limit_m``)."""
         ahead = max(self._ahead_need(b.ahead) for b in s.pieces)
         if s.at_start:
             if frame is not ABSOLUTE:
                 raise EngineError("z3: a start stretch in a moved window")
             first = s.pieces[0].start
-            behind = first.x_m - self.ex - self.length_m
+            behind = follower_limit_m(first.x_m, self.sound.safety)
         else:
             behind = min(self._behind_allow(b.behind) for b in s.pieces)
         return [_or(self._atom(v.lo, self.low, frame, ">=", ahead + EPS_M),
@@ -386,13 +393,17 @@ class SoundEncoding:
 
     def _end(self, window: Window, frame: Frame, lane: Lane, follows: Sequence[Cond]) -> list[Cond]:
         """After the continuation: in the right lane every oncoming vehicle passed; in the left lane, unless the AV
-        is slow enough never to close in, no vehicle but a follower held ahead."""
+        is slow enough never to close in, no vehicle but a follower held ahead, and no follower at all where one
+        would close in on the AV (``spec.sound.rear_binds`` at the end speed)."""
         end = window.end
         if lane is Lane.RIGHT:
             return [self._passed(v, end, frame) for v in self.oncoming]
-        if end.v_mps + self.ev > self.low + EPS_MPS:
-            return [_not(_and(_not(f), self._held(v, end, frame))) for v, f in zip(self.same, follows, strict=True)]
-        return []
+        out = []
+        if self.sound.minimal_risk.closes_in(end.v_mps, self.low):
+            out += [_not(_and(_not(f), self._held(v, end, frame))) for v, f in zip(self.same, follows, strict=True)]
+        if rear_binds(self.sound.bounds, end.v_mps):  # a follower that keeps its speed closes in for ever
+            out += [_not(f) for f in follows]
+        return out
 
     def _goal(self, window: Window, frame: Frame, lane: Lane) -> list[Cond]:
         """The goal at the continuation window's boundary (``SoundRules.goal_holds``)."""

@@ -34,7 +34,7 @@ from spec.motion import Ramp, action_speed_mps, ramp_s
 from spec.physical import LOOP
 from spec.safety import Conflict
 from spec.scenario import Scenario
-from spec.sound import Sound, Vehicle, vehicles
+from spec.sound import Sound, Vehicle, follower_limit_m, vehicles
 
 #: The longest step between two samples of the exact check (the issue's 10 ms).
 MAX_DT_S = 0.01
@@ -82,7 +82,7 @@ class Path:
                 r = ramp_s(speeds[k - 1], speeds[k])
                 ramps.append(Ramp(self.bounds_s[k] - r / 2, r, speeds[k] - speeds[k - 1]))
         last = speeds[-1] if speeds else start_mps
-        hold = sound.minimal_risk.hold_mps(last, sound.bounds.same_mps.low_mps, sound.tracking)
+        hold = sound.minimal_risk.hold_mps(last, sound.bounds.same_mps.low_mps)
         brake = sound.minimal_risk.ramp(t, last, hold)  # the manoeuvre as spec.envelope declares it
         if brake is not None:
             ramps.append(brake)
@@ -143,7 +143,8 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
     """The first instant at which some motion within the bounds breaks the specification, or None.
 
     Conflicts as the specification states them: a same-direction vehicle ahead in the left lane while the AV
-    occupies it (one behind since the AV entered, or started, follows it); an oncoming vehicle not yet past while
+    occupies it (one behind since the AV entered, or started, follows it: where followers keep their speed, it is
+    held to the cut-in's gap while the reference is slower than it may be); an oncoming vehicle not yet past while
     the AV occupies the right lane; while the AV moves into the left lane, every same-direction vehicle certainly
     ahead, or certainly behind with the cut-in gap. Between two samples the margin (gap less required gap) changes
     at most at the largest relative speed plus the time gap times the AV's largest acceleration: an interval whose
@@ -159,8 +160,13 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
         """The least margin over the conflicts at ``t`` and the breach it would be."""
         x, v = path.position(t), path.speed(t)
         least: tuple[float, Breach | None] = (math.inf, None)
+        rear = not b.followers_react and v < b.same_mps.high_mps - TOLERANCE_M  # followers closing in: BEHIND
         for i, c in enumerate(cars):
             options = []
+            if rear and c.lane is Lane.LEFT and Lane.LEFT in lanes and i in behind:
+                high = c.hi_m + b.same_mps.high_mps * t
+                options.append((Conflict.BEHIND, (x - tr.position_m) - high - length,
+                                b.same_mps.high_mps - v + tr.speed_mps))
             if c.lane is Lane.LEFT and Lane.LEFT in lanes and i not in behind:
                 low = c.lo_m + b.same_mps.low_mps * t
                 options.append((Conflict.AHEAD, low - (x + tr.position_m) - length,
@@ -196,7 +202,9 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
         return interval_ok(t0, mid, m0, m_mid, lanes, entering, behind) or \
             interval_ok(mid, t1, m_mid, m1, lanes, entering, behind)
 
-    behind: set[int] = set()
+    # at the start in the left lane, one that can never be clear ahead follows (``spec.sound.follower_limit_m``)
+    behind = {i for i, c in enumerate(cars) if scenario.lane is Lane.LEFT and c.lane is Lane.LEFT
+              and c.hi_m <= follower_limit_m(0.0, sound.safety) - TOLERANCE_M}
     previous: tuple[float, float] | None = None
     for t in path.times(dt_s):
         lanes, entering = path.occupancy(t)
@@ -324,7 +332,9 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
     ``goal`` when the plan ends.
 
     A same-direction vehicle behind the AV when it starts in, or finishes moving into, the left lane follows it
-    (a lane keeps its order): it is no conflict, and it is held at the specification's least gap behind. The AV's
+    (a lane keeps its order). Where followers react it is no conflict, and it is held at the specification's least
+    gap behind; where they keep their speed it drives its schedule and is checked (``BEHIND``) while the reference
+    is slower than it may be. The AV's
     deviation from its reference changes at its scheduled rate (at most the speed error) and stays within the
     position error."""
     sound = _sound(scenario)
@@ -334,7 +344,9 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
     pos, idx = list(motion.starts_m), [0] * len(cars)
     dev, dev_k = 0.0, 0
     times = path.times(dt_s)
-    followers = {i for i, c in enumerate(cars) if c.lane is Lane.LEFT and scenario.lane is Lane.LEFT and pos[i] < 0}
+    # at the start in the left lane: behind, or touching (a contact before the decision: ``follower_limit_m``)
+    followers = {i for i, c in enumerate(cars) if c.lane is Lane.LEFT and scenario.lane is Lane.LEFT
+                 and pos[i] <= follower_limit_m(0.0, sound.safety)}
     goal_checked, was_entering = goal is None, False
     for k, t in enumerate(times):
         while dev_k + 1 < len(motion.av_offset) and motion.av_offset[dev_k + 1][0] <= t:
@@ -360,8 +372,13 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
             found = _goal_breach(scenario, goal, cars, pos, x, motion.name, t)
             if found is not None:
                 return found
+        rear = not sound.bounds.followers_react and path.speed(t) < sound.bounds.same_mps.high_mps - TOLERANCE_M
         for i, c in enumerate(cars):
             y, s = pos[i], speeds[i]
+            if rear and c.lane is Lane.LEFT and Lane.LEFT in lanes and i in followers:
+                found = _gap_breach(sound, motion.name, Conflict.BEHIND, c.name, t, x - y - length, s - v)
+                if found is not None:
+                    return found
             if c.lane is Lane.LEFT and Lane.LEFT in lanes and i not in followers:
                 if entering and y < x:
                     found = _gap_breach(sound, motion.name, Conflict.CUT_IN, c.name, t, x - y - length, s - v)
@@ -378,7 +395,7 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
         for i, c in enumerate(cars):
             move = speeds[i] * step
             pos[i] = pos[i] + move if c.lane is Lane.LEFT else pos[i] - move
-            if i in followers:
+            if i in followers and sound.bounds.followers_react:
                 pos[i] = min(pos[i], path.position(t + step) + dev - length - g_min)
     return None
 

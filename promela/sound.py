@@ -19,7 +19,8 @@ What does not depend on the scenario is compiled in from spec/: the windows of
 ``spec.windows.sound_table`` (shapes, early windows, start windows, gains, speeds), the required gap
 at each instant a condition binds (``SafetySpec.required_gap_m`` of the closing speed this module
 forms from the instant's speed, the speed error and the lane's bound), the bounds, the envelope,
-``EPS_M`` and ``EPS_MPS``, the phantoms and each cell's extent (``spec.cells``). The C code does
+``EPS_M``, whether each window's end closes in (``MinimalRisk.closes_in``), the phantoms and each
+cell's extent (``spec.cells``). The C code does
 the rest itself: the vehicles' intervals (extents widened by the sensing error, then the
 phantoms), their growth over time, the conditions of ``spec.windows``'s docstring, the followers,
 the goal and the continuation. The scenario (AV lane, cells, targets, horizon) is read from
@@ -46,7 +47,7 @@ from spec.grid import Grid
 from spec.lanes import Lane
 from spec.models import GoalRule, ModelRules
 from spec.scenario import Problem
-from spec.sound import EPS_M, EPS_MPS, Checks, Sound
+from spec.sound import EPS_M, Checks, Sound, follower_limit_m, rear_binds
 from spec.windows import NO_SPEED, Binding, Instant, SoundTable, Window, sound_table
 
 ENV_VAR = "OVERTAKE_SCENARIO"
@@ -137,7 +138,7 @@ def _piece(b: Binding, sound: Sound) -> str:
     oncoming = s.required_gap_m(b.oncoming.v_mps + e_v + onc.high_mps)
     behind = s.required_gap_m(same.high_mps - b.behind.v_mps + e_v)
     return (f"{{{_f(b.start.t_s)}, {_f(b.start.x_m)}, {_at(b.ahead, ahead)}, {_at(b.oncoming, oncoming)}, "
-            f"{_at(b.behind, behind)}}}")
+            f"{_at(b.behind, behind)}, {int(b.rear)}}}")
 
 
 def _window(w: Window, sound: Sound, name: str) -> str:
@@ -147,7 +148,9 @@ def _window(w: Window, sound: Sound, name: str) -> str:
         stretches.append(f"{{{int(s.left)}, {int(s.right)}, {int(s.entering)}, {int(s.at_start)}, {len(s.pieces)}, "
                          f"{{{pieces}}}}}")
     return (f"  /* {name} */\n  {{{len(w.stretches)}, {{{', '.join(stretches)}}}, {_f(w.boundary.t_s)}, "
-            f"{_f(w.boundary.x_m)}, {_f(w.end.t_s)}, {_f(w.end.x_m)}, {_f(w.end.v_mps)}}}")
+            f"{_f(w.boundary.x_m)}, {_f(w.end.t_s)}, {_f(w.end.x_m)}, "
+            f"{int(sound.minimal_risk.closes_in(w.end.v_mps, sound.bounds.same_mps.low_mps))}, "
+            f"{int(rear_binds(sound.bounds, w.end.v_mps))}}}")
 
 
 def _action_code(action: Action | None) -> int:
@@ -210,14 +213,16 @@ def _tables(shape: SoundShape, table: SoundTable) -> str:
         f"#define CONTINUATION {CONTINUATION}",
         "c_decl {",
         "typedef struct { double t, x, gap; } SoundAt;  /* an instant of the reference, the gap required there */",
-        "typedef struct { double t0, x0; SoundAt ahead, oncoming, behind; } SoundPiece;",
+        "typedef struct { double t0, x0; SoundAt ahead, oncoming, behind; int rear; } SoundPiece;",
         "typedef struct { int left, right, entering, at_start, n; SoundPiece p[MAX_PIECES]; } SoundStretch;",
-        "typedef struct { int n; SoundStretch s[MAX_STRETCHES]; double bt, bx, et, ex, ev; } SoundWindow;",
+        "typedef struct { int n; SoundStretch s[MAX_STRETCHES]; double bt, bx, et, ex; int closes, rear_closes; }"
+        " SoundWindow;",
         "typedef struct { int lane, t, d, first, last, moved, action, window; } SoundEarly;",
         "typedef struct { int lane; double dx; } SoundPhantom;",
         f"static const double UNIT_S = {_f(table.unit_s)}, CELL_M = {_f(table.cell_m)};",
         f"static const double E_X = {_f(tr.position_m)}, E_V = {_f(tr.speed_mps)}, LEN = {_f(s.vehicle_length_m)};",
-        f"static const double EPS_M = {_f(EPS_M)}, EPS_MPS = {_f(EPS_MPS)};",
+        f"static const double EPS_M = {_f(EPS_M)};",
+        f"static const double FOLLOWER_M = {_f(follower_limit_m(0.0, s))};  /* spec.sound.follower_limit_m */",
         f"static const double SAME_LOW = {_f(b.same_mps.low_mps)}, SAME_HIGH = {_f(b.same_mps.high_mps)};",
         f"static const double ONC_LOW = {_f(b.oncoming_mps.low_mps)}, ONC_HIGH = {_f(b.oncoming_mps.high_mps)};",
         f"static const double SENSING_ERROR_M = {_f(b.sensing_error_m)};",
@@ -305,8 +310,8 @@ static int sound_stretch_refused(const SoundStretch *s, double dt, double dx, co
 				if (sound_ahead_refused(i, &p->ahead, dt, dx)) { ahead = 0; }
 				if (!sound_behind_clear(i, &p->behind, dt, dx)) { behind = 0; }
 			}
-			if (s->at_start)  /* already in the lane: bumpers clear is enough behind */
-			{	behind = S_HI[i] <= s->p[0].x0 + dx - E_X - LEN - EPS_M;
+			if (s->at_start)  /* already in the lane: one that cannot be clear ahead follows */
+			{	behind = S_HI[i] <= s->p[0].x0 + dx + FOLLOWER_M - EPS_M;
 			}
 			if (!ahead && !behind) { return 1; }
 		}
@@ -316,6 +321,8 @@ static int sound_stretch_refused(const SoundStretch *s, double dt, double dx, co
 			for (i = 0; i < n_same; i++)
 			{	if (!sound_follows(fol, i) && sound_held_ahead(i, p->x0 + dx, p->t0 + dt)
 				&&  sound_ahead_refused(i, &p->ahead, dt, dx)) { return 1; }
+				if (p->rear && sound_follows(fol, i)  /* BEHIND: a follower that keeps its speed */
+				&&  !sound_behind_clear(i, &p->behind, dt, dx)) { return 1; }
 		}	}
 	}
 	if (s->right)
@@ -389,9 +396,10 @@ GOAL
 	t = w->et + dt;
 	if (now.lane == RIGHT)
 	{	for (i = 0; i < n_onc; i++) { if (!sound_passed(i, x, t)) { return 0; } }
-	} else if (w->ev + E_V > SAME_LOW + EPS_MPS)
+	} else
 	{	for (i = 0; i < n_same; i++)
-		{	if (!sound_follows((const unsigned *) now.fol, i) && sound_held_ahead(i, x, t)) { return 0; }
+		{	if (w->closes && !sound_follows((const unsigned *) now.fol, i) && sound_held_ahead(i, x, t)) { return 0; }
+			if (w->rear_closes && sound_follows((const unsigned *) now.fol, i)) { return 0; }
 	}	}
 	return 1;
 }

@@ -6,9 +6,11 @@ under the drive's bounds (``spec.assumptions.world_bounds``) each vehicle of tha
 with its lane's speeds (``spec.sound.reach_m``), and where the sensors cannot see, a phantom's interval covers what
 may come from beyond. At every control step each vehicle's true position since the snapshot must be inside its own
 interval; a vehicle the decision did not know (missed, occluded, respawned) must be inside a phantom's, or behind
-the AV in the oncoming lane (past it). A same-direction vehicle behind the AV in its lane is assumed to follow it
-(``spec.sound``: a rear-end collision is the follower's to avoid): one nearer than the safety specification allows
-at its closing speed breaks that assumption. The AV must be inside its envelope (``spec.envelope.TRACKING``) around the
+the AV in the oncoming lane (past it). Where followers react (``Bounds.followers_react``), a same-direction vehicle
+behind the AV in its lane is assumed to follow it (``spec.sound``: a rear-end collision is the follower's to avoid):
+one nearer than the safety specification allows at its closing speed breaks that assumption; where they keep their
+speed, the model protects the AV from them (``Conflict.BEHIND``) and they are held to their intervals like any other
+vehicle. The AV must be inside its envelope (``spec.envelope.TRACKING``) around the
 executor's reference, its sideways move finished in the stated time. A departure is a ``Breach``, recorded once
 per decision and vehicle with the bound it broke and by how much; an AV envelope breach is an executor fault, which
 counts as inside the assumptions.
@@ -150,7 +152,7 @@ class Containment:
             for car in cars:
                 if car.body in self.breached:
                     continue
-                if lane is Lane.LEFT and av_in_left and car.x_m < av.x_m:
+                if lane is Lane.LEFT and av_in_left and car.x_m < av.x_m and self.bounds.followers_react:
                     gap_m = av.x_m - car.x_m - CAR.length_m
                     closing_mps = car.velocity_mps - av.speed_mps
                     if SAFETY.violated(gap_m, closing_mps):

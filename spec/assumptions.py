@@ -48,6 +48,9 @@ class Bounds:
     sensing_error_m: float
     phantoms: bool
     source: str = field(compare=False)
+    #: whether a same-direction vehicle behind the AV brakes for it (False: it keeps its speed whatever the AV does,
+    #: and the AV must not drive slower than it may while it is near: ``spec.safety.Conflict.BEHIND``)
+    followers_react: bool = True
 
     def speeds(self, lane: Lane) -> SpeedBounds:
         """The bounds of the vehicles of ``lane`` (the left lane carries same-direction traffic, the right oncoming)."""
@@ -86,7 +89,8 @@ SENSING_SDS = 3.0
 PROFILES: dict[str, Bounds] = {b.name: check_bounds(b) for b in (
     Bounds("paper", SpeedBounds(_COMMON_MPS, _COMMON_MPS), SpeedBounds(_COMMON_MPS, _COMMON_MPS), 0.0, True,
            "the paper's world: every vehicle at the common speed (spec.physical.TRAFFIC.speed_mps), sensing exact "
-           "(a cell still means anywhere within it), phantoms at the sensors' ranges (traffic enters from beyond)"),
+           "(a cell still means anywhere within it), phantoms at the sensors' ranges (traffic enters from beyond); "
+           "followers keep their speed whatever the AV does (the paper's traffic never brakes)", False),
     Bounds("default", _SPREAD, _SPREAD, SENSING_SDS * NOISE.range_sd_m, True,
            f"speeds: the spread traffic's distribution (spec.physical.SPEEDS) cut where it is cut, mean +- "
            f"{SPEEDS.cut_sd:g} sd = {_SPREAD.low_mps:g}..{_SPREAD.high_mps:g} m/s, both lanes; sensing error: "
@@ -107,6 +111,12 @@ TRAFFIC_SPEEDS: dict[str, tuple[SpeedBounds, str]] = {
     "following": (_SPREAD, f"the desired speeds' cut (spec.physical.SPEEDS), mean +- {SPEEDS.cut_sd:g} sd; IDM "
                            "braking below it (stops, wrecks, a slow leader) is outside"),
 }
+#: Whether a traffic model's followers react to the AV, from the model's own law (``Bounds.followers_react``).
+TRAFFIC_FOLLOWERS_REACT: dict[str, tuple[bool, str]] = {
+    "paper": (False, "followers keep the common speed whatever the AV does (the paper's traffic never brakes)"),
+    "spread": (True, "a follower takes its leader's speed, the AV's included, at the minimum gap"),
+    "following": (True, "a follower brakes by the IDM behind its leader, the AV included"),
+}
 #: The rule for each sensing model's error: ``exact`` none (a cell still means anywhere within it); ``noisy``
 #: ``SENSING_SDS`` times its range noise's sd. Missed readings are not bounded: a vehicle the plan did not know that
 #: turns up where its safety depends on is an assumption violation.
@@ -126,14 +136,15 @@ def world_bounds(traffic: str, sensing: str, range_sd_m: float = NOISE.range_sd_
                           f"{', '.join(SENSING_RULES)})")
     scale = check_number("--bounds-scale", scale)
     speeds, why = TRAFFIC_SPEEDS[traffic]
+    react, react_why = TRAFFIC_FOLLOWERS_REACT[traffic]
     middle, half = (speeds.low_mps + speeds.high_mps) / 2, (speeds.high_mps - speeds.low_mps) / 2
     scaled = SpeedBounds(max(0.0, middle - scale * half), middle + scale * half)
     error = scale * (SENSING_SDS * check_number("--range-sd-m", range_sd_m) if sensing == "noisy" else 0.0)
     name = f"{traffic}+{sensing}" + ("" if scale == 1 else f" x{scale:g}")
-    source = (f"traffic {traffic}: {why} = {scaled.low_mps:g}..{scaled.high_mps:g} m/s, both lanes; sensing "
-              f"{sensing}: {SENSING_RULES[sensing]} = {error:g} m; phantoms at the sensors' ranges"
+    source = (f"traffic {traffic}: {why} = {scaled.low_mps:g}..{scaled.high_mps:g} m/s, both lanes; {react_why}; "
+              f"sensing {sensing}: {SENSING_RULES[sensing]} = {error:g} m; phantoms at the sensors' ranges"
               + ("" if scale == 1 else f"; widths x {scale:g} (--bounds-scale)"))
-    return check_bounds(Bounds(name, scaled, scaled, error, True, source))
+    return check_bounds(Bounds(name, scaled, scaled, error, True, source, react))
 
 
 def profile(name: str, where: str = "--bounds") -> Bounds:

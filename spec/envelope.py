@@ -48,6 +48,11 @@ TRACKING = Tracking(1.5, 1.5, LOOP.lane_change_lateral_s,
 EXACT_AV = Tracking(0.0, 0.0, 0.0, "the paper's AV: exactly on its reference, lane changes instant")
 
 
+#: A ramp's end speed is a sum of floats: one that ends at the hold speed (the slowest speed ahead) may come out a
+#: rounding above it, which must not count as closing in (1e-9 m/s closes 1 mm in 11 days).
+CLOSING_EPS_MPS = 1e-9
+
+
 @dataclass(frozen=True, slots=True)
 class MinimalRisk:
     """The minimal-risk manoeuvre after a plan (and the fallback's): stay in lane and brake, at the share of the
@@ -66,10 +71,21 @@ class MinimalRisk:
     emergency_decel_mps2: float = CAR.max_brake_mps2  # the car's own braking limit
     takeover_s: float = LOOP.wait_s  # one take-over lasts as long as a wait without a plan
 
-    def hold_mps(self, speed_mps: float, slowest_ahead_mps: float, tracking: Tracking) -> float:
-        """The speed the manoeuvre brakes to: at most the slowest speed a vehicle ahead may keep, less the car's
-        speed error (so the AV never closes in), never below a standstill, never faster than it already is."""
-        return max(0.0, min(speed_mps, slowest_ahead_mps - tracking.speed_mps))
+    def hold_mps(self, speed_mps: float, slowest_ahead_mps: float) -> float:
+        """The speed the manoeuvre brakes to: at most the slowest speed a vehicle ahead may keep (so the reference
+        never closes in on it), never below a standstill, never faster than the AV already is.
+
+        The car's speed error is not taken off: the envelope (``Tracking``) holds the car within ``position_m`` of
+        the reference's integral at every instant, so a reference at the leader's slowest speed keeps every gap
+        ahead within ``position_m`` of where it was, for ever; the specification's check of each instant already
+        takes that position error and the speed error's closing. Taking the speed error off as well made the AV
+        brake below the speed of traffic that keeps its speed exactly (the paper's), whose followers do not react."""
+        return max(0.0, min(speed_mps, slowest_ahead_mps))
+
+    def closes_in(self, end_mps: float, slowest_ahead_mps: float) -> bool:
+        """Whether a reference that ends the manoeuvre at ``end_mps`` keeps closing in on a vehicle ahead that may
+        drive at ``slowest_ahead_mps`` (then no such vehicle may be held ahead after it: it would be reached)."""
+        return end_mps > slowest_ahead_mps + CLOSING_EPS_MPS
 
     def ramp(self, at_s: float, speed_mps: float, hold_mps: float) -> Ramp | None:
         """The braking ramp, starting at ``at_s`` (none when the AV already drives at the hold speed)."""

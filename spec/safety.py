@@ -2,7 +2,9 @@
 
 Safe means a gap of at least ``max(min_gap_m, time_gap_s x closing speed)`` to each vehicle in
 conflict with the AV (``Conflict``): ahead of it in its lane; oncoming while any part of the AV is
-in the right lane; behind it in the lane it enters (a cut-in). The audit's safety monitor
+in the right lane; behind it in the lane it enters (a cut-in); and, in a world whose followers do
+not react to the AV, behind it in its lane while the AV drives slower than they may (``BEHIND``:
+elsewhere a rear-end is the follower's to avoid). The audit's safety monitor
 (``sim.safety``) counts a near miss exactly where this is broken, and the sound model's checks
 (``oracle.reach``) take the worst closing speed over the vehicles' speed bounds and the AV's
 envelope, so the model guarantees what the audit measures. Gaps are bumper to bumper between
@@ -23,6 +25,9 @@ class Conflict(enum.Enum):
     AHEAD = "ahead"  # a same-direction vehicle ahead of the AV in a lane the AV occupies
     ONCOMING = "oncoming"  # an oncoming vehicle ahead of the AV while any part of the AV is in the right lane
     CUT_IN = "cut_in"  # a same-direction vehicle behind the AV in the lane the AV enters
+    #: a same-direction vehicle behind the AV in its lane, where followers keep their speed whatever the AV does
+    #: (``spec.assumptions.Bounds.followers_react`` False), while the AV's reference is slower than it may be
+    BEHIND = "behind"
 
 
 @dataclass(frozen=True, slots=True)

@@ -17,9 +17,14 @@ start of the ramp into it to its end), every vehicle in conflict keeps the gap o
   certainly ahead as above, or certainly behind with ``(x - e_x) - (hi + v_high t) - L >=
   max(g_min, tau (v_high - v + e_v))``.
 
-A same-direction vehicle behind the AV in its own lane follows it (a lane keeps its order; a
-rear-end collision is the follower's to avoid) and is no conflict; the state remembers which ones
-do (``SoundState.followers``), since an interval behind a braking AV grows past it. Each condition
+- ``BEHIND``: where followers keep their speed whatever the AV does (``Bounds.followers_react``
+  False, the paper's traffic), each follower while the AV's reference is slower than ``v_high``
+  (``rear_binds``), with the cut-in's gap.
+
+A same-direction vehicle behind the AV in its own lane follows it (a lane keeps its order); where
+followers react, a rear-end collision is the follower's to avoid and it is no conflict. The state
+remembers which ones follow (``SoundState.followers``), since an interval behind a braking AV grows
+past it. Each condition
 is a threshold on the vehicle's start interval, the extreme over the window of a function of the
 reference alone; the reference is piecewise quadratic, so the extreme is exact (the ends of each
 piece and a vertex inside it). Goal fields hold only for every position; a plan's last state must admit the
@@ -37,7 +42,7 @@ from dataclasses import dataclass, replace
 from spec.actions import ACTION_RULES, Action
 from spec.assumptions import DEFAULT_PROFILE, Bounds, check_bounds, parse_speeds, profile
 from spec.cells import left_extent_m, oncoming_extent_m
-from spec.envelope import MINIMAL_RISK, TRACKING, MinimalRisk, Piece, Reference, Tracking
+from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING, MinimalRisk, Piece, Reference, Tracking
 from spec.errors import OptionError, check_number
 from spec.grid import Grid
 from spec.lanes import Lane
@@ -47,9 +52,6 @@ from spec.safety import SAFETY, Conflict, SafetySpec
 
 #: Conditions are held to this much slack on the safe side, so that float rounding never makes a gap look large.
 EPS_M = 1e-9
-#: A ramp's end speed is a sum of floats: one that ends at the hold speed (the slowest speed ahead less the speed
-#: error) may come out a rounding above it, which must not count as closing in (1e-9 m/s closes 1 mm in 11 days).
-EPS_MPS = 1e-9
 #: The most step answers one scenario's rules remember (a few MB; a longer walk starts again).
 MEMO_ENTRIES = 50_000
 
@@ -78,16 +80,17 @@ class Sound:
             return f"the sound model's code path with the paper's cell rules (identity check), bounds {b.name}"
         return (f"sound model, bounds {b.name}: same-direction {b.same_mps.low_mps:g}..{b.same_mps.high_mps:g} m/s, "
                 f"oncoming {b.oncoming_mps.low_mps:g}..{b.oncoming_mps.high_mps:g} m/s, sensing error "
-                f"{b.sensing_error_m:g} m, phantoms {'on' if b.phantoms else 'off'}")
+                f"{b.sensing_error_m:g} m, phantoms {'on' if b.phantoms else 'off'}, followers "
+                f"{'react' if b.followers_react else 'keep their speed'}")
 
 
 #: The keys of a scenario file's ``bounds`` table (and the command line's options of the same names).
-BOUNDS_KEYS = ("profile", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps")
+BOUNDS_KEYS = ("profile", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react")
 
 
 def sound_from(base: Sound | None, profile_name: str | None = None, same: object = None, oncoming: object = None,
                sensing_error_m: object = None, phantoms: bool | None = None, av_speed_mps: object = None,
-               where: str = "--") -> Sound:
+               where: str = "--", followers_react: bool | None = None) -> Sound:
     """The sound model from a base (a file's, or None: the default profile), a named profile and overrides of its
     numbers; every value is checked, and bad input names the option or key (``where`` + its name)."""
     def key(name: str) -> str:
@@ -112,6 +115,11 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
             raise OptionError(key("phantoms"), phantoms, "must be true or false")
         bounds = replace(bounds, phantoms=phantoms)
         changed.append("phantoms")
+    if followers_react is not None:
+        if not isinstance(followers_react, bool):
+            raise OptionError(key("followers_react"), followers_react, "must be true or false")
+        bounds = replace(bounds, followers_react=followers_react)
+        changed.append("followers_react")
     if changed:
         bounds = replace(bounds, name=f"{bounds.name} (changed: {', '.join(changed)})",
                          source=f"{bounds.source}; changed by the user: {', '.join(changed)}")
@@ -131,7 +139,8 @@ def sound_from_table(table: object, where: str = "bounds") -> Sound:
         if name not in BOUNDS_KEYS:
             raise OptionError(f"{where}.{name}", table[name], f"unknown key (allowed: {', '.join(BOUNDS_KEYS)})")
     return sound_from(None, table.get("profile"), table.get("same_mps"), table.get("oncoming_mps"),
-                      table.get("sensing_error_m"), table.get("phantoms"), table.get("av_speed_mps"), f"{where}.")
+                      table.get("sensing_error_m"), table.get("phantoms"), table.get("av_speed_mps"), f"{where}.",
+                      table.get("followers_react"))
 
 
 def sound_to_table(sound: Sound) -> dict[str, object]:
@@ -139,7 +148,8 @@ def sound_to_table(sound: Sound) -> dict[str, object]:
     b = sound.bounds
     table: dict[str, object] = {"same_mps": [b.same_mps.low_mps, b.same_mps.high_mps],
                                 "oncoming_mps": [b.oncoming_mps.low_mps, b.oncoming_mps.high_mps],
-                                "sensing_error_m": b.sensing_error_m, "phantoms": b.phantoms}
+                                "sensing_error_m": b.sensing_error_m, "phantoms": b.phantoms,
+                                "followers_react": b.followers_react}
     if sound.start_mps is not None:
         table["av_speed_mps"] = sound.start_mps
     return table
@@ -186,6 +196,27 @@ def vehicles(lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Gr
         lo, hi = (p.dx_m, math.inf) if p.dx_m > 0 else (-math.inf, p.dx_m)
         out.append(Vehicle(p.lane, None, lo, hi, f"phantom ({p.why}, {p.dx_m:+g} m)"))
     return tuple(out)
+
+
+def rear_binds(bounds: Bounds, slowest_mps: float) -> bool:
+    """Whether the AV's followers are in conflict (``Conflict.BEHIND``) while its reference drives no faster than
+    ``slowest_mps``: only where followers keep their speed whatever the AV does, and only while the reference is
+    slower than a follower may be. At or above that speed the reference never closes on a follower, and the car's
+    own error is the envelope's position bound; below it, a follower at its fastest closes in and must be far enough
+    behind for the specification's gap (``SoundRules._behind_allow``, the cut-in's threshold)."""
+    return not bounds.followers_react and slowest_mps < bounds.same_mps.high_mps - CLOSING_EPS_MPS
+
+
+def follower_limit_m(x0_m: float, safety: SafetySpec) -> float:
+    """At a plan's start, the AV in the left lane at ``x0_m``: a same-direction vehicle whose every position is short
+    of this (its centre less than a car length ahead of the AV's, so it can never be clear ahead) follows the AV.
+
+    Such a vehicle is behind the AV, or touching it: a contact the collision monitor has counted before the decision
+    and no plan can undo, so the start refuses nothing for it; a lane keeps its order, so it follows for the rest of
+    the plan (the specification has no conflict behind the AV in its own lane). On 21 m cells the cell behind the
+    AV's reaches to the AV's centre, and bumpers clear (the earlier rule) refused every start after an overtake's
+    return: the overtaken vehicle is in that cell."""
+    return x0_m + safety.vehicle_length_m
 
 
 def reach_m(v: Vehicle, bounds: Bounds, t_s: float) -> tuple[float, float]:
@@ -242,6 +273,7 @@ class Bounded:
     ahead: tuple[float, float]
     oncoming: tuple[float, float]
     behind: tuple[float, float]
+    rear: bool = False  # followers are in conflict over this piece (``rear_binds``): ``behind`` holds for them too
 
     def shifted(self, dt_s: float, dx_m: float, bounds: Bounds) -> Bounded:
         """The same piece ``dt_s`` later and ``dx_m`` farther (every threshold is a reference position less or more
@@ -250,7 +282,7 @@ class Bounded:
         return Bounded(Piece(p.t0_s + dt_s, p.t1_s + dt_s, p.x0_m + dx_m, p.v0_mps, p.acc_mps2),
                        (self.ahead[0] + dx_m - same.low_mps * dt_s, self.ahead[1] + dt_s),
                        (self.oncoming[0] + dx_m + onc.high_mps * dt_s, self.oncoming[1] + dt_s),
-                       (self.behind[0] + dx_m - same.high_mps * dt_s, self.behind[1] + dt_s))
+                       (self.behind[0] + dx_m - same.high_mps * dt_s, self.behind[1] + dt_s), self.rear)
 
 
 @dataclass(frozen=True, slots=True)
@@ -319,7 +351,7 @@ class SoundRules:
             first_mps = self.speeds[action] if action is not None else start_mps
         before = last_mps if last_mps is not None else first_mps
         if action is None:
-            hold = self.sound.minimal_risk.hold_mps(before, self.sound.bounds.same_mps.low_mps, self.sound.tracking)
+            hold = self.sound.minimal_risk.hold_mps(before, self.sound.bounds.same_mps.low_mps)
             ramp = self.sound.minimal_risk.ramp(t_s, before, hold)
         elif last_mps is None or self.speeds[action] == before:
             ramp = None
@@ -388,7 +420,8 @@ class SoundRules:
         return shape
 
     def _bounded(self, p: Piece) -> Bounded:
-        return Bounded(p, self._ahead_need(p), self._oncoming_need(p), self._behind_allow(p))
+        return Bounded(p, self._ahead_need(p), self._oncoming_need(p), self._behind_allow(p),
+                       rear_binds(self.sound.bounds, min(p.v0_mps, p.v(p.t1_s))))
 
     # -- the conditions, as thresholds on a vehicle's start interval -----------------------------------------
     def _ahead_need(self, p: Piece) -> tuple[float, float]:
@@ -445,7 +478,8 @@ class SoundRules:
         v = p.v(t_s)
         closing = {Conflict.AHEAD: v + tr.speed_mps - b.same_mps.low_mps,
                    Conflict.ONCOMING: v + tr.speed_mps + b.oncoming_mps.high_mps,
-                   Conflict.CUT_IN: b.same_mps.high_mps - v + tr.speed_mps}[conflict]
+                   Conflict.CUT_IN: b.same_mps.high_mps - v + tr.speed_mps,
+                   Conflict.BEHIND: b.same_mps.high_mps - v + tr.speed_mps}[conflict]
         return s.required_gap_m(closing)
 
     def _violation(self, conflict: Conflict, v: Vehicle, p: Piece, need: tuple[float, float], lo: bool) -> Violation:
@@ -468,11 +502,17 @@ class SoundRules:
         return None
 
     def _check_ahead(self, pieces: list[Bounded], followers: frozenset[int]) -> Violation | None:
+        """AHEAD for every vehicle not a follower; BEHIND for the followers over the pieces where they bind."""
         for b in pieces:
             for i, v in enumerate(self.same):
                 if v.lo_m < b.ahead[0] + EPS_M and i not in followers and \
                         self.held_ahead(v, b.piece.x0_m, b.piece.t0_s):
                     return self._violation(Conflict.AHEAD, v, b.piece, b.ahead, True)
+            if b.rear:
+                for i in sorted(followers):
+                    v = self.same[i]
+                    if v.hi_m > b.behind[0] - EPS_M:
+                        return self._violation(Conflict.BEHIND, v, b.piece, b.behind, False)
         return None
 
     def _check_oncoming(self, pieces: list[Bounded]) -> Violation | None:
@@ -485,7 +525,7 @@ class SoundRules:
     def _check_entering(self, pieces: list[Bounded], margin: bool) -> Violation | None:
         """Entering the left lane: each same-direction vehicle certainly ahead (AHEAD) or certainly behind (CUT_IN)
         over the whole sideways move. At the plan's start (``margin`` False) the AV is already in the lane: one
-        behind need only be certainly behind (bumpers clear); it is a follower, not a cut-in."""
+        behind need only be one that cannot be clear ahead (``follower_limit_m``); it is a follower, not a cut-in."""
         ahead = max(pieces, key=lambda b: b.ahead[0])
         if margin:
             behind = min(pieces, key=lambda b: b.behind[0])
@@ -493,7 +533,7 @@ class SoundRules:
         else:
             behind = pieces[0]
             p = behind.piece
-            allow = (p.x0_m - self.sound.tracking.position_m - self.sound.safety.vehicle_length_m, p.t0_s)
+            allow = (follower_limit_m(p.x0_m, self.sound.safety), p.t0_s)
         for v in self.same:
             if v.lo_m >= ahead.ahead[0] + EPS_M or v.hi_m <= allow[0] - EPS_M:
                 continue
@@ -556,7 +596,7 @@ class SoundRules:
     def continuation_violation(self, state: SoundState) -> Violation | None:
         """A plan's last state must be safe for ever: the minimal-risk manoeuvre (brake in lane to the hold speed)
         over its ramp, and after it no conflict may close in (an oncoming vehicle not yet past an AV in the right
-        lane always does)."""
+        lane always does; a follower that keeps its speed does when the hold speed is below it)."""
         followers = self.followers(state, None)
         ((seg, pieces),) = self.window(state, None)
         found = self.check_segment(seg, pieces, followers)
@@ -570,10 +610,13 @@ class SoundRules:
                     return Violation(Conflict.ONCOMING, v, end_s, -math.inf, self._required(
                         Conflict.ONCOMING, tail, end_s))
             return None
-        if end_v + self.sound.tracking.speed_mps > self.sound.bounds.same_mps.low_mps + EPS_MPS:
+        if self.sound.minimal_risk.closes_in(end_v, self.sound.bounds.same_mps.low_mps):
             for i, v in enumerate(self.same):
                 if i not in followers and self.held_ahead(v, end_x, end_s):
                     return Violation(Conflict.AHEAD, v, end_s, -math.inf, self._required(Conflict.AHEAD, tail, end_s))
+        if followers and rear_binds(self.sound.bounds, end_v):
+            v = self.same[min(followers)]
+            return Violation(Conflict.BEHIND, v, end_s, -math.inf, self._required(Conflict.BEHIND, tail, end_s))
         return None
 
     def goal_holds(self, state: SoundState, goal: GoalRule) -> bool:

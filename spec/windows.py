@@ -18,12 +18,17 @@ phantoms, ``spec.assumptions``), its growth with its lane's speed bounds, the AV
 - entering the left lane (``entering``), per same-direction vehicle: safe when it is ahead (the
   ``AHEAD`` test above, not refused) at every piece, or behind at every piece: ``hi + high t <= x
   - e_x - L - gap(high - v + e_v) - EPS_M`` at each ``behind`` instant (at the plan's start,
-  ``at_start``, only bumpers clear: ``hi <= x0 - e_x - L - EPS_M``);
+  ``at_start``, one that cannot be clear ahead follows: ``hi <= spec.sound.follower_limit_m(x0) - EPS_M``);
 - followers: at the start, and at the boundary of a move into the left lane (``boundary``), the
-  same-direction vehicles not held ahead there; they stay followers until the next such move;
+  same-direction vehicles not held ahead there; they stay followers until the next such move; over
+  a piece marked ``rear`` (``spec.sound.rear_binds``: followers keep their speed and the reference
+  is slower than they may be), each follower must be behind as a cut-in must: ``hi + high t <= x -
+  e_x - L - gap(high - v + e_v) - EPS_M`` at the piece's ``behind`` instant;
 - the end of a plan: its continuation window (action None) as above, then at its ``end``: in the
-  right lane every oncoming vehicle passed; in the left lane, when ``v + e_v > low + EPS_MPS``,
-  no same-direction vehicle but a follower held ahead;
+  right lane every oncoming vehicle passed; in the left lane, when the reference closes in
+  (``spec.envelope.MinimalRisk.closes_in``: ``v > low`` at the end),
+  no same-direction vehicle but a follower held ahead; and when followers bind at the end speed
+  (``rear_binds``), no follower at all;
 - the goal, at the continuation window's ``boundary`` (``spec.sound.SoundRules.goal_holds``).
 
 Lookup (``SoundTable.window``): a window while the first ramp still runs is in ``early`` under
@@ -67,9 +72,11 @@ class Binding:
     ahead: Instant
     oncoming: Instant
     behind: Instant
+    rear: bool  # the followers are in conflict over this piece (``spec.sound.rear_binds``): ``behind`` holds them
 
     def shifted(self, dt_s: float, dx_m: float) -> Binding:
-        return Binding(*(i.shifted(dt_s, dx_m) for i in (self.start, self.ahead, self.oncoming, self.behind)))
+        return Binding(self.start.shifted(dt_s, dx_m), self.ahead.shifted(dt_s, dx_m),
+                       self.oncoming.shifted(dt_s, dx_m), self.behind.shifted(dt_s, dx_m), self.rear)
 
 
 @dataclass(frozen=True, slots=True)
@@ -147,7 +154,7 @@ def _instant(b: Bounded, t_s: float) -> Instant:
 def _binding(b: Bounded) -> Binding:
     p = b.piece
     return Binding(Instant(p.t0_s, p.x0_m, p.v0_mps), _instant(b, b.ahead[1]), _instant(b, b.oncoming[1]),
-                   _instant(b, b.behind[1]))
+                   _instant(b, b.behind[1]), b.rear)
 
 
 def declared(window: list[tuple[Segment, list[Bounded]]], boundary: Instant) -> Window:

@@ -115,7 +115,7 @@ def abbrev(answer: Answer) -> str:
     return " ".join(SHORT[a] for a in answer.actions) or "(empty)"
 
 
-SOUND_OPTIONS = ("bounds", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps")
+SOUND_OPTIONS = ("bounds", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react")
 
 
 def sound_options(command: Any) -> Any:
@@ -139,15 +139,21 @@ def sound_options(command: Any) -> Any:
                      "sensors' ranges (default: the profile's)."),
         click.option("--av-speed-mps", type=SPEED, default=None, help="Sound model: the AV's measured speed at "
                      "the snapshot (default: the common speed)."),
+        click.option("--followers-react/--followers-keep-speed", "followers_react", default=None,
+                     help="Sound model: whether vehicles behind the AV brake for it (default: the profile's; the "
+                     "paper's keep their speed, and the AV must not drive slower than they may while near)."),
     )):
         wrapper = decorate(wrapper)
     return wrapper
 
 
 def with_sound(scenario: Scenario, bounds: str | None, same_mps: str | None, oncoming_mps: str | None,
-               sensing_error_m: float | None, phantoms: bool | None, av_speed_mps: float | None) -> Scenario:
+               sensing_error_m: float | None, phantoms: bool | None, av_speed_mps: float | None,
+               followers_react: bool | None = None) -> Scenario:
     """``scenario`` under the sound model the options (over the file's ``bounds``) choose; unchanged without any."""
-    if all(v is None for v in (bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps)):
+    if all(v is None for v in (bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
+                               followers_react)):
         return scenario
-    sound = sound_from(scenario.sound, bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps)
+    sound = sound_from(scenario.sound, bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
+                       followers_react=followers_react)
     return replace(scenario, sound=sound)

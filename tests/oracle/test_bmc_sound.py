@@ -181,3 +181,17 @@ def test_answers_on_kept_solvers_equal_answers_on_fresh_ones() -> None:
             assert (k.status, len(k.actions), k.extra.get("cost")) == (f.status, len(f.actions), f.extra.get("cost"))
             if k.status is Status.PLAN:
                 assert sound.validate(p, k.actions).states == k.states, strategy
+
+
+#: Two scenarios whose answer the paper profile's followers (who keep their speed: ``Conflict.BEHIND``) change
+#: (cell length, profile, measured start speed, lane, left, right, targets), as in Spin's pinned ones.
+PINNED = ((21.0, "paper", 5.0, "left", (12, 13, 15, 17), (), 0), (21.0, "paper", 5.0, "right", (8, 12, 14, 16),
+                                                                   (18, 23), 1))
+
+
+@pytest.mark.parametrize("case", PINNED, ids=lambda c: f"{c[1]}-{c[0]:g}m-{c[2]:g}mps-{c[3]}")
+def test_pinned_scenarios_agree(case: tuple[float, str, float, str, tuple[int, ...], tuple[int, ...], int]) -> None:
+    cell_m, name, start_mps, lane, left, right, targets = case
+    scenario = make_scenario(lane, list(left), list(right), targets, horizon=30, grid=grid_for(cell_m))
+    for strategy in STRATEGIES:
+        _agree(replace(scenario, sound=Sound(profile(name), start_mps=start_mps)), strategy)

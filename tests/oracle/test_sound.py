@@ -35,13 +35,14 @@ PAIRS = 10_000 if CI else 1_000
 
 @st.composite
 def bounds(draw: st.DrawFn) -> Bounds:
-    """Bounds around the common speed, from none at all to the default profile's spread, phantoms or not."""
+    """Bounds around the common speed, from none at all to the default profile's spread, phantoms or not, followers
+    that react or keep their speed."""
     spread = draw(st.sampled_from((0.0, 0.5, 1.0, 2.1)))
     onc = draw(st.sampled_from((0.0, 1.0, 2.1)))
     error = draw(st.sampled_from((0.0, 0.5, 1.5)))
-    phantoms = draw(st.booleans())
+    phantoms, react = draw(st.booleans()), draw(st.booleans())
     return Bounds("drawn", SpeedBounds(7 - spread, 7 + spread), SpeedBounds(7 - onc, 7 + onc), error, phantoms,
-                  "drawn by the test")
+                  "drawn by the test", react)
 
 
 def sound_scenarios(grid: Grid = PAPER_GRID) -> st.SearchStrategy[Scenario]:
@@ -88,7 +89,7 @@ def _random_scenario(rng: random.Random) -> Scenario:
         return _random_scenario(rng)
     spread, onc = rng.choice((0.0, 0.5, 1.0, 2.1)), rng.choice((0.0, 1.0, 2.1))
     drawn = Bounds("drawn", SpeedBounds(7 - spread, 7 + spread), SpeedBounds(7 - onc, 7 + onc),
-                   rng.choice((0.0, 0.5, 1.5)), rng.random() < 0.5, "drawn by the test")
+                   rng.choice((0.0, 0.5, 1.5)), rng.random() < 0.5, "drawn by the test", rng.random() < 0.5)
     return replace(base, sound=Sound(drawn))
 
 
@@ -320,3 +321,45 @@ def test_keeping_the_lane_drives_on_a_clear_road_and_refuses_an_unsafe_start() -
             after = sound.step(problem, sound.start(problem), step)
             assert not isinstance(after, sound.Violation | sound.Collision)
             assert sound.rules_for(problem).continuation_violation(after) is None
+
+
+# -- followers that keep their speed (the paper's traffic): Conflict.BEHIND ---------------------------------------
+def _keeping_and_reacting(start_mps: float | None = None) -> tuple[Sound, Sound]:
+    keep = Sound(profile("paper"), start_mps=start_mps)
+    assert not keep.bounds.followers_react  # the paper's traffic never brakes
+    return keep, replace(keep, bounds=replace(keep.bounds, followers_react=True))
+
+
+def test_braking_in_front_of_a_follower_that_keeps_its_speed_is_refused_and_the_checks_agree() -> None:
+    """A follower two cells behind: braking is refused (BEHIND) where followers keep their speed, allowed where they
+    react; the exact check of continuous motion finds the same braking unsafe, and driving on at their speed safe."""
+    scenario = make_scenario(Lane.LEFT, [PAPER_GRID.av_cell - 2, PAPER_GRID.av_cell + 3], [], 1)
+    keep, react = _keeping_and_reacting()
+    for sound_, refused in ((keep, True), (react, False)):
+        problem = problem_for(replace(scenario, sound=sound_), ModelKind.FINAL)
+        rules, start = sound.rules_for(problem), sound.start(problem)
+        found = rules.step_violation(start, Action.BRAKE)
+        assert (found is not None and found.conflict.value == "behind") is refused, found
+        assert rules.step_violation(start, Action.DRIVE) is None
+    breach = reach.exact_check(replace(scenario, sound=keep), (Action.BRAKE,))
+    assert breach is not None and breach.conflict is not None and breach.conflict.value == "behind", breach
+    assert reach.exact_check(replace(scenario, sound=keep), (Action.DRIVE,)) is None
+
+
+def test_a_slow_av_must_get_back_to_the_speed_of_followers_that_keep_theirs() -> None:
+    """At 5 m/s with followers that keep 7 m/s the empty plan is refused (its minimal-risk manoeuvre holds 5 m/s for
+    ever, and the follower closes in): the plan accelerates; where followers react, the empty plan stands."""
+    scenario = make_scenario(Lane.LEFT, [12, 13, 15, 17], [], 0)
+    keep, react = _keeping_and_reacting(5.0)
+    assert plan(replace(scenario, sound=react)).actions == ()
+    assert plan(replace(scenario, sound=keep)).actions == (Action.ACCELERATE,)
+
+
+def test_the_minimal_risk_manoeuvre_holds_the_slowest_speed_ahead() -> None:
+    """In the paper's world (every vehicle at 7 m/s) a plan may end at 7 m/s behind a vehicle ahead: the hold speed is
+    the slowest speed ahead itself, the car's speed error being inside the envelope's position bound."""
+    scenario = make_scenario(Lane.LEFT, [PAPER_GRID.av_cell + 2], [], 0)
+    keep, _ = _keeping_and_reacting()
+    problem = problem_for(replace(scenario, sound=keep), ModelKind.FINAL)
+    assert sound.rules_for(problem).continuation_violation(sound.start(problem)) is None
+    assert reach.exact_check(replace(scenario, sound=keep), ()) is None

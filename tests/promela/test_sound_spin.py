@@ -99,8 +99,12 @@ def test_a_measured_start_speed_agrees_too() -> None:
 
 #: Scenarios that told a faulty translation from the interpreter where the sample did not (cell length, profile,
 #: measured start speed, lane, left, right, targets): the oncoming vehicles' lower end moved at their lowest speed;
-#: the early windows (the first ramp still running) left out.
-PINNED = ((21.0, "default", 3.0, "right", (16,), (13, 34), 1), (5.25, "paper", 9.5, "right", (38, 46), (), 0))
+#: the early windows (the first ramp still running) left out. Then two whose answer the paper profile's followers
+#: (who keep their speed: ``Conflict.BEHIND``) change: a slow AV must get back to their speed, and a return whose
+#: braking a follower would run into.
+PINNED = ((21.0, "default", 3.0, "right", (16,), (13, 34), 1), (5.25, "paper", 9.5, "right", (38, 46), (), 0),
+          (21.0, "paper", 5.0, "left", (12, 13, 15, 17), (), 0), (21.0, "paper", 5.0, "right", (8, 12, 14, 16),
+                                                                  (18, 23), 1))
 
 
 @pytest.mark.parametrize("case", PINNED, ids=lambda c: f"{c[1]}-{c[0]:g}m-{c[2]:g}mps")

@@ -190,3 +190,37 @@ def test_tracking_bridges_dropped_sweeps_that_leave_the_planner_without_a_snapsh
     assert run_drive(4, config).stops  # without tracking: snapshots that could not be read
     tracked = run_drive(4, dataclasses.replace(config, tracking=True))
     assert not tracked.stops and tracked.faults["dropped-sweep"]["started"] > 0
+
+
+def test_an_overtake_is_refused_only_at_the_decision_that_would_start_it() -> None:
+    """With a lane holding an unresolved contradiction, a plan with a lane change out of the left lane is refused
+    only where driving on in lane is what the AV does anyway: in the left lane, at the common speed, with no lane
+    change under way. Mid-manoeuvre (a lane change still to come from the last plan, or the AV already faster) the
+    plan goes on; without a contradiction, without tracking or without a lane change nothing is refused."""
+    from sim.parts import DriveConfig
+    from sim.simulator import Simulator
+    from spec.actions import Action
+
+    overtake = (Action.ACCELERATE, Action.RIGHT_LANE_CHANGE, Action.ACCELERATE, Action.LEFT_LANE_CHANGE)
+    sim = Simulator(1, DriveConfig(1.0, tracking=True).parts())
+    try:
+        common, pose = float(sim.grid.speed), sim.car.pose()
+        assert pose.y_m > 0  # the AV starts in the left lane
+        sim.car.pose = lambda: dataclasses.replace(pose, speed_mps=common)  # type: ignore[method-assign]
+        sim.unresolved = frozenset()
+        assert not sim._refused(overtake, ())
+        sim.unresolved = frozenset({Lane.LEFT})
+        assert not sim._refused((Action.DRIVE, Action.DRIVE), ())  # no overtake in it
+        assert not sim._refused(overtake, (Action.RIGHT_LANE_CHANGE, Action.ACCELERATE))  # one under way
+        assert sim._refused(overtake, ()) and sim.summary.refusals == 1
+        sim.car.pose = lambda: dataclasses.replace(pose, speed_mps=2 * common)  # type: ignore[method-assign]
+        assert not sim._refused(overtake, ())  # already faster than the traffic: too near to brake
+        assert sim.summary.refusals == 1
+    finally:
+        sim.close()
+    untracked = Simulator(1, DriveConfig(1.0).parts())
+    try:
+        untracked.unresolved = frozenset({Lane.LEFT})
+        assert not untracked._refused(overtake, ())
+    finally:
+        untracked.close()

@@ -75,12 +75,16 @@ def test_reference_is_the_executors_speed_profile(actions: list[Action], cell_m:
         state = rules.after(state, action)  # guards are not the envelope's business
 
 
-def test_minimal_risk_brakes_to_below_the_slowest_vehicle_ahead() -> None:
-    """The hold speed leaves room for the car's speed error below the slowest same-direction speed, never above the
-    speed the AV has, never below a standstill; the ramp brakes at the stated deceleration."""
-    assert MINIMAL_RISK.hold_mps(14.0, 4.9, TRACKING) == pytest.approx(4.9 - TRACKING.speed_mps)
-    assert MINIMAL_RISK.hold_mps(3.0, 4.9, TRACKING) == 3.0
-    assert MINIMAL_RISK.hold_mps(7.0, 1.0, TRACKING) == 0.0
+def test_minimal_risk_brakes_to_the_slowest_vehicle_ahead() -> None:
+    """The hold speed is the slowest same-direction speed (the envelope's position bound covers the car's speed
+    error), never above the speed the AV has, never below a standstill; only a reference that ends faster than the
+    slowest vehicle ahead closes in; the ramp brakes at the stated deceleration."""
+    assert MINIMAL_RISK.hold_mps(14.0, 4.9) == 4.9
+    assert MINIMAL_RISK.hold_mps(3.0, 4.9) == 3.0
+    assert MINIMAL_RISK.hold_mps(7.0, 0.0) == 0.0
+    assert not MINIMAL_RISK.closes_in(MINIMAL_RISK.hold_mps(14.0, 4.9), 4.9)
+    assert not MINIMAL_RISK.closes_in(4.9 + 1e-12, 4.9)  # a rounding above is the same speed
+    assert MINIMAL_RISK.closes_in(4.95, 4.9)
     ramp = MINIMAL_RISK.ramp(10.0, 14.0, 3.4)
     assert ramp is not None and ramp.start_s == 10.0
     assert ramp.dv_mps / ramp.duration_s == pytest.approx(-MINIMAL_RISK.decel_mps2)
