@@ -359,9 +359,13 @@ class Simulator:
         return True
 
     def _hold_a_sweep(self) -> bool:
-        """Drive on in lane at the common speed until the next sweep (at least one control step)."""
+        """Drive on in lane at the common speed until the next sweep (at least one control step). The position
+        reference runs on while the car is within its stated envelope of it (``TRACKING.position_m``), so a series of
+        refusals holds the common speed in position too: restarted at the car every sweep, the speed command alone
+        let the car creep 0.16 m/s faster than the traffic into the vehicle ahead (measured, seed 2)."""
         y_ref = self.scene.lane_y(Executor.lane_of(self.car.pose().y_m))
-        self.executor.reset_reference()
+        if abs(self.executor.x_ref_m - self.car.pose().x_m) > TRACKING.position_m:
+            self.executor.reset_reference()
         if not self.executor.control(float(self.grid.speed), y_ref, 0.0, self._tick):
             return False
         return self._await_sweep()

@@ -26,6 +26,7 @@ from spec.tracking import CONFIRM_SWEEPS, GATE_EPS_M, Explained, TrackState
 
 FORBIDDEN = 1e12  # the cost of a pair the gates do not allow
 BEYOND = 1e6  # added to the cost of a reading beyond a track's interval (its vehicle breaking its bounds)
+HELD = 1e3  # added to the cost of a reading for a held appearance: a confirmed track whose interval holds it wins
 
 
 def hides(av_y_m: float, lane: Lane, dx_m: float, other_lane: Lane, other_dx_m: float) -> bool:
@@ -192,9 +193,12 @@ class Tracker:
     def _assign(self, lane: Lane, mine: list[Track], dets: list[tuple[int, float]], dt_s: float,
                 e_m: float) -> dict[int, int]:
         """Track -> reading (positions in ``mine`` and ``dets``) by SciPy's ``linear_sum_assignment`` on gated costs:
-        inside a track's interval (+- the sensing error) the distance to its middle; just beyond it (a vehicle that
-        stopped, or one sweep of the car's acceleration limit past the top speed), for a confirmed track only, that
-        plus ``BEYOND`` (its vehicle breaking its bounds); elsewhere not allowed."""
+        inside a track's interval (+- the sensing error) the distance to its middle, plus ``HELD`` for an appearance not
+        yet confirmed (a reading that a confirmed track's interval also holds is that vehicle's: given to the held
+        track, it left the confirmed one missing, and the two held each other open for as long as the vehicle had
+        been seen, 96 s measured); just beyond it (a vehicle that stopped, or one sweep of the car's acceleration
+        limit past the top speed), for a confirmed track only, that plus ``BEYOND`` (its vehicle breaking its bounds);
+        elsewhere not allowed."""
         if not mine or not dets:
             return {}
         speeds = self.bounds.speeds(lane)
@@ -206,7 +210,7 @@ class Tracker:
         for a, t in enumerate(mine):
             for b, (_, x) in enumerate(dets):
                 if t.lo_m - e_m <= x <= t.hi_m + e_m:
-                    cost[a, b] = abs(x - t.middle_m)
+                    cost[a, b] = abs(x - t.middle_m) + (0.0 if t.confirmed else HELD)
                 elif t.confirmed and t.lo_m - e_m - below_m <= x <= t.hi_m + e_m + above_m:
                     cost[a, b] = BEYOND + abs(x - t.middle_m)
         rows, cols = linear_sum_assignment(cost)

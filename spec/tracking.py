@@ -19,7 +19,8 @@ GATE_EPS_M = 1e-6
 #: speed, the third checks it against the lane's bounds. Held is not hidden: its lane is flagged meanwhile. While a
 #: vehicle of its lane is missing where a sensor sees, an appearance stays held (the two may be one vehicle read in
 #: the wrong place). A vehicle missing where a sensor sees is kept, coasting within its bounds, until it has been
-#: missing for longer than it had been seen: the longer-lived account of the lane wins.
+#: missing for longer than it had been seen: the longer-lived account of the lane wins. A reading inside both a
+#: confirmed track's interval and a held appearance's is the confirmed track's (``sim.tracking``: the ``HELD`` cost).
 CONFIRM_SWEEPS = 3
 
 
