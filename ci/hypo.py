@@ -34,8 +34,8 @@ from spec.errors import ScenarioError
 from spec.files import scenario_from_dict
 from spec.grid import Grid, grid_for
 from spec.lanes import Lane
-from spec.scenario import Scenario, make_scenario
-from spec.sound import Sound
+from spec.scenario import Scenario, make_scenario, sensed
+from spec.sound import Sound, sensed_extents
 
 #: The campaign's own profiles (the tests register theirs in tests/conftest.py), picked by ``PROFILE_VAR``.
 #: Quiet: hypothesis would print its falsifying examples from the workers into the command's output (and --json);
@@ -105,14 +105,33 @@ def scenarios(grid: Grid, horizon: int | None, model: Sound | str | None = None)
         h = horizon if horizon is not None else draw(st.integers(1, DEFAULT_HORIZON))
         sound = draw(drawn_sound()) if model == DRAWN else model if isinstance(model, Sound) else None
         try:
-            return replace(make_scenario(lane, left, right, targets, horizon=h, grid=grid), sound=sound)
+            scenario = replace(make_scenario(lane, left, right, targets, horizon=h, grid=grid), sound=sound)
         except ScenarioError:
             from hypothesis import reject
 
             reject()
             raise  # unreachable: reject() raises
+        if sound is None or not draw(st.booleans()):
+            return scenario
+        return draw(measured(scenario))
 
     return build()
+
+
+@st.composite
+def measured(draw: st.DrawFn, scenario: Scenario) -> Scenario:
+    """``scenario`` with what a snapshot measured (``spec.scenario.sensed``): per vehicle a reading anywhere in its
+    cell's extent, or an interval inside it (a kept track); shrinking towards the cell's extent itself."""
+    same, oncoming = sensed_extents(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid)
+
+    def inside(extent: tuple[float, float]) -> tuple[float, float]:
+        lo, hi = extent
+        a = draw(st.floats(0.0, 1.0))
+        b = draw(st.sampled_from((1.0, 0.25, 0.0)))  # the rest of the extent, a short interval, a reading
+        start = lo + a * (hi - lo)
+        return start, start + b * (hi - start)
+
+    return sensed(scenario, tuple(inside(e) for e in same), tuple(inside(e) for e in oncoming))
 
 
 class PropertyFailed(AssertionError):

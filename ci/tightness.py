@@ -438,7 +438,7 @@ def shifted_rules(problem: Problem, vehicle: Vehicle, by_m: float) -> SoundRules
     assert sc.sound is not None
     moved = replace(vehicle, lo_m=vehicle.lo_m + by_m, hi_m=vehicle.hi_m + by_m)
     given = tuple(moved if v == vehicle else v for v in vehicles(sc.lane, sc.left_lane, sc.right_lane, sc.grid,
-                                                                 sc.sound))
+                                                                 sc.sound, sc.left_m, sc.right_m))
     return SoundRules(sc.sound, sc.lane, sc.left_lane, sc.right_lane, sc.grid, sc.target_indices, given)
 
 

@@ -65,13 +65,12 @@ import z3
 from oracle import bmc
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.answers import Limits, SearchResult, Status, Strategy
-from spec.cells import left_extent_m, oncoming_extent_m
 from spec.cost import COST_DOC, COST_TERMS, total_cost
 from spec.errors import EngineError
 from spec.lanes import Lane
 from spec.motion import ramp_s
 from spec.scenario import Problem, Scenario
-from spec.sound import EPS_M, Checks, follower_limit_m, rear_binds
+from spec.sound import EPS_M, Checks, follower_limit_m, rear_binds, sensed_extents
 from spec.state import State
 from spec.windows import NO_SPEED, Instant, Stretch, Window, sound_table
 
@@ -207,12 +206,13 @@ ABSOLUTE = Frame()
 
 
 def extents(scenario: Scenario) -> tuple[list[tuple[float, float]], list[tuple[float, float]]]:
-    """The sensed vehicles' intervals (same-direction, oncoming): each cell's extent widened by the sensing error."""
+    """The sensed vehicles' intervals (same-direction, oncoming): each cell's extent, or what the snapshot measured
+    (``spec.sound.sensed_extents``), widened by the sensing error."""
     sound, grid = scenario.sound, scenario.grid
     assert sound is not None
     e = sound.bounds.sensing_error_m
-    same = [left_extent_m(c, scenario.lane, grid) for c in scenario.left_lane]
-    oncoming = [oncoming_extent_m(c, grid) for c in scenario.right_lane]
+    same, oncoming = sensed_extents(scenario.lane, scenario.left_lane, scenario.right_lane, grid, scenario.left_m,
+                                    scenario.right_m)
     return [(lo - e, hi + e) for lo, hi in same], [(lo - e, hi + e) for lo, hi in oncoming]
 
 

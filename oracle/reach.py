@@ -152,7 +152,8 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
     sound = _sound(scenario)
     path = Path(actions, sound, scenario.grid, scenario.lane)
     tr, b, length = sound.tracking, sound.bounds, sound.safety.vehicle_length_m
-    cars = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid, sound)
+    cars = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid, sound, scenario.left_m,
+                    scenario.right_m)
     fastest_vehicle = max(b.same_mps.high_mps, b.oncoming_mps.high_mps)
     rate = path.max_speed + tr.speed_mps + fastest_vehicle + sound.safety.time_gap_s * path.max_accel
 
@@ -286,7 +287,11 @@ def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, c
                 out.append(c.lo_m)
                 continue
             cells = scenario.left_lane if c.lane is Lane.LEFT else scenario.right_lane
-            sensed = _sensed_start(rng, cells[c.index], c.lane, scenario.lane, scenario.grid)
+            measured = scenario.left_m if c.lane is Lane.LEFT else scenario.right_m
+            if measured is not None:  # what the snapshot measured: a reading anywhere in it
+                sensed = rng.uniform(*measured[c.index])
+            else:
+                sensed = _sensed_start(rng, cells[c.index], c.lane, scenario.lane, scenario.grid)
             err = {"low": -e, "high": e}.get(pick, rng.uniform(-e, e))
             out.append(sensed + err)
         return tuple(out)

@@ -67,7 +67,8 @@ def _scenario_rules(sc: Scenario) -> SoundRules:
     """One scenario's rules, shared by its models (they read the scenario alone; the goal is asked per question), so
     that the preparations model's search reuses the answers the final model's found."""
     assert sc.sound is not None  # rules_for checked it
-    return SoundRules(sc.sound, sc.lane, sc.left_lane, sc.right_lane, sc.grid, sc.target_indices)
+    return SoundRules(sc.sound, sc.lane, sc.left_lane, sc.right_lane, sc.grid, sc.target_indices,
+                      left_m=sc.left_m, right_m=sc.right_m)
 
 
 class PaperCells:

@@ -25,6 +25,7 @@ from spec.lanes import Lane
 from spec.models import GOAL_RULES, MODEL_RULES, GoalKind, GoalRule, ModelKind, ModelRules
 from spec.rules import behind_line, collision_span, left_path, nearest_span, passed_line
 from spec.scenario import Problem, Scenario
+from spec.sound import sensed_extents
 
 ENV_VAR = "OVERTAKE_SCENARIO"
 LANE_CODE = {Lane.LEFT: 0, Lane.RIGHT: 1}
@@ -99,11 +100,19 @@ def _left_hit(shape: Shape) -> str:
 
 
 def scenario_values(problem: Problem) -> str:
-    """The scenario as the injected verifier reads it: lane nl cells... nr cells... nt ft horizon."""
+    """The scenario as the injected verifier reads it: lane nl cells... nr cells... nt ft horizon; under the sound
+    model then 0, or 1 and each vehicle's sensed interval (``spec.sound.sensed_extents``, same-direction then
+    oncoming, lo hi each, as Python's ``repr`` writes a double: ``strtod`` reads it back exactly)."""
     s = problem.scenario
     first_target = s.target_indices[0] if s.target_indices else 0
-    words = [LANE_CODE[s.lane], len(s.left_lane), *s.left_lane, len(s.right_lane), *s.right_lane,
-             len(s.target_indices), first_target, problem.horizon]
+    words: list[object] = [LANE_CODE[s.lane], len(s.left_lane), *s.left_lane, len(s.right_lane), *s.right_lane,
+                           len(s.target_indices), first_target, problem.horizon]
+    if s.sound is not None:
+        if s.left_m is None and s.right_m is None:
+            words.append(0)
+        else:
+            same, oncoming = sensed_extents(s.lane, s.left_lane, s.right_lane, s.grid, s.left_m, s.right_m)
+            words += [1, *(repr(float(x)) for pair in (*same, *oncoming) for x in pair)]
     return " ".join(map(str, words))
 
 

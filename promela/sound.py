@@ -434,27 +434,28 @@ static void sound_malformed(const char *why)
 	exit(2);
 }
 
-/* the scenario: lane nl cells... nr cells... nt ft horizon; the vehicles as intervals, then the phantoms */
+/* the scenario: lane nl cells... nr cells... nt ft horizon, then 0, or 1 and each vehicle's sensed interval (lo hi,
+   same-direction then oncoming); the vehicles as intervals (those, or their cells' extents), then the phantoms */
 static void sound_load(void)
 {	char *text = getenv("ENV_NAME"), *end;
-	long v[2 * (ROAD_CELLS + 1) + 8];
-	int n = 0, at = 0, j, lane, cell;
+	double v[6 * (ROAD_CELLS + 1) + 16];
+	int n = 0, at = 0, j, lane, cell, measured;
 	double lo, hi;
 	if (!text) { fprintf(stderr, "overtake: ENV_NAME is not set\n"); exit(2); }
-	while (n < 2 * (ROAD_CELLS + 1) + 8)
-	{	v[n] = strtol(text, &end, 10);
+	while (n < 6 * (ROAD_CELLS + 1) + 16)
+	{	v[n] = strtod(text, &end);
 		if (end == text) { break; }
 		n++; text = end;
 	}
-	if (n < 6) { sound_malformed("too few numbers"); }
+	if (n < 7) { sound_malformed("too few numbers"); }
 	lane = (int) v[at++];
 	if (lane != LEFT && lane != RIGHT) { sound_malformed("lane"); }
 	n_left = (int) v[at++];
-	if (n_left < 0 || n_left > ROAD_CELLS + 1 || at + n_left + 4 > n) { sound_malformed("left-lane count"); }
+	if (n_left < 0 || n_left > ROAD_CELLS + 1 || at + n_left + 5 > n) { sound_malformed("left-lane count"); }
 	if (n_left + N_PHANTOMS > MAX_SAME) { sound_malformed("more same-direction vehicles than the followers hold"); }
 	for (j = 0; j < n_left; j++) { left_cells[j] = (int) v[at++]; }
 	n_right = (int) v[at++];
-	if (n_right < 0 || n_right > ROAD_CELLS + 1 || at + n_right + 3 != n) { sound_malformed("right-lane count"); }
+	if (n_right < 0 || n_right > ROAD_CELLS + 1 || at + n_right + 4 > n) { sound_malformed("right-lane count"); }
 	for (j = 0; j < n_right; j++) { right_cells[j] = (int) v[at++]; }
 	n_targets = (int) v[at++];
 	first_target = (int) v[at++];
@@ -462,20 +463,30 @@ static void sound_load(void)
 	||  v[at] < 0 || v[at] > MAX_HORIZON) { sound_malformed("targets or horizon"); }
 	now.horizon = (int) v[at++];
 	now.lane = lane;
+	measured = (int) v[at++];
+	if ((measured != 0 && measured != 1) || at + (measured ? 2 * (n_left + n_right) : 0) != n)
+	{	sound_malformed("the sensed intervals");
+	}
 	n_same = 0;
 	for (j = 0; j < n_left; j++)
 	{	cell = left_cells[j];
 		if (cell < 0 || cell > ROAD_CELLS) { sound_malformed("a left-lane cell"); }
-		S_LO[n_same] = LEFT_EXTENT[lane][cell][0] - SENSING_ERROR_M;
-		S_HI[n_same] = LEFT_EXTENT[lane][cell][1] + SENSING_ERROR_M;
+		lo = measured ? v[at++] : LEFT_EXTENT[lane][cell][0];
+		hi = measured ? v[at++] : LEFT_EXTENT[lane][cell][1];
+		if (!(lo <= hi)) { sound_malformed("a left-lane interval"); }
+		S_LO[n_same] = lo - SENSING_ERROR_M;
+		S_HI[n_same] = hi + SENSING_ERROR_M;
 		n_same++;
 	}
 	n_onc = 0;
 	for (j = 0; j < n_right; j++)
 	{	cell = right_cells[j];
 		if (cell < 0 || cell > ROAD_CELLS) { sound_malformed("a right-lane cell"); }
-		O_LO[n_onc] = ONCOMING_EXTENT[cell][0] - SENSING_ERROR_M;
-		O_HI[n_onc] = ONCOMING_EXTENT[cell][1] + SENSING_ERROR_M;
+		lo = measured ? v[at++] : ONCOMING_EXTENT[cell][0];
+		hi = measured ? v[at++] : ONCOMING_EXTENT[cell][1];
+		if (!(lo <= hi)) { sound_malformed("a right-lane interval"); }
+		O_LO[n_onc] = lo - SENSING_ERROR_M;
+		O_HI[n_onc] = hi + SENSING_ERROR_M;
 		n_onc++;
 	}
 	for (j = 0; j < N_PHANTOMS; j++)  /* the unseen stretch from the range outwards */

@@ -118,7 +118,8 @@ class Containment:
                  av_x_m: float, t_s: float, cars: Iterable[KinematicCar]) -> None:
         self.decision, self.bounds, self.tracking = decision, sound.bounds, sound.tracking
         self.x0_m, self.t0_s = av_x_m, t_s
-        found = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, grid, sound)
+        found = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, grid, sound, scenario.left_m,
+                         scenario.right_m)
         by_index = {(v.lane, v.index): v for v in found if v.index is not None}
         self.phantoms = {lane: [v for v in found if v.index is None and v.lane is lane] for lane in Lane}
         self.tracked: dict[int, Vehicle] = {}

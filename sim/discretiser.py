@@ -12,7 +12,7 @@ from spec.cells import first_platoon, left_cell, oncoming_cell
 from spec.constants import DEFAULT_HORIZON
 from spec.grid import Grid
 from spec.lanes import Lane
-from spec.scenario import Scenario, make_scenario
+from spec.scenario import Scenario, make_scenario, sensed
 
 
 def reading_cell(reading: Reading, av_lane: Lane, grid: Grid) -> int:
@@ -25,11 +25,17 @@ def in_window(cell: int, grid: Grid) -> bool:
     return 0 <= cell <= grid.road_cells
 
 
-def discretise(readings: tuple[Reading, ...], av_lane: Lane, grid: Grid, horizon: int = DEFAULT_HORIZON) -> Scenario:
-    """The scenario the planner sees on ``grid``; raises ScenarioError when the readings are inconsistent."""
-    cells = {lane: sorted(c for r in readings
-                          if r.lane is lane and in_window(c := reading_cell(r, av_lane, grid), grid))
-             for lane in Lane}
-    left = cells[Lane.LEFT]
-    return make_scenario(av_lane, left, cells[Lane.RIGHT], first_platoon(left, av_lane, grid), horizon=horizon,
-                         grid=grid)
+def discretise(readings: tuple[Reading, ...], av_lane: Lane, grid: Grid, horizon: int = DEFAULT_HORIZON,
+               measured: bool = False) -> Scenario:
+    """The scenario the planner sees on ``grid``; raises ScenarioError when the readings are inconsistent. With
+    ``measured`` (the sound model) it also carries where each vehicle was sensed (``spec.scenario.sensed``): a
+    reading's distance, or a kept track's interval; the paper's rules read the cells alone."""
+    placed = {lane: sorted((c, r.interval_m) for r in readings
+                           if r.lane is lane and in_window(c := reading_cell(r, av_lane, grid), grid))
+              for lane in Lane}
+    left = [c for c, _ in placed[Lane.LEFT]]
+    scenario = make_scenario(av_lane, left, [c for c, _ in placed[Lane.RIGHT]], first_platoon(left, av_lane, grid),
+                             horizon=horizon, grid=grid)
+    if not measured:
+        return scenario
+    return sensed(scenario, *(tuple(interval for _, interval in placed[lane]) for lane in Lane))

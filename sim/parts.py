@@ -74,7 +74,7 @@ class Planner:
     def scenario(self, readings: tuple[Reading, ...], lane: Lane, speed_mps: float | None = None) -> Scenario:
         """The snapshot as a scenario on this planner's grid (ScenarioError when it is inconsistent); under the
         sound model, with the AV's measured speed as the plan's start."""
-        scenario = discretise(readings, lane, self.grid)
+        scenario = discretise(readings, lane, self.grid, measured=self.sound is not None)
         if self.sound is None:
             return scenario
         return replace(scenario, sound=replace(self.sound, start_mps=speed_mps))

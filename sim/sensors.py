@@ -24,11 +24,17 @@ from spec.physical import CAR, NOISE, SENSORS, NoiseSpec, SensorSpec
 
 @dataclass(frozen=True, slots=True)
 class Reading:
-    """One sensed vehicle: its lane, its body, and its distance ahead of the AV along the road (m)."""
+    """One sensed vehicle: its lane, its body, and its distance ahead of the AV along the road (m); a kept track that
+    no reading confirmed this sweep (``sim.tracking``) also says how far either side of it the vehicle may be."""
 
     lane: Lane
     body: int
     dx_m: float
+    spread_m: tuple[float, float] = (0.0, 0.0)  # (below, above) dx_m: the vehicle is within [dx - below, dx + above]
+
+    @property
+    def interval_m(self) -> tuple[float, float]:
+        return self.dx_m - self.spread_m[0], self.dx_m + self.spread_m[1]
 
 
 def _outside_av(x: float, y: float, end: tuple[float, float, float], z: float) -> tuple[float, float, float]:

@@ -324,7 +324,9 @@ class Simulator:
             for track in (*view.planned, *view.held):
                 if raw is not None and track.detection is not None:
                     self.track_body[track.id] = raw[track.detection].body
-            self.sweep = tuple(Reading(t.lane, self.track_body.get(t.id, GHOST_BODY), t.place_m - pose.x_m)
+            # a kept track (no reading this sweep) goes to the planner with its interval: its bounds since last seen
+            self.sweep = tuple(Reading(t.lane, self.track_body.get(t.id, GHOST_BODY), t.place_m - pose.x_m,
+                                       (0.0, 0.0) if t.read_m is not None else (t.place_m - t.lo_m, t.hi_m - t.place_m))
                                for t in view.planned)
             self.unresolved = view.unresolved
         self.executor.steer_offset_rad = self.steering.on_sweep()

@@ -11,11 +11,11 @@ from pathlib import Path
 from typing import Any
 
 from spec.errors import BadInput, OptionError, ScenarioError
-from spec.scenario import Scenario, make_scenario
+from spec.scenario import Scenario, make_scenario, sensed
 from spec.sound import sound_from_table, sound_to_table
 
 REQUIRED_KEYS = ("lane", "left_lane", "right_lane")
-OPTIONAL_KEYS = ("targets", "model", "horizon", "cell_m", "bounds")
+OPTIONAL_KEYS = ("targets", "model", "horizon", "cell_m", "bounds", "left_m", "right_m")
 SUFFIXES = (".json", ".toml")
 MAX_BYTES = 256 * 1024  # a scenario is a few hundred bytes: anything near this is not one
 
@@ -97,8 +97,20 @@ def scenario_from_dict(data: dict[str, Any]) -> Scenario:
     for key in REQUIRED_KEYS:
         if key not in data:
             raise ScenarioError(key, None, "missing required key")
-    fields = {k: v for k, v in data.items() if k != "bounds"}
+    fields = {k: v for k, v in data.items() if k not in ("bounds", "left_m", "right_m")}
     scenario = make_scenario(**fields)
+    if "left_m" in data or "right_m" in data:  # given in the file's order of its cells; the scenario sorts them
+        left, right = _cell_order(data["left_lane"], data.get("left_m")), _cell_order(data["right_lane"],
+                                                                                     data.get("right_m"))
+        try:
+            scenario = sensed(scenario, [data["left_m"][i] for i in left] if left else data.get("left_m"),
+                              [data["right_m"][i] for i in right] if right else data.get("right_m"))
+        except ScenarioError as err:  # name the interval as the file numbers it
+            key, _, rest = err.key.partition("[")
+            order = left if key == "left_m" else right
+            if rest and order:
+                raise ScenarioError(f"{key}[{order[int(rest.rstrip(']'))]}]", err.value, err.reason) from None
+            raise
     if "bounds" not in data:
         return scenario
     try:
@@ -106,6 +118,14 @@ def scenario_from_dict(data: dict[str, Any]) -> Scenario:
     except BadInput as err:
         raise ScenarioError(err.key, err.value, err.reason) from None
     return replace(scenario, sound=sound)
+
+
+def _cell_order(cells: object, intervals: object) -> list[int] | None:
+    """The file's indices of a lane's sensed intervals in the scenario's (ascending) order of its cells; None when
+    there is nothing to reorder (``sensed`` names what is wrong with it)."""
+    if isinstance(cells, list) and isinstance(intervals, list) and len(cells) == len(intervals):
+        return sorted(range(len(cells)), key=lambda i: cells[i])
+    return None
 
 
 def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
@@ -119,4 +139,6 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
         "horizon": scenario.horizon,
         "cell_m": scenario.grid.to_json(),
         **({"bounds": sound_to_table(scenario.sound)} if scenario.sound is not None else {}),
+        **({"left_m": [list(e) for e in scenario.left_m]} if scenario.left_m is not None else {}),
+        **({"right_m": [list(e) for e in scenario.right_m]} if scenario.right_m is not None else {}),
     }

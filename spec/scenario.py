@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 from typing import TypeVar
 
+from spec.cells import left_extent_m, oncoming_extent_m
 from spec.constants import DEFAULT_HORIZON, MAX_HORIZON
 from spec.errors import BadInput, ScenarioError
 from spec.grid import PAPER_GRID, Grid, grid_for
@@ -21,7 +23,7 @@ from spec.models import (
     models_for,
 )
 from spec.rules import collision_in, collision_span
-from spec.sound import Sound
+from spec.sound import Extent, Sound
 from spec.state import State
 
 E = TypeVar("E", bound=enum.Enum)
@@ -39,6 +41,10 @@ class Scenario:
     horizon: int = DEFAULT_HORIZON
     grid: Grid = PAPER_GRID
     sound: Sound | None = None  # None: the paper's rules; else the sound model under these assumptions
+    #: Where each vehicle's centre was sensed, metres ahead of the AV before the sensing error, per vehicle of its
+    #: lane in order (``sensed``); None: anywhere in its cell. Only the sound model reads them (``spec.sound``).
+    left_m: tuple[Extent, ...] | None = None
+    right_m: tuple[Extent, ...] | None = None
 
     @property
     def target_indices(self) -> tuple[int, ...]:
@@ -104,6 +110,37 @@ def make_scenario(
     _check_targets(scenario)
     _check_no_initial_collision(scenario, left, right)
     return scenario
+
+
+def sensed(scenario: Scenario, left_m: object = None, right_m: object = None) -> Scenario:
+    """``scenario`` with what its snapshot measured: per vehicle of a lane (in its cells' order) an interval
+    ``[lo, hi]`` of metres ahead of the AV where its centre was (a reading: ``[dx, dx]``; a kept track: its
+    interval), finite, ``lo <= hi``, and touching its cell's extent (the cell is where the same vehicle was put);
+    None leaves a lane's vehicles anywhere in their cells. Bad input raises ScenarioError naming ``left_m[i]``."""
+    out: dict[str, tuple[Extent, ...] | None] = {}
+    for key, value, cells, extent in (
+            ("left_m", left_m, scenario.left_lane, lambda c: left_extent_m(c, scenario.lane, scenario.grid)),
+            ("right_m", right_m, scenario.right_lane, lambda c: oncoming_extent_m(c, scenario.grid))):
+        if value is None:
+            out[key] = None
+            continue
+        if not isinstance(value, (list, tuple)) or len(value) != len(cells):
+            raise ScenarioError(key, value, f"must be a list of {len(cells)} [lo, hi] intervals, one per vehicle")
+        intervals = []
+        for i, (cell, pair) in enumerate(zip(cells, value, strict=True)):
+            where = f"{key}[{i}]"
+            if not isinstance(pair, (list, tuple)) or len(pair) != 2 or not all(
+                    isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in pair):
+                raise ScenarioError(where, pair, "must be two finite numbers [lo, hi] (metres ahead of the AV)")
+            lo, hi = float(pair[0]), float(pair[1])
+            c_lo, c_hi = extent(cell)
+            if lo > hi:
+                raise ScenarioError(where, pair, "the lower end is above the upper end")
+            if hi < c_lo or lo > c_hi:
+                raise ScenarioError(where, pair, f"outside its cell {cell}'s extent {c_lo:g}..{c_hi:g} m")
+            intervals.append((lo, hi))
+        out[key] = tuple(intervals)
+    return replace(scenario, left_m=out["left_m"], right_m=out["right_m"])
 
 
 def _check_enum(kind: type[E], key: str, value: object) -> E:

@@ -181,16 +181,17 @@ class Violation:
                 f"be {self.gap_m:.2f} m where {self.required_m:.2f} m is required")
 
 
-def vehicles(lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Grid, sound: Sound) -> tuple[
+def vehicles(lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Grid, sound: Sound,
+             left_m: tuple[Extent, ...] | None = None, right_m: tuple[Extent, ...] | None = None) -> tuple[
         Vehicle, ...]:
-    """Every vehicle of a scenario (the AV starting in ``lane``) as an interval, then the phantoms."""
+    """Every vehicle of a scenario (the AV starting in ``lane``) as an interval (``sensed_extents`` widened by the
+    sensing error), then the phantoms."""
     e = sound.bounds.sensing_error_m
     out = []
-    for i, cell in enumerate(left):
-        lo, hi = left_extent_m(cell, lane, grid)
+    same, oncoming = sensed_extents(lane, left, right, grid, left_m, right_m)
+    for i, (cell, (lo, hi)) in enumerate(zip(left, same, strict=True)):
         out.append(Vehicle(Lane.LEFT, i, lo - e, hi + e, f"left_lane[{i}] (cell {cell})"))
-    for i, cell in enumerate(right):
-        lo, hi = oncoming_extent_m(cell, grid)
+    for i, (cell, (lo, hi)) in enumerate(zip(right, oncoming, strict=True)):
         out.append(Vehicle(Lane.RIGHT, i, lo - e, hi + e, f"right_lane[{i}] (cell {cell})"))
     for p in sound.bounds.phantom_vehicles():  # the whole unseen stretch: from the range's edge outwards
         lo, hi = (p.dx_m, math.inf) if p.dx_m > 0 else (-math.inf, p.dx_m)
@@ -217,6 +218,20 @@ def follower_limit_m(x0_m: float, safety: SafetySpec) -> float:
     AV's reaches to the AV's centre, and bumpers clear (the earlier rule) refused every start after an overtake's
     return: the overtaken vehicle is in that cell."""
     return x0_m + safety.vehicle_length_m
+
+
+Extent = tuple[float, float]  # where a vehicle's centre can be, metres ahead of the AV's (negative: behind)
+
+
+def sensed_extents(lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Grid,
+                   left_m: tuple[Extent, ...] | None = None,
+                   right_m: tuple[Extent, ...] | None = None) -> tuple[list[Extent], list[Extent]]:
+    """Where each sensed vehicle's centre can be at the snapshot, before the sensing error (same-direction, oncoming):
+    what the snapshot measured (``Scenario.left_m``, ``right_m``) where it says, else anywhere in its cell
+    (``spec.cells``). Every engine reads a vehicle's interval from here (Spin through its scenario values)."""
+    same = list(left_m) if left_m is not None else [left_extent_m(c, lane, grid) for c in left]
+    oncoming = list(right_m) if right_m is not None else [oncoming_extent_m(c, grid) for c in right]
+    return same, oncoming
 
 
 def reach_m(v: Vehicle, bounds: Bounds, t_s: float) -> tuple[float, float]:
@@ -310,11 +325,12 @@ class SoundRules:
     """The sound model on one scenario: its vehicles and every rule over sound states."""
 
     def __init__(self, sound: Sound, lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Grid,
-                 targets: tuple[int, ...], given: tuple[Vehicle, ...] | None = None) -> None:
-        """``given``: the vehicles as intervals, when not the scenario's own (``vehicles``); a measurement that
-        moves one of them passes them here."""
+                 targets: tuple[int, ...], given: tuple[Vehicle, ...] | None = None,
+                 left_m: tuple[Extent, ...] | None = None, right_m: tuple[Extent, ...] | None = None) -> None:
+        """``given``: the vehicles as intervals, when not the scenario's own (``vehicles``, of the cells or of what
+        the snapshot measured, ``left_m`` and ``right_m``); a measurement that moves one of them passes them here."""
         self.sound, self.grid, self.targets = sound, grid, targets
-        self.vehicles = vehicles(lane, left, right, grid, sound) if given is None else given
+        self.vehicles = vehicles(lane, left, right, grid, sound, left_m, right_m) if given is None else given
         self.same = tuple(v for v in self.vehicles if v.lane is Lane.LEFT)
         self.oncoming = tuple(v for v in self.vehicles if v.lane is Lane.RIGHT)
         self.sensed_same = {v.index: v for v in self.same if v.index is not None}

@@ -24,8 +24,8 @@ from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
 from spec.library import BUILTINS
 from spec.models import ModelKind
-from spec.scenario import Problem, Scenario, make_scenario, problem_for
-from spec.sound import Sound
+from spec.scenario import Problem, Scenario, make_scenario, problem_for, sensed
+from spec.sound import Sound, sensed_extents
 from tests.conftest import scenarios
 
 CI = os.environ.get("HYPOTHESIS_PROFILE") == "ci"
@@ -90,7 +90,12 @@ def _random_scenario(rng: random.Random) -> Scenario:
     spread, onc = rng.choice((0.0, 0.5, 1.0, 2.1)), rng.choice((0.0, 1.0, 2.1))
     drawn = Bounds("drawn", SpeedBounds(7 - spread, 7 + spread), SpeedBounds(7 - onc, 7 + onc),
                    rng.choice((0.0, 0.5, 1.5)), rng.random() < 0.5, "drawn by the test", rng.random() < 0.5)
-    return replace(base, sound=Sound(drawn))
+    scenario = replace(base, sound=Sound(drawn))
+    if rng.random() < 0.5:  # what a snapshot measured: a reading anywhere in each vehicle's cell
+        same, oncoming = sensed_extents(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid)
+        scenario = sensed(scenario, *(tuple((x, x) for x in (rng.uniform(lo, hi) for lo, hi in extents))
+                                      for extents in (same, oncoming)))
+    return scenario
 
 
 def test_ten_thousand_plan_motion_pairs_without_a_violation() -> None:
@@ -363,3 +368,16 @@ def test_the_minimal_risk_manoeuvre_holds_the_slowest_speed_ahead() -> None:
     problem = problem_for(replace(scenario, sound=keep), ModelKind.FINAL)
     assert sound.rules_for(problem).continuation_violation(sound.start(problem)) is None
     assert reach.exact_check(replace(scenario, sound=keep), ()) is None
+
+
+def test_what_the_snapshot_measured_lets_the_av_start_where_its_cells_do_not() -> None:
+    """At 21 m cells the vehicle 21 m ahead is in the cell whose extent reaches the AV, and the one it passed 21 m
+    behind in the cell that reaches its centre: no start is provable from the cells. From the readings it is, and
+    every plan from them survives the exact check and the sampled motions (readings anywhere in the measured
+    intervals, off by the sensing error)."""
+    base = replace(make_scenario(Lane.LEFT, [9, 11], [20], 1), sound=Sound(profile("paper")))
+    assert plan(base).status is not Status.PLAN
+    measured = sensed(base, ((-21.0, -21.0), (21.0, 21.0)), ((215.0, 216.0),))
+    assert measured.left_m is not None
+    for strategy in (Strategy.SENSIBLE, Strategy.SHORTEST):
+        assert _check(measured, strategy, 40, random.Random(7)) > 40  # a plan, driven by the corners and 40 more

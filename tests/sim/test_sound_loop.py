@@ -50,7 +50,7 @@ def test_sound_plans_start_from_the_cars_measured_speed_and_nothing_inside_the_a
 
 
 def test_no_sound_decision_runs_on_past_a_breach_and_a_broken_world_is_counted() -> None:
-    config = DriveConfig(1.0, model="sound", traffic="spread", stop_rate_per_h=60.0)  # stops: too slow by far
+    config = DriveConfig(1.0, model="sound", traffic="spread", stop_rate_per_h=300.0)  # stops: too slow by far
     sim, summary = drive(config, 2)
     assert summary.containment.by_kind.get("too slow", 0) > 0
     assert summary.breach_replans + len(summary.takeovers) > 0

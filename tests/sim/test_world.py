@@ -100,3 +100,14 @@ def test_sensors_keep_truth_apart_and_see_past_the_car_ahead_into_the_oncoming_l
         assert {r.body for r in seen} == {ahead.body, oncoming.body}
     finally:
         scene.close()
+
+
+def test_the_sound_models_scenario_carries_where_each_vehicle_was_sensed() -> None:
+    """With ``measured`` each vehicle keeps what the snapshot said of it, in its cells' order: a reading its
+    distance, a kept track (``Reading.spread_m``) its interval; without it the scenario is the cells alone."""
+    readings = (Reading(Lane.LEFT, 0, 52.0), Reading(Lane.LEFT, 1, 23.0, (2.0, 3.5)), Reading(Lane.RIGHT, 2, 150.0))
+    plain = discretise(readings, Lane.LEFT, PAPER_GRID)
+    assert plain.left_m is None and plain.right_m is None
+    scenario = discretise(readings, Lane.LEFT, PAPER_GRID, measured=True)
+    assert scenario.left_lane == (PAPER_GRID.av_cell + 1, PAPER_GRID.av_cell + 2)
+    assert scenario.left_m == ((21.0, 26.5), (52.0, 52.0)) and scenario.right_m == ((150.0, 150.0),)

@@ -45,3 +45,25 @@ def test_boolean_is_not_a_cell(tmp_path: Path) -> None:
     path.write_text('{"lane": "left", "left_lane": [true], "right_lane": []}')
     with pytest.raises(ScenarioError, match="integer"):
         load_scenario(path)
+
+
+def test_measured_intervals_round_trip_in_the_files_cell_order_and_bad_ones_name_their_key(tmp_path: Path) -> None:
+    """What a snapshot measured (``left_m``, ``right_m``) is read in the order of the file's cells and written
+    back as the scenario holds it (sorted); an interval that is not two finite numbers, is upside down or lies
+    outside its cell's extent is bad input naming its key."""
+    path = tmp_path / "s.json"
+    path.write_text('{"lane": "left", "left_lane": [14, 11], "right_lane": [], "left_m": [[80, 85.5], [19.5, 19.5]]}')
+    scenario = load_scenario(path)
+    assert scenario.left_lane == (11, 14) and scenario.left_m == ((19.5, 19.5), (80.0, 85.5))
+    assert scenario.right_m is None
+    again = tmp_path / "again.json"
+    again.write_text(json.dumps(scenario_to_dict(scenario)))
+    assert load_scenario(again) == scenario
+    for bad, reason, key in (('[[19.5, 19.5]]', "must be a list of 2", "left_m="),
+                             ('[[80, "x"], [20, 21]]', "two finite numbers", "left_m[0]="),
+                             ('[[85, 80], [20, 21]]', "lower end is above", "left_m[0]="),
+                             ('[[80, 81], [200, 201]]', "outside its cell 11", "left_m[1]=")):
+        path.write_text(f'{{"lane": "left", "left_lane": [14, 11], "right_lane": [], "left_m": {bad}}}')
+        with pytest.raises(ScenarioError, match=reason) as err:
+            load_scenario(path)
+        assert f"{path}: {key}" in str(err.value)  # numbered as the file numbers its intervals
