@@ -4,9 +4,11 @@ marker, and the hypothesis strategy for valid scenarios that tests import from h
 from __future__ import annotations
 
 import os
+import random
 import shutil
 import subprocess
 import sys
+from dataclasses import replace
 
 import pytest
 from hypothesis import HealthCheck, settings
@@ -14,7 +16,8 @@ from hypothesis import strategies as st
 
 from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
-from spec.scenario import Scenario, make_scenario
+from spec.scenario import Scenario, make_scenario, sensed
+from spec.sound import Sound, sensed_extents
 
 settings.register_profile("dev", max_examples=60, deadline=None)
 settings.register_profile("ci", max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow],
@@ -69,3 +72,22 @@ def run_cli(*args: str, timeout_s: float = 120) -> subprocess.CompletedProcess[s
     """The ``overtake`` command in a fresh process, as a user runs it."""
     return subprocess.run([sys.executable, "-m", "ci.cli.main", *args], capture_output=True, text=True,
                           timeout=timeout_s)
+
+
+# -- what a snapshot measured (``spec.scenario.sensed``), for the engines' agreement tests -------------------------
+#: The AV at 21 m cells between the vehicle it passed and the next one, each sensed 21 m away: their cells reach the
+#: AV (no start is provable), the readings do not.
+MEASURED = ("left", (9, 11), (20,), 1, ((-21.0, -21.0), (21.0, 21.0)), ((215.0, 216.0),))
+
+
+def measured_pinned(sound: Sound) -> Scenario:
+    lane, left, right, targets, left_m, right_m = MEASURED
+    return sensed(replace(make_scenario(lane, list(left), list(right), targets), sound=sound), left_m, right_m)
+
+
+def measured_like(rng: random.Random, scenario: Scenario) -> Scenario:
+    """``scenario`` with each vehicle sensed at a reading or within a short interval of its cell."""
+    same, oncoming = sensed_extents(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid)
+    pick = [(lo + a * (hi - lo), lo + a * (hi - lo) + b * (hi - lo) * (1 - a))
+            for lo, hi in (*same, *oncoming) for a, b in [(rng.random(), rng.choice((0.0, 0.3)))]]
+    return sensed(scenario, tuple(pick[:len(same)]), tuple(pick[len(same):]))

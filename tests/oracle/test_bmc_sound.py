@@ -28,8 +28,9 @@ from spec.errors import EngineError
 from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
 from spec.models import ModelKind
-from spec.scenario import Scenario, make_scenario, problem_for, sensed
-from spec.sound import Checks, Sound, sensed_extents, vehicles
+from spec.scenario import Scenario, make_scenario, problem_for
+from spec.sound import Checks, Sound, vehicles
+from tests.conftest import measured_like, measured_pinned
 
 #: (profile, cell length, scenarios): 150 scenarios, both strategies each.
 SAMPLE = (("default", 21.0, 60), ("default", 10.5, 60), ("paper", 21.0, 15), ("paper", 10.5, 15))
@@ -197,29 +198,11 @@ def test_pinned_scenarios_agree(case: tuple[float, str, float, str, tuple[int, .
         _agree(replace(scenario, sound=Sound(profile(name), start_mps=start_mps)), strategy)
 
 
-# -- what a snapshot measured (``spec.scenario.sensed``): the engines read each vehicle's interval from it -------------
-#: The AV at 21 m cells between the vehicle it passed and the next one, each sensed 21 m away: their cells reach the
-#: AV (no start is provable), the readings do not.
-MEASURED = ("left", (9, 11), (20,), 1, ((-21.0, -21.0), (21.0, 21.0)), ((215.0, 216.0),))
-
-
-def _measured_sample(rng: random.Random, sound_: Sound, count: int) -> list[Scenario]:
-    """``count`` scenarios of the sample, each vehicle sensed at a reading or within an interval of its cell."""
-    out = []
-    while len(out) < count:
-        scenario = _draw(rng, PAPER_GRID, sound_)
-        same, oncoming = sensed_extents(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid)
-        pick = [(lo + a * (hi - lo), lo + a * (hi - lo) + b * (hi - lo) * (1 - a))
-                for lo, hi in (*same, *oncoming) for a, b in [(rng.random(), rng.choice((0.0, 0.3)))]]
-        out.append(sensed(scenario, tuple(pick[:len(same)]), tuple(pick[len(same):])))
-    return out
-
 
 @pytest.mark.parametrize("name", ["paper", "default"])
 def test_measured_intervals_agree(name: str) -> None:
-    lane, left, right, targets, left_m, right_m = MEASURED
-    pinned = sensed(replace(make_scenario(lane, list(left), list(right), targets), sound=Sound(profile(name))),
-                    left_m, right_m)
-    for scenario in [pinned, *_measured_sample(random.Random(f"measured-{name}"), Sound(profile(name)), 12)]:
+    """What a snapshot measured (``spec.scenario.sensed``): the engine reads each vehicle's interval from it."""
+    rng, sound_ = random.Random(f"measured-{name}"), Sound(profile(name))
+    for scenario in [measured_pinned(sound_), *(measured_like(rng, _draw(rng, PAPER_GRID, sound_)) for _ in range(12))]:
         for strategy in STRATEGIES:
             _agree(scenario, strategy)
