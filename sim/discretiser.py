@@ -25,14 +25,30 @@ def in_window(cell: int, grid: Grid) -> bool:
     return 0 <= cell <= grid.road_cells
 
 
+def _hulls(placed: list[tuple[int, tuple[float, float]]]) -> list[tuple[int, tuple[float, float]]]:
+    """One entry per cell (``placed`` is sorted by cell): the hull of the intervals read in it."""
+    out: list[tuple[int, tuple[float, float]]] = []
+    for cell, (lo, hi) in placed:
+        if out and out[-1][0] == cell:
+            lo, hi = min(lo, out[-1][1][0]), max(hi, out[-1][1][1])
+            out.pop()
+        out.append((cell, (lo, hi)))
+    return out
+
+
 def discretise(readings: tuple[Reading, ...], av_lane: Lane, grid: Grid, horizon: int = DEFAULT_HORIZON,
                measured: bool = False) -> Scenario:
     """The scenario the planner sees on ``grid``; raises ScenarioError when the readings are inconsistent. With
     ``measured`` (the sound model) it also carries where each vehicle was sensed (``spec.scenario.sensed``): a
-    reading's distance, or a kept track's interval; the paper's rules read the cells alone."""
+    reading's distance, or a kept track's interval; the paper's rules read the cells alone. Under ``measured`` two
+    readings in one cell are one vehicle anywhere in the hull of their intervals: every condition of the sound
+    model binds at an end of a vehicle's interval, so the hull covers both (and the cells alone, the paper's rules,
+    would read them as a collision: a sensing failure, as before)."""
     placed = {lane: sorted((c, r.interval_m) for r in readings
                            if r.lane is lane and in_window(c := reading_cell(r, av_lane, grid), grid))
               for lane in Lane}
+    if measured:
+        placed = {lane: _hulls(placed[lane]) for lane in Lane}
     left = [c for c, _ in placed[Lane.LEFT]]
     scenario = make_scenario(av_lane, left, [c for c, _ in placed[Lane.RIGHT]], first_platoon(left, av_lane, grid),
                              horizon=horizon, grid=grid)

@@ -21,7 +21,7 @@ import contextlib
 import math
 import time
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -125,6 +125,7 @@ class Simulator:
         self.takeover: Takeover | None = None  # the fallback's take-over under way
         self.proved: Containment | None = None  # the containment of the last sound decision that was executed
         self.sweep: tuple[Reading, ...] | None = ()  # the last sweep the sensors delivered (None: it was dropped)
+        self.lead: Lead | None = None  # the nearest vehicle sensed ahead in the left lane, for the fallback
         # with tracking, the planner sees the tracker's vehicles (``sim.tracking``); bodies only for bookkeeping
         self.tracker = Tracker(self.parts.bounds) if self.parts.tracking and self.parts.bounds is not None else None
         self.track_body: dict[int, int] = {}  # track -> the body of the reading last assigned to it (bookkeeping)
@@ -324,11 +325,15 @@ class Simulator:
             for track in (*view.planned, *view.held):
                 if raw is not None and track.detection is not None:
                     self.track_body[track.id] = raw[track.detection].body
-            # a kept track (no reading this sweep) goes to the planner with its interval: its bounds since last seen
+            # a kept track (no reading this sweep) goes to the planner with its interval: its bounds since last seen;
+            # the sound model plans around held appearances too (what the tracker cannot resolve is uncertainty to it,
+            # never hidden), the paper's rules do not (an appearance held is how a fake gap stays closed for them)
+            told = (*view.planned, *view.held) if self.sound is not None else view.planned
             self.sweep = tuple(Reading(t.lane, self.track_body.get(t.id, GHOST_BODY), t.place_m - pose.x_m,
                                        (0.0, 0.0) if t.read_m is not None else (t.place_m - t.lo_m, t.hi_m - t.place_m))
-                               for t in view.planned)
+                               for t in told)
             self.unresolved = view.unresolved
+        self.lead = Lead.after(self.lead, self.sweep, SENSORS.sweep_hz)
         self.executor.steer_offset_rad = self.steering.on_sweep()
         if self.steering.active is not None and self.steering.active not in self.steered:
             self.steered.append(self.steering.active)
@@ -577,8 +582,8 @@ class Simulator:
 
     def _fallback(self, cause: str) -> bool:
         """The minimal-risk manoeuvre takes over for ``MINIMAL_RISK.takeover_s``: back to the left lane from the
-        right one, then brake in lane to the hold speed, and towards a standstill while the sensed vehicle ahead is
-        nearer than the safety specification allows (closing at the AV's whole speed: it may stand)."""
+        right one, then brake in lane to the hold speed, and down to the sensed vehicle ahead's speed while it is
+        nearer than the safety specification allows (``_brake_in_lane``)."""
         pose = self.car.pose()
         again = self.takeover is not None and self.takeover.outcome == "under way"
         broke = bool(self.breached_before) or (self.containment is not None and self.containment.world_breached()) \
@@ -590,32 +595,70 @@ class Simulator:
         self.summary.takeovers.append(self.takeover)
         self.doing = f"fallback ({cause})"
         if Executor.lane_of(pose.y_m) is Lane.RIGHT:
+            if not self._await_room_to_return():
+                return False
             self.executor.reset_reference()
-            if not self.executor.run(Action.LEFT_LANE_CHANGE, self._tick, SpeedProfile(pose.speed_mps, ())):
+            speed = self.car.pose().speed_mps
+            if not self.executor.run(Action.LEFT_LANE_CHANGE, self._tick, SpeedProfile(speed, ())):
                 return False
         self.pending, self.proved = (), None
         return self._brake_in_lane(emergency=True)
 
+    def _await_room_to_return(self) -> bool:
+        """The fallback in the right lane: hold the lane until the sensed left lane leaves room to return
+        (``MinimalRisk``: nothing alongside within the specification's least gap, the vehicle ahead not nearer than
+        it allows at the measured closing speed once the return, at the speed it starts at, is over), braking
+        meanwhile down to that vehicle's speed (below it while beside it: dropping back behind it); at most
+        ``takeover_s``, then back regardless (the oncoming lane is the greater danger). False on a collision."""
+        mr = MINIMAL_RISK
+        y_ref = self.scene.lane_y(Lane.RIGHT)
+        command = self.car.pose().speed_mps
+        change_s = float(ACTION_RULES[Action.LEFT_LANE_CHANGE].duration_s)
+        for _ in range(max(1, round(mr.takeover_s / self.executor.dt_s))):
+            speed = self.car.pose().speed_mps
+            alongside = any(r.lane is Lane.LEFT and -CAR.length_m - SAFETY.min_gap_m < r.dx_m <= 0
+                            for r in self._sense())
+            closing = 0.0 if self.lead is None else mr.fallback_closing_mps(speed, self.lead.closing_mps)
+            # the return runs at the speed it starts at: the gap it will leave at its end must still do
+            left_m = 0.0 if self.lead is None else self.lead.dx_m - CAR.length_m - closing * change_s
+            near = self.lead is not None and SAFETY.violated(left_m, closing)
+            if not alongside and not near:
+                return True
+            if near:  # down to its speed; below it while beside it (drop back behind it, as the return needs)
+                beside = self.lead is not None and self.lead.dx_m - CAR.length_m < SAFETY.min_gap_m
+                target = 0.0 if beside else max(0.0, speed - closing)
+                command = max(target, command - mr.emergency_decel_mps2 * self.executor.dt_s)
+            self.executor.reset_reference()
+            if not self.executor.control(command, y_ref, 0.0, self._tick):
+                return False
+        return True
+
     def _brake_in_lane(self, emergency: bool) -> bool:
         """The minimal-risk manoeuvre for ``MINIMAL_RISK.takeover_s``: brake in lane to the hold speed; with
-        ``emergency`` (the fallback), towards a standstill while the sensed vehicle ahead is nearer than the safety
-        specification allows (closing at the AV's whole speed: it may stand). Without it (a proved continuation), a
+        ``emergency`` (the fallback), down to the sensed vehicle ahead's speed while it is nearer than the safety
+        specification allows at the closing speed measured over the last sweeps (``fallback_closing_mps``; not
+        measured: the AV's whole speed, it may stand). Without it (a proved continuation), a
         breach ends it at once, and the position reference runs on from the plan's (the envelope the proof assumed
         bounds the car's position about it; a speed command alone would let the car drift for as long as the
         manoeuvre lasts)."""
         mr = MINIMAL_RISK
         assert self.watch is not None
-        hold = mr.hold_mps(self.car.pose().speed_mps, self.watch.bounds.same_mps.low_mps)
+        low = self.watch.bounds.same_mps.low_mps
+        hold = mr.fallback_hold_mps(low) if emergency else mr.hold_mps(self.car.pose().speed_mps, low)
         command = self.car.pose().speed_mps
         y_ref = self.scene.lane_y(self.executor.lane)
         self.executor.lane_due = self.executor.lane
         for _ in range(max(1, round(mr.takeover_s / self.executor.dt_s))):
             target, decel = hold, mr.decel_mps2
-            if emergency:
-                ahead = [r.dx_m for r in self._sense() if r.lane is Lane.LEFT and r.dx_m > 0]
-                if ahead and SAFETY.violated(min(ahead) - CAR.length_m, self.car.pose().speed_mps):
-                    target, decel = 0.0, mr.emergency_decel_mps2
-            command = max(target, command - decel * self.executor.dt_s) if command > target else command
+            if emergency and self.lead is not None:
+                speed = self.car.pose().speed_mps
+                closing = mr.fallback_closing_mps(speed, self.lead.closing_mps)
+                if SAFETY.violated(self.lead.dx_m - CAR.length_m, closing):
+                    target, decel = max(0.0, speed - closing), mr.emergency_decel_mps2
+            if command > target:
+                command = max(target, command - decel * self.executor.dt_s)
+            elif emergency:
+                command = min(target, command + mr.accel_mps2 * self.executor.dt_s)
             if emergency:  # towards a standstill no position is to be kept; a proved continuation keeps its own
                 self.executor.reset_reference()
             if not self.executor.control(command, y_ref, 0.0, self._tick):
@@ -761,6 +804,24 @@ class Simulator:
 
     def close(self) -> None:
         self.scene.close()
+
+
+@dataclass(frozen=True, slots=True)
+class Lead:
+    """The nearest vehicle sensed ahead in the left lane at the last sweep, and its closing speed over the sweep
+    before when that was the same vehicle (its distance changed by at most a car length; else None: not measured)."""
+
+    dx_m: float
+    closing_mps: float | None
+
+    @staticmethod
+    def after(before: Lead | None, sweep: tuple[Reading, ...] | None, sweep_hz: float) -> Lead | None:
+        ahead = [r.dx_m for r in sweep or () if r.lane is Lane.LEFT and r.dx_m > 0]
+        if not ahead:
+            return None
+        dx = min(ahead)
+        same = before is not None and sweep is not None and abs(before.dx_m - dx) <= CAR.length_m
+        return Lead(dx, (before.dx_m - dx) * sweep_hz if same and before is not None else None)
 
 
 def run_drive(seed: int, config: DriveConfig, out_dir: str | None = None, report: Report | None = None) -> RunSummary:

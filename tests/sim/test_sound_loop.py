@@ -80,3 +80,36 @@ def test_a_models_name_and_bounds_scale_are_part_of_a_drives_configuration() -> 
     for bad in ({"model": "nosuch"}, {"bounds_scale": -1.0}, {"bounds_scale": float("nan")}):
         with pytest.raises(OptionError):
             DriveConfig(1.0, **bad)  # type: ignore[arg-type]
+
+
+def test_the_lead_is_the_nearest_vehicle_ahead_and_its_closing_speed_is_measured_only_on_the_same_one() -> None:
+    from sim.sensors import Reading
+    from sim.simulator import Lead
+    from spec.lanes import Lane
+
+    sweep = (Reading(Lane.LEFT, 1, 30.0), Reading(Lane.LEFT, 2, 9.0), Reading(Lane.LEFT, 3, -8.0),
+             Reading(Lane.RIGHT, 4, 5.0))
+    first = Lead.after(None, sweep, 10.0)
+    assert first == Lead(9.0, None)
+    closer = Lead.after(first, (Reading(Lane.LEFT, 2, 8.5),), 10.0)
+    assert closer is not None and closer.dx_m == 8.5 and closer.closing_mps == pytest.approx(5.0)
+    assert Lead.after(closer, (Reading(Lane.LEFT, 1, 29.5),), 10.0) == Lead(29.5, None)  # another vehicle
+    assert Lead.after(closer, None, 10.0) is None  # a dropped sweep: nothing sensed
+    assert Lead.after(closer, (Reading(Lane.LEFT, 3, -7.0),), 10.0) is None  # nothing ahead
+
+
+def test_the_fallback_neither_brakes_below_traffic_that_keeps_its_speed_nor_returns_into_it() -> None:
+    """The paper's world with its faults and tracking (seeds 4 and 6 of the evaluation): the fallback took over
+    after vehicles appeared; braking for a standstill ahead that was not there, it was run into by a follower that
+    never brakes (seed 6, 2.5 km), and returning from the right lane at 13 m/s it ran into the vehicle ahead, or
+    beside it (seed 4, 21 km). Now it brakes for the closing speed it measures and returns only into room."""
+    for seed, km in ((6, 3.0), (4, 22.0)):
+        summary = run_drive_summary(seed, km)
+        assert summary.failure is None, (seed, summary.failure)
+        assert summary.takeovers  # the fallback did act
+
+
+def run_drive_summary(seed: int, km: float) -> RunSummary:
+    from sim.simulator import run_drive
+
+    return run_drive(seed, DriveConfig(km, until_failure=True, faults="paper", tracking=True, model="sound"))

@@ -89,3 +89,14 @@ def test_minimal_risk_brakes_to_the_slowest_vehicle_ahead() -> None:
     assert ramp is not None and ramp.start_s == 10.0
     assert ramp.dv_mps / ramp.duration_s == pytest.approx(-MINIMAL_RISK.decel_mps2)
     assert MINIMAL_RISK.ramp(0.0, 3.0, 3.0) is None
+
+
+def test_the_fallback_brakes_for_the_closing_speed_it_measured_and_comes_back_up_to_the_hold_speed() -> None:
+    """Measured closing speeds count within [0, the AV's speed]; not measured, the vehicle ahead may stand (the
+    AV's whole speed); the fallback's hold speed is the slowest speed ahead itself, from below as from above."""
+    assert MINIMAL_RISK.fallback_closing_mps(7.0, None) == 7.0
+    assert MINIMAL_RISK.fallback_closing_mps(7.0, 0.3) == 0.3
+    assert MINIMAL_RISK.fallback_closing_mps(7.0, -2.0) == 0.0  # moving away: nothing to brake for
+    assert MINIMAL_RISK.fallback_closing_mps(7.0, 9.0) == 7.0  # more than the AV's speed: a reading jumped
+    assert MINIMAL_RISK.fallback_hold_mps(7.0) == 7.0 and MINIMAL_RISK.hold_mps(6.2, 7.0) == 6.2
+    assert 0 < MINIMAL_RISK.accel_mps2 < MINIMAL_RISK.emergency_decel_mps2
