@@ -618,7 +618,7 @@ class Simulator:
             speed = self.car.pose().speed_mps
             alongside = any(r.lane is Lane.LEFT and -CAR.length_m - SAFETY.min_gap_m < r.dx_m <= 0
                             for r in self._sense())
-            closing = 0.0 if self.lead is None else mr.fallback_closing_mps(speed, self.lead.closing_mps)
+            closing = 0.0 if self.lead is None else self.lead.closing_mps(speed)
             # the return runs at the speed it starts at: the gap it will leave at its end must still do
             left_m = 0.0 if self.lead is None else self.lead.dx_m - CAR.length_m - closing * change_s
             near = self.lead is not None and SAFETY.violated(left_m, closing)
@@ -652,7 +652,7 @@ class Simulator:
             target, decel = hold, mr.decel_mps2
             if emergency and self.lead is not None:
                 speed = self.car.pose().speed_mps
-                closing = mr.fallback_closing_mps(speed, self.lead.closing_mps)
+                closing = self.lead.closing_mps(speed)
                 if SAFETY.violated(self.lead.dx_m - CAR.length_m, closing):
                     target, decel = max(0.0, speed - closing), mr.emergency_decel_mps2
             if command > target:
@@ -812,7 +812,7 @@ class Lead:
     before when that was the same vehicle (its distance changed by at most a car length; else None: not measured)."""
 
     dx_m: float
-    closing_mps: float | None
+    measured_mps: float | None
 
     @staticmethod
     def after(before: Lead | None, sweep: tuple[Reading, ...] | None, sweep_hz: float) -> Lead | None:
@@ -820,8 +820,13 @@ class Lead:
         if not ahead:
             return None
         dx = min(ahead)
-        same = before is not None and sweep is not None and abs(before.dx_m - dx) <= CAR.length_m
-        return Lead(dx, (before.dx_m - dx) * sweep_hz if same and before is not None else None)
+        if before is None or abs(before.dx_m - dx) > CAR.length_m:
+            return Lead(dx, None)
+        return Lead(dx, (before.dx_m - dx) * sweep_hz)
+
+    def closing_mps(self, speed_mps: float) -> float:
+        """The closing speed the fallback brakes for (``MinimalRisk.fallback_closing_mps``)."""
+        return MINIMAL_RISK.fallback_closing_mps(speed_mps, self.measured_mps)
 
 
 def run_drive(seed: int, config: DriveConfig, out_dir: str | None = None, report: Report | None = None) -> RunSummary:

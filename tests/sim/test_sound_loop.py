@@ -92,7 +92,7 @@ def test_the_lead_is_the_nearest_vehicle_ahead_and_its_closing_speed_is_measured
     first = Lead.after(None, sweep, 10.0)
     assert first == Lead(9.0, None)
     closer = Lead.after(first, (Reading(Lane.LEFT, 2, 8.5),), 10.0)
-    assert closer is not None and closer.dx_m == 8.5 and closer.closing_mps == pytest.approx(5.0)
+    assert closer is not None and closer.dx_m == 8.5 and closer.measured_mps == pytest.approx(5.0)
     assert Lead.after(closer, (Reading(Lane.LEFT, 1, 29.5),), 10.0) == Lead(29.5, None)  # another vehicle
     assert Lead.after(closer, None, 10.0) is None  # a dropped sweep: nothing sensed
     assert Lead.after(closer, (Reading(Lane.LEFT, 3, -7.0),), 10.0) is None  # nothing ahead
