@@ -17,6 +17,7 @@ the sampled checks.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import time
@@ -41,7 +42,7 @@ from sim.parts import DriveConfig
 from sim.safety import attribution_key
 from sim.simulator import run_drive
 from sim.summary import RunSummary
-from sim.tolerance import HISTOGRAM_BIN, HISTOGRAM_BINS, histogram_quantile
+from sim.tolerance import HISTOGRAM_BIN, histogram_quantile
 from spec.answers import Limits, Status, Strategy
 from spec.errors import OptionError
 from spec.files import scenario_from_dict
@@ -138,8 +139,8 @@ def _run_audit(audit: AuditPlan, out: Path, executor: ExecutorChoice, fresh: boo
             if on_done:
                 on_done(index, results[index], True)
     todo = [(index, seed, config) for index, (config, seed) in enumerate(jobs) if index not in results]
-    with open_for_append(log) as lines:
-        for _, (index, summary) in run_jobs(audit_one, todo, executor, on_km):
+    with open_for_append(log) as lines, contextlib.closing(run_jobs(audit_one, todo, executor, on_km)) as finished:
+        for _, (index, summary) in finished:
             config = jobs[index][0]
             append(lines, {"campaign": config.to_json(), "run": summary.to_json()})
             results[index] = Done(config, summary)
@@ -199,7 +200,7 @@ class Row:
 
     def inside_after(self, kind: str) -> str:
         """Contacts or near misses (``kind``) per 1,000 km, inside / after the assumptions, as tables print them."""
-        return " / ".join(f"{self.per_1000_km(self.attributed_count(kind, inside)):.1f}" for inside in (True, False))
+        return " / ".join(figure(self.per_1000_km(self.attributed_count(kind, inside))) for inside in (True, False))
 
     @property
     def collisions_per_1000_km(self) -> float:
@@ -258,6 +259,12 @@ class Row:
                 "unreadable_snapshots": self.unreadable, "faults": self.faults}
 
 
+def figure(value: float | None, digits: int = 1) -> str:
+    """A rate or estimate as tables print it: "-" where it is undefined (no km driven, or an estimate whose
+    refusals were never replayed), never "nan"."""
+    return "-" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
+
+
 def _num(value: float | None) -> float | None:
     return None if value is None or not math.isfinite(value) else round(value, 2)
 
@@ -284,9 +291,9 @@ def _row(key: Key, runs: list[RunSummary]) -> Row:
         histograms = [r.tolerance.histogram[action] for r in runs if action in r.tolerance.histogram]
         if histograms:
             bins = [sum(column) for column in zip(*histograms)]
-            largest = max(r.tolerance.largest.get(action, 0.0) for r in runs)
-            deviation[action] = {"p50": histogram_quantile(bins, 0.5), "p95": histogram_quantile(bins, 0.95),
-                                 "max": round(largest, 3)}
+            largest = math.ceil(1000 * max(r.tolerance.largest.get(action, 0.0) for r in runs)) / 1000  # up: a bound
+            deviation[action] = {"p50": _at_most(histogram_quantile(bins, 0.5), largest),
+                                 "p95": _at_most(histogram_quantile(bins, 0.95), largest), "max": largest}
     gaps_left = [r.safety.min_gap_left_m for r in runs if math.isfinite(r.safety.min_gap_left_m)]
     gaps_oncoming = [r.safety.min_gap_oncoming_m for r in runs if math.isfinite(r.safety.min_gap_oncoming_m)]
     plan_ms = [m for r in runs for m in r.plan_ms]
@@ -312,6 +319,12 @@ def _row(key: Key, runs: list[RunSummary]) -> Row:
                sum(t.after_breach for r in runs for t in r.takeovers), sum(len(r.planner_failures) for r in runs),
                sum(len(r.of_kind(FailureKind.LOSS_OF_CONTROL)) for r in runs),
                sum(len(r.of_kind(FailureKind.SENSING)) for r in runs), _fault_counts(runs))
+
+
+def _at_most(edge: float | None, largest: float) -> float | None:
+    """A quantile's bound from the histogram: the upper edge of its bin, or the largest value seen when that is
+    smaller (a quantile never exceeds the maximum; an overflow bin's edge is infinite)."""
+    return None if edge is None else min(edge, largest)
 
 
 def _fault_counts(runs: list[RunSummary]) -> dict[str, dict[str, int]]:
@@ -422,11 +435,11 @@ def models_markdown(audit_rows: list[Row]) -> list[str]:
         share = "-" if r.breached_share is None else f"{100 * r.breached_share:.1f}%"
         lines.append(
             f"| {r.cell_m:g} | {r.traffic} | {r.sensing} | {label(r)} | {r.km:.1f} | "
-            f"{r.overtakes / r.km if r.km else math.nan:.2f} | "
+            f"{figure(r.per_1000_km(r.overtakes) / 1000, 2)} | "
             f"{r.inside_after('contact')} | {r.inside_after('near_miss')} | "
-            f"{r.per_1000_km(sum(r.breaches.values())):.1f} ({kinds}) | {share} | {r.decisions} | "
+            f"{figure(r.per_1000_km(sum(r.breaches.values())))} ({kinds}) | {share} | {r.decisions} | "
             f"{r.breach_replans} | {r.keep_lane_steps} | {r.minimal_risk_steps} | "
-            f"{r.takeovers} ({r.takeovers_after_breach}) | {r.waits_without_plan} | {r.delayed_per_1000_km:.1f} |")
+            f"{r.takeovers} ({r.takeovers_after_breach}) | {r.waits_without_plan} | {figure(r.delayed_per_1000_km)} |")
     return lines
 
 
@@ -442,9 +455,9 @@ def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any])
     for r in audit_rows:
         lines.append(f"| {r.cell_m:g} | {r.traffic} | {r.sensing} | {label(r)} | {r.runs} | {r.km:.1f} | "
                      f"{r.collisions} | "
-                     f"{r.collisions_per_1000_km:.1f} | {r.near_misses} | {r.near_misses_per_1000_km:.1f} | "
+                     f"{figure(r.collisions_per_1000_km)} | {r.near_misses} | {figure(r.near_misses_per_1000_km)} | "
                      f"{r.opportunity_total('missed')} ({r.opportunity_total('checked')}) | "
-                     f"{r.missed_per_1000_km:.1f} | {r.delayed_per_1000_km:.1f} | "
+                     f"{figure(r.missed_per_1000_km)} | {figure(r.delayed_per_1000_km)} | "
                      f"{r.traffic_collisions} | {r.min_gap_left_m} | {r.min_gap_oncoming_m} | {r.violations} | "
                      f"{r.plan_ms_median} |")
     lines += models_markdown(audit_rows)
@@ -485,12 +498,13 @@ def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any])
                 lines.append(f"  - at {o['km']} km ({o['refusal']}: {o['answer']}), target {o['target_gap_m']} m "
                              f"ahead: change, accelerate x{o['accelerates']}, change back succeeded; "
                              f"the planner's scenario is in audit.json")
-    lines += ["", f"## Deviation each action added (cells of {LOOP.tolerance_unit_m:g} m: p50 / p95 as histogram bin "
-              f"edges of {HISTOGRAM_BIN:g} / max)", "",
+    lines += ["", f"## Deviation each action added (cells of {LOOP.tolerance_unit_m:g} m: p50 / p95 / max)", "",
+              f"p50 and p95 are bounds, \"≤\": the upper edge of their {HISTOGRAM_BIN:g}-cell histogram bin, or the "
+              "largest deviation seen when that is smaller. -: the action never ran.", "",
               "| cell m | traffic | sensing | " + " | ".join(ACTIONS) + " |", "|---|---|---|" + "---|" * len(ACTIONS)]
     for r in audit_rows:
-        cells = [" / ".join(_edge(r.deviation[a][k]) for k in ("p50", "p95", "max")) if a in r.deviation else "-"
-                 for a in ACTIONS]
+        cells = [" / ".join(_edge(r.deviation[a][k], k != "max") for k in ("p50", "p95", "max"))
+                 if a in r.deviation else "-" for a in ACTIONS]
         lines.append(f"| {r.cell_m:g} | {r.traffic} | {r.sensing} | " + " | ".join(cells) + " |")
     lines += ["", "## Planning cost on the scenarios the planner saw (shortest, whole pipeline)", "",
               f"Under the sound model, the first {MAX_SOUND_SNAPSHOTS} snapshots per cell size (Spin compiles a "
@@ -506,11 +520,11 @@ def _fault_kinds(audit_rows: list[Row]) -> list[str]:
     return sorted({k for r in audit_rows for k in r.faults if k != "none"})
 
 
-def _edge(value: float | None) -> str:
-    """A quantile as the report prints it: beyond the histogram's last edge is "> 1"."""
+def _edge(value: float | None, bound: bool) -> str:
+    """A deviation as the report prints it: a quantile's bound with "≤" (``_at_most``), the maximum as it is."""
     if value is None:
         return "-"
-    return f"> {HISTOGRAM_BIN * HISTOGRAM_BINS:g}" if math.isinf(value) else f"{value:g}"
+    return f"≤ {value:g}" if bound else f"{value:g}"
 
 
 def _plot_safety(audit_rows: list[Row], png: Path) -> None:

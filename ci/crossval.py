@@ -13,6 +13,7 @@ verdict. After the sweep each failed property's first failures are shrunk to rep
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import json
 import math
@@ -276,8 +277,9 @@ def _sweep(campaign: Campaign, scenarios: Iterable[Scenario], out: Path, executo
     batches = [todo[i:i + BATCH] for i in range(0, len(todo), BATCH)]
     jobs = [(batch, [p.value for p in campaign.properties], list(campaign.engines), campaign.timeout_s)
             for batch in batches]
-    with open_for_append(log) as lines:
-        for _, results in run_jobs(check_batch, jobs, executor, on_checked):
+    with (open_for_append(log) as lines,
+          contextlib.closing(run_jobs(check_batch, jobs, executor, on_checked)) as finished):
+        for _, results in finished:
             for result in results:
                 append(lines, {"campaign": campaign.key(), "result": result})
                 done[result["key"]] = result

@@ -4,6 +4,10 @@ Campaigns hand ``run_jobs`` a picklable function and its argument tuples and get
 ``(index, result)`` back as soon as that job finishes, whatever runs it. For dask,
 ``scheduler`` is the address of a running scheduler (``dask scheduler`` prints it; every
 worker needs this package installed) or None for a local cluster of ``workers`` processes.
+
+Every campaign's served verifiers work in one folder of its own (``served_scope``), which it removes when it ends,
+however it ends short of being killed outright (its workers' folders are in it); a folder whose owner was killed
+outright is removed by the next campaign.
 """
 
 from __future__ import annotations
@@ -15,19 +19,24 @@ import enum
 import functools
 import logging
 import os
+import shutil
 import signal
+import tempfile
 import threading
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Generator, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from multiprocessing.managers import SyncManager
+from pathlib import Path
 from typing import Any, TypeVar
 
+from promela.runner import SERVED_DIR_ENV, SERVED_PREFIX, close_servers, hold, remove_stale
 from spec.errors import OptionError, ToolMissing
 
 R = TypeVar("R")
 CONNECT_TIMEOUT_S = 10
 PR_SET_PDEATHSIG = 1  # prctl(2)
+CAMPAIGN_PREFIX = "overtake-campaign-"  # + the campaign's pid: its served verifiers' folder (``served_scope``)
 
 
 class ExecutorKind(enum.Enum):
@@ -70,7 +79,7 @@ def check_executor(choice: ExecutorChoice) -> None:
 
 
 def run_jobs(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: ExecutorChoice,
-             progress: Callable[[Any], None] | None = None) -> Iterator[tuple[int, R]]:
+             progress: Callable[[Any], None] | None = None) -> Generator[tuple[int, R], None, None]:
     """Run ``fn(*job)`` for every job; yield ``(index, result)`` in the order they finish.
 
     With ``progress``, each job also gets ``report=``: a function whose every call reaches
@@ -78,6 +87,44 @@ def run_jobs(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: Exec
     ``report`` is None and progress is per finished job). Jobs must not report None.
     """
     check_executor(choice)
+    with served_scope():
+        yield from _run_jobs(fn, jobs, choice, progress)  # callers close this generator (contextlib.closing)
+
+
+_SCOPE: list[Path] = []  # this process's open scope (at most one; nested scopes share it)
+
+
+@contextlib.contextmanager
+def served_scope() -> Iterator[Path]:
+    """A folder for this campaign's served verifiers (``promela.runner.SERVED_DIR_ENV``, inherited by its workers),
+    held by its owner lock while the block runs and removed when it ends; first, the campaign and server folders
+    whose owner is gone (killed outright). Within a scope already open in this process, that one."""
+    if _SCOPE:
+        yield _SCOPE[-1]
+        return
+    temporary = Path(tempfile.gettempdir())
+    for prefix in (CAMPAIGN_PREFIX, SERVED_PREFIX):
+        remove_stale(temporary, prefix)
+    folder = Path(tempfile.mkdtemp(prefix=f"{CAMPAIGN_PREFIX}{os.getpid()}-"))
+    owner = hold(folder)
+    before = os.environ.get(SERVED_DIR_ENV)
+    os.environ[SERVED_DIR_ENV] = str(folder)
+    _SCOPE.append(folder)
+    try:
+        yield folder
+    finally:
+        _SCOPE.pop()
+        close_servers(within=folder)  # this process's servers in it (its workers' die with them: PDEATHSIG)
+        if before is None:
+            os.environ.pop(SERVED_DIR_ENV, None)
+        else:
+            os.environ[SERVED_DIR_ENV] = before
+        owner.close()
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def _run_jobs(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: ExecutorChoice,
+              progress: Callable[[Any], None] | None) -> Iterator[tuple[int, R]]:
     if choice.kind is ExecutorKind.DASK:
         extra: dict[str, Any] = {"report": None} if progress else {}
         yield from _dask(functools.partial(fn, **extra), jobs, choice)
@@ -110,7 +157,8 @@ def worker_setup() -> None:
     """In each local worker: leave Ctrl-C to the campaign (which stops the workers and says so in one line), and die
     with the campaign, even when it is killed outright (Linux's parent-death signal), so no worker is orphaned."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the campaign's handler, inherited through fork: just end
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the campaign's handler, inherited through fork: end at
+    # once, even inside a long native call (a Z3 check); its served folder is in the campaign's, removed with it
     with contextlib.suppress(OSError, AttributeError):
         libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
         libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM)

@@ -11,6 +11,7 @@ The example hypothesis shrank a failure to is the reproducer's scenario. Profile
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 from dataclasses import replace
@@ -194,9 +195,10 @@ def _run(campaign: Campaign, out: Path, executor: ExecutorChoice, max_reproducer
     jobs = [(p.value, campaign, str(out), name, n) for n, p in enumerate(campaign.properties)]
     reproducers = []
     shrunk: dict[str, dict[str, Any]] = {}
-    for _, job in run_jobs(hypothesis_job, jobs, executor):
-        if job["failure"] is not None:
-            shrunk[job["property"]] = job["failure"]
+    with contextlib.closing(run_jobs(hypothesis_job, jobs, executor)) as finished:
+        for _, job in finished:
+            if job["failure"] is not None:
+                shrunk[job["property"]] = job["failure"]
     results = list(recorded(out / VERDICTS_FILE, campaign).values())
     for prop_name, failure in shrunk.items():
         if max_reproducers:

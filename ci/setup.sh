@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Install what the suite needs: Spin and gcc from Debian when missing, then this package and its
-# Python dependencies from PyPI (editable, with the dev tools ruff and mypy).
+# Python dependencies from PyPI (editable, with the dev tools ruff and mypy). OVERTAKE_BROWSER=1 also installs
+# Debian's chromium, which the report's browser test drives (CI always sets it; Playwright never downloads a browser).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if ! command -v spin >/dev/null 2>&1 || ! command -v gcc >/dev/null 2>&1; then
@@ -8,5 +9,11 @@ if ! command -v spin >/dev/null 2>&1 || ! command -v gcc >/dev/null 2>&1; then
   echo "setup: installing spin and gcc with apt-get" >&2
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq spin gcc >/dev/null
+fi
+if [ "${OVERTAKE_BROWSER:-0}" = 1 ] && ! command -v chromium >/dev/null 2>&1; then
+  SUDO=""; [ "$(id -u)" = 0 ] || SUDO="sudo"
+  echo "setup: installing chromium with apt-get (OVERTAKE_BROWSER=1)" >&2
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq chromium >/dev/null
 fi
 python3 -m pip install -q --disable-pip-version-check --root-user-action=ignore -e '.[dev]'

@@ -48,8 +48,8 @@ def _simulate(campaign: DriveConfig, seeds: list[int], out: Path, executor: Exec
             on_done(summary, True)
     todo = [s for s in seeds if s not in done]
     jobs = [(s, campaign, str(out)) for s in todo]
-    with open_for_append(log) as lines:
-        for _index, summary in run_jobs(drive_one, jobs, executor, on_km):
+    with open_for_append(log) as lines, contextlib.closing(run_jobs(drive_one, jobs, executor, on_km)) as finished:
+        for _index, summary in finished:
             append(lines, {"campaign": campaign.to_json(), "run": summary.to_json()})  # after its files (drive_one)
             done[summary.seed] = summary
             if on_done:

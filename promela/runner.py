@@ -29,7 +29,9 @@ A replay (``pan -r``, ``spin -t``) that times out or does not exit cleanly is an
 from __future__ import annotations
 
 import atexit
+import fcntl
 import hashlib
+import multiprocessing.util
 import os
 import re
 import select
@@ -43,6 +45,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
+from typing import IO
 
 from promela import sound as sound_model
 from promela.render import ENV_VAR, Shape, render, render_for, scenario_values, shape_of
@@ -331,13 +334,83 @@ def _replay(execute: Execute, args: list[str], problem: Problem, explored: int) 
 
 
 # -- servers: one per verifier, process and thread ---------------------------------------------------
+#: The folder served verifiers' work folders are made in: a campaign sets it to a folder of its own, which it removes
+#: (``ci.executors.served_scope``); otherwise the system's temporary folder.
+SERVED_DIR_ENV = "OVERTAKE_SERVED_DIR"
+#: A server's work folder (``overtake-served-PID-...``, named for the process that made it, for people).
+SERVED_PREFIX = "overtake-served-"
+#: The file in a work folder its owner holds an exclusive lock on while it lives (the kernel releases it however the
+#: owner ends, SIGKILL too): a folder whose lock can be taken has no owner left (``remove_stale``).
+OWNER_LOCK = ".owner"
+#: Work folders without an owner's lock file (older versions; a process killed between making the folder and locking
+#: it) are removed once this old: none can still be in use.
+UNLOCKED_STALE_S = 24 * 3600.0
+
+
+def served_root() -> Path:
+    """Where this process's servers make their work folders."""
+    return Path(os.environ.get(SERVED_DIR_ENV) or tempfile.gettempdir())
+
+
+def hold(folder: Path) -> IO[bytes]:
+    """Take ``folder``'s owner lock (``OWNER_LOCK``); it is held while the returned file stays open."""
+    handle = (folder / OWNER_LOCK).open("wb")
+    fcntl.flock(handle, fcntl.LOCK_EX)
+    return handle
+
+
+def _owned(folder: Path) -> bool | None:
+    """Whether a process still holds ``folder``'s owner lock; None when it has no lock file."""
+    try:
+        handle = (folder / OWNER_LOCK).open("rb")
+    except FileNotFoundError:
+        return None
+    except OSError:
+        return True  # cannot tell: leave it
+    with handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return True
+        except OSError:
+            return True
+        return False
+
+
+def remove_stale(root: Path, prefix: str) -> int:
+    """Remove the folders in ``root`` named ``prefix...`` whose owner is gone (their lock can be taken), and those
+    without a lock file older than ``UNLOCKED_STALE_S``; how many were removed."""
+    removed = 0
+    try:
+        entries = [e for e in root.iterdir() if e.name.startswith(prefix)]
+    except OSError:
+        return 0
+    for entry in entries:
+        if entry.is_symlink() or not entry.is_dir():
+            continue
+        owned = _owned(entry)
+        if owned is None:
+            try:
+                owned = time.time() - entry.stat().st_mtime <= UNLOCKED_STALE_S
+            except OSError:
+                continue
+        if not owned:
+            shutil.rmtree(entry, ignore_errors=True)
+            removed += 1
+    return removed
+
+
 class Server:
     """A verifier started with ``--serve`` (see ``serve.c``): pan runs on many scenarios in one process."""
 
     def __init__(self, pan: Path) -> None:
         self.pan = pan
-        self._work = tempfile.TemporaryDirectory(prefix="overtake-served-")
+        _close_at_exit()
+        root = served_root()
+        root.mkdir(parents=True, exist_ok=True)
+        self._work = tempfile.TemporaryDirectory(prefix=f"{SERVED_PREFIX}{os.getpid()}-", dir=root)
         self.folder = Path(self._work.name)
+        self._owner = hold(self.folder)
         self.process = subprocess.Popen([str(pan), "--serve"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                         stderr=subprocess.DEVNULL, cwd=self.folder, text=True, bufsize=1)
         if self._reply(SERVER_START_S) != "ready":
@@ -388,6 +461,7 @@ class Server:
         for stream in (self.process.stdin, self.process.stdout):
             if stream is not None:
                 stream.close()
+        self._owner.close()
         self._work.cleanup()
 
 
@@ -406,10 +480,23 @@ def _server(pan: Path) -> Server:
 
 
 @atexit.register
-def close_servers() -> None:
-    """Stop this process's servers (they would die with it anyway: PR_SET_PDEATHSIG)."""
+def close_servers(within: Path | None = None) -> None:
+    """Stop this process's servers (they would die with it anyway: PR_SET_PDEATHSIG) and remove their folders; with
+    ``within``, only the servers whose folder is in it."""
     for key in [k for k in _SERVERS if k[1] == os.getpid()]:
-        _SERVERS.pop(key).close()
+        if within is None or _SERVERS[key].folder.parent == within:
+            _SERVERS.pop(key).close()
+
+
+_FINALIZED: set[int] = set()  # processes whose exit closes their servers
+
+
+def _close_at_exit() -> None:
+    """Close this process's servers when it ends normally: a worker process of a pool ends without running atexit
+    handlers, but runs multiprocessing's finalizers (its SIGTERM is ``ci.executors.worker_setup``'s)."""
+    if os.getpid() not in _FINALIZED:
+        _FINALIZED.add(os.getpid())
+        multiprocessing.util.Finalize(None, close_servers, exitpriority=0)
 
 
 def _plan_from(replay: str, problem: Problem, explored: int) -> SearchResult:

@@ -37,6 +37,10 @@ from spec.sound import Sound, Vehicle, reach_m, vehicles
 
 #: Breach records kept per run (the counts are exact beyond it).
 MAX_RECORDS = 200
+#: A vehicle this close outside its interval is inside it: floating-point rounding of positions a kilometre from the
+#: origin (~1e-13 m), not motion. The paper's world makes it matter: exact sensing and every vehicle at 7 m/s give
+#: intervals of no width, which every vehicle left by 1e-12 m within a control step (each decision ended by a breach).
+ROUNDING_M = 1e-6
 
 
 class BreachKind(enum.Enum):
@@ -123,11 +127,12 @@ class Containment:
         by_index = {(v.lane, v.index): v for v in found if v.index is not None}
         self.phantoms = {lane: [v for v in found if v.index is None and v.lane is lane] for lane in Lane}
         self.tracked: dict[int, Vehicle] = {}
-        for lane in Lane:  # a lane's readings in the window, nearest first, are its scenario's vehicles in order
-            readings = sorted((r for r in seen if r.lane is lane), key=lambda r: r.dx_m)
-            inside = [r for r in readings if in_window(reading_cell(r, scenario.lane, grid), grid)]
-            for index, reading in enumerate(inside):
-                self.tracked[reading.body] = by_index[(lane, index)]
+        for lane in Lane:  # a lane's cells in the window, nearest first, are its scenario's vehicles in order
+            readings = sorted((r for r in seen if r.lane is lane), key=lambda r: r.dx_m)  # readings in one cell: one
+            cells = [(c, r) for r in readings if in_window(c := reading_cell(r, scenario.lane, grid), grid)]  # hull
+            order = sorted({c for c, _ in cells})
+            for cell, reading in cells:
+                self.tracked[reading.body] = by_index[(lane, order.index(cell))]
         self.generation = {car.body: car.respawns for car in cars}  # a respawned car is a new vehicle
         self.breached: dict[int, Breach] = {}  # body (-1: the AV) -> its first breach under this decision
 
@@ -208,5 +213,7 @@ class Containment:
 
 
 def _outside(x: float, low: float, high: float) -> float:
-    """How far ``x`` is outside ``[low, high]``: negative below, positive above, 0 inside."""
-    return x - low if x < low else x - high if x > high else 0.0
+    """How far ``x`` is outside ``[low, high]``: negative below, positive above, 0 inside (or within
+    ``ROUNDING_M`` of it)."""
+    miss = x - low if x < low else x - high if x > high else 0.0
+    return 0.0 if abs(miss) <= ROUNDING_M else miss

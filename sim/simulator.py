@@ -196,8 +196,10 @@ class Simulator:
         self.containment, self.interrupt = None, False
         if self.watch is None:
             return
-        try:
-            scenario = discretise(readings, lane, self.grid)
+        try:  # the sets a sound plan is proved against: where each vehicle was sensed, not its whole cell; a snapshot
+            if self.sound is None:  # the paper model's rules cannot read (two vehicles in one cell) makes none
+                discretise(readings, lane, self.grid)
+            scenario = discretise(readings, lane, self.grid, measured=True)
         except ScenarioError:
             return
         self.summary.decisions += 1

@@ -9,7 +9,7 @@ from typing import Any
 import click
 from rich.table import Table
 
-from ci.cli.common import err, faults_options, out, print_json
+from ci.cli.common import err, faults_options, out, print_json, print_table
 from ci.cli.options import (
     CELL_M,
     FRACTION,
@@ -108,7 +108,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
           scheduler: str | None, out_dir: str, fresh: bool, faults: str, steering_offset_deg: float,
           tracking: bool, as_json: bool) -> None:
     """Audit the grid abstraction: cell size x traffic model x sensing model x seeds, driven closed-loop."""
-    from ci.audit import AuditPlan, label, planning_cost, rows, run_audit, write_reports
+    from ci.audit import AuditPlan, figure, label, planning_cost, rows, run_audit, write_reports
     from ci.progress import km_progress
     from sim.parts import PLANNING_MODELS, SENSOR_MODELS, TRAFFIC_MODELS, DriveConfig
     from spec.engines import get_engine
@@ -153,12 +153,12 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
             table.add_column(col, justify="right")
         for r in audit_rows:
             table.add_row(f"{r.cell_m:g}", r.traffic, r.sensing, label(r), f"{r.km:.1f}",
-                          f"{r.collisions} ({r.collisions_per_1000_km:.1f})",
-                          f"{r.near_misses} ({r.near_misses_per_1000_km:.1f})",
+                          f"{r.collisions} ({figure(r.collisions_per_1000_km)})",
+                          f"{r.near_misses} ({figure(r.near_misses_per_1000_km)})",
                           f"{r.opportunity_total('missed')} ({r.opportunity_total('checked')})",
-                          f"{r.missed_per_1000_km:.1f}", f"{r.delayed_per_1000_km:.1f}", str(r.traffic_collisions),
+                          figure(r.missed_per_1000_km), figure(r.delayed_per_1000_km), str(r.traffic_collisions),
                           str(r.min_gap_left_m), str(r.violations), str(r.plan_ms_median))
-        out.print(table)
+        print_table(table, 4, "audit.md and audit.json")
         models = Table(title="the models side by side: safety inside / after the assumptions, containment, price")
         for col in ("cell m", "traffic", "sensing", "model", "overtakes /km", "collisions in / after /1000 km",
                     "near misses in / after /1000 km", "breaches /1000 km", "re-plans on a breach", "keep-lane",
@@ -166,12 +166,12 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
             models.add_column(col, justify="right")
         for r in audit_rows:
             models.add_row(f"{r.cell_m:g}", r.traffic, r.sensing, label(r),
-                           f"{r.per_1000_km(r.overtakes) / 1000:.2f}",
+                           figure(r.per_1000_km(r.overtakes) / 1000, 2),
                            r.inside_after("contact"), r.inside_after("near_miss"),
-                           f"{r.per_1000_km(sum(r.breaches.values())):.1f}", str(r.breach_replans),
+                           figure(r.per_1000_km(sum(r.breaches.values()))), str(r.breach_replans),
                            str(r.keep_lane_steps), str(r.minimal_risk_steps),
                            f"{r.takeovers} ({r.takeovers_after_breach})", str(r.waits_without_plan))
-        out.print(models)
+        print_table(models, 4, "audit.md and audit.json")
         kinds = sorted({k for r in audit_rows for k in r.faults if k != "none"})
         if kinds:
             faults_table = Table(title="faults: started / sweeps changed / failures attributed")
@@ -181,14 +181,14 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
                 faults_table.add_row(f"{r.cell_m:g}", r.traffic, r.sensing, label(r), *(r.fault_cell(k) for k in kinds),
                                      str(r.faults.get("none", {}).get("failures", 0)), str(r.losses_of_control),
                                      str(r.unreadable))
-            out.print(faults_table)
+            print_table(faults_table, 4, "audit.md and audit.json")
         cost_table = Table(title="planning cost on the scenarios the planner saw (shortest)")
         for col in ("cell m", "model", "engine", "n", "median ms", "p99 ms", "median states", "incomplete"):
             cost_table.add_column(col, justify="right")
         for c in costs:
             cost_table.add_row(f"{c.cell_m:g}", c.model, c.engine, str(c.n), str(c.median_ms), str(c.p99_ms),
                                str(c.median_states), str(c.incomplete))
-        out.print(cost_table)
+        print_table(cost_table, 3, "audit.md and audit.json")
         out.print("written: " + ", ".join(str(p) for p in paths))
     sys.exit(ExitCode.OK)
 

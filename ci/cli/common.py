@@ -10,9 +10,13 @@ from pathlib import Path
 from typing import Any
 
 import click
+from rich import box
 from rich.console import Console
+from rich.markup import escape
+from rich.measure import Measurement
+from rich.table import Table
 
-from oracle.render import LEGEND, draw
+from oracle.render import FRAME_CHARS, LEGEND, PRECEDENCE, cells_per_char, draw
 from spec.actions import Action
 from spec.answers import Answer, Status, Strategy
 from spec.constants import DEFAULT_HORIZON
@@ -90,6 +94,36 @@ def load(file: str, cell_m: float | None = None) -> Scenario:
     return load_scenario(path, cell_m)
 
 
+def print_table(table: Table, keep: int = 1, full: str = "--json") -> None:
+    """``table`` at the console's width, every word whole: first the lines between columns go, then the rightmost
+    columns (never the first ``keep``) until the rest fit, and one line names them and ``full``, where every column
+    is; each column gets at least its longest word and the room left in proportion to what it would take more (rich
+    alone shrinks the widest columns below their longest word). A pipe is 80 columns wide unless $COLUMNS says
+    otherwise; a terminal, its own."""
+    wide = out.options.update_width(10_000)
+
+    def narrowest() -> int:  # every column as narrow as its longest word (rich clamps a measure to the width asked)
+        return Measurement.get(out, wide, table).minimum
+
+    left_out: list[str] = []
+    if narrowest() > out.width:
+        table.box, table.show_edge, table.pad_edge = box.SIMPLE_HEAD, False, False
+    while narrowest() > out.width and len(table.columns) > keep:
+        left_out.append(" ".join(str(table.columns.pop().header).split()))
+    ranges = [[Measurement.get(out, wide, cell) for cell in (column.header, *column.cells)] for column in table.columns]
+    least = [max(m.minimum for m in r) for r in ranges]
+    most = [max(m.maximum for m in r) for r in ranges]
+    room = out.width - (narrowest() - sum(least))  # what the columns' contents may take together
+    if sum(most) > room >= sum(least):
+        spare, wanted = room - sum(least), sum(most) - sum(least)
+        for column, low, high in zip(table.columns, least, most):
+            column.width = low + spare * (high - low) // wanted
+    out.print(table)
+    if left_out:
+        out.print(escape(f"(not shown at {out.width} columns: {'; '.join(reversed(left_out))}; {full} has every "
+                         "column)"), style="dim")
+
+
 def print_json(obj: Any) -> None:
     click.echo(json.dumps(obj, indent=2))
 
@@ -97,22 +131,33 @@ def print_json(obj: Any) -> None:
 def print_states(scenario: Scenario, actions: tuple[Action, ...], states: tuple[State, ...]) -> None:
     """Both lanes after every step, with a legend for the marks."""
     labels = ["start", *(a.value for a in actions)]
+    room = out.width - 2 - FRAME_CHARS  # the indent, and each line's frame
     for n, (label, state) in enumerate(zip(labels, states)):
         out.print(f"step {n}: {label}")
-        for line in draw(state, scenario.grid, scenario.target_indices):
-            out.print(f"  {line}")
-    out.print(f"  ({LEGEND})")
+        for line in draw(state, scenario.grid, scenario.target_indices, room):
+            out.print(f"  {line}", overflow="ignore", crop=False)
+    step = cells_per_char(scenario.grid, room)
+    scale = "" if step == 1 else (f"; one character is {step} cells of {scenario.grid.cell:g} m, showing the first of "
+                                  f"{', '.join(PRECEDENCE[:-1])} among them")
+    out.print(f"  ({LEGEND}{scale})")
 
 
 SHORT = {Action.LEFT_LANE_CHANGE: "L", Action.ACCELERATE: "A", Action.RIGHT_LANE_CHANGE: "R", Action.DRIVE: "D",
          Action.BRAKE: "B"}
 
 
-def abbrev(answer: Answer) -> str:
-    """A plan as letters, or the status when there is none."""
+#: Answers without a plan, short enough for a narrow table (``STATUS_LEGEND`` says what each is).
+SHORT_STATUS = {Status.NO_PLAN: "no-plan", Status.NO_PLAN_WITHIN_HORIZON: "no-plan-h", Status.INCOMPLETE: "incomplete",
+                Status.PLAN: "plan"}
+STATUS_LEGEND = ("no-plan: proved, no plan of any length; no-plan-h: no plan within the horizon; incomplete: the "
+                 "search hit its limit")
+
+
+def abbrev(answer: Answer, compact: bool = False) -> str:
+    """A plan as letters (``compact``: without spaces), or the status when there is none (``compact``: short)."""
     if answer.status is not Status.PLAN:
-        return answer.status.value
-    return " ".join(SHORT[a] for a in answer.actions) or "(empty)"
+        return SHORT_STATUS.get(answer.status, answer.status.value) if compact else answer.status.value
+    return ("" if compact else " ").join(SHORT[a] for a in answer.actions) or "(empty)"
 
 
 SOUND_OPTIONS = ("bounds", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react")

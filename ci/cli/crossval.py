@@ -14,7 +14,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColum
 from rich.table import Table
 from rich.text import Text
 
-from ci.cli.common import cell_option, err, horizon_option, out, print_json, sound_options
+from ci.cli.common import cell_option, err, horizon_option, out, print_json, print_table, sound_options
 from ci.cli.options import MAX_WORKERS, REPRODUCERS, SCHEDULER, SECONDS, SEED, WORKERS, names
 from ci.cli.options import out_dir as checked_out_dir
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
@@ -256,20 +256,20 @@ def _print(data: dict[str, Any], wall_s: float) -> None:
         table.add_column(col, justify="right")
     for name, v in data["properties"].items():
         table.add_row(name, str(v["checked"]), str(v["held"]), str(v["failed"]), str(v["incomplete"]))
-    out.print(table)
+    print_table(table, 1, "summary.md")
     latency = Table(title="latency per run (engine/strategy)")
     for col in ("run", "n", "median ms", "p99 ms"):
         latency.add_column(col, justify="right")
     for label, v in data["latency"].items():
         latency.add_row(label, str(v["n"]), str(v["median_ms"]), str(v["p99_ms"]))
-    out.print(latency)
+    print_table(latency, 1, "summary.md")
     for cell, rules in data["rule_coverage"].items():
         coverage = Table(title=f"rule coverage at {cell}: scenarios that exercised each rule")
         coverage.add_column("rule")
         coverage.add_column("scenarios", justify="right")
         for rule, n in rules.items():
             coverage.add_row(rule, str(n))
-        out.print(coverage)
+        print_table(coverage, 1, "summary.md")
     target = data["coverage_target"]
     if target["missed"]:
         out.print(f"coverage target {target['target']} missed: no scenario exercised {'; '.join(target['missed'])}")

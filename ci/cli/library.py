@@ -7,7 +7,7 @@ import sys
 import click
 from rich.table import Table
 
-from ci.cli.common import SHORT, abbrev, out, print_json, strategy_option
+from ci.cli.common import SHORT, SHORT_STATUS, STATUS_LEGEND, abbrev, out, print_json, print_table, strategy_option
 from oracle.conform import disagreements
 from oracle.planner import plan as run_plan
 from spec.answers import Strategy
@@ -28,8 +28,9 @@ def scenarios(as_json: bool) -> None:
     for col in ("name", "description", "expected", "model"):
         table.add_column(col)
     for b in BUILTINS:
-        table.add_row(b.name, b.description, b.expected.status.value, b.expected.model.value)
-    out.print(table)
+        table.add_row(b.name, b.description, SHORT_STATUS[b.expected.status], b.expected.model.value)
+    print_table(table)
+    out.print(f"({STATUS_LEGEND})")
 
 
 @click.command()
@@ -40,7 +41,7 @@ def engines() -> None:
         table.add_column(col)
     for engine in load_engines().values():
         table.add_row(engine.name, ", ".join(s.value for s in engine.strategies), engine.description)
-    out.print(table)
+    print_table(table)
 
 
 @click.command()
@@ -54,7 +55,7 @@ def demo(strategy: Strategy, engine_names: tuple[str, ...]) -> None:
     table.add_column("scenario", no_wrap=True)
     table.add_column("expected")
     for engine in engines:
-        table.add_column(f"{engine.name}: plan (length) ms", overflow="fold")
+        table.add_column(f"{engine.name}: plan, ms")
     table.add_column("agree")
     unexpected = 0
     for b in BUILTINS:
@@ -63,12 +64,12 @@ def demo(strategy: Strategy, engine_names: tuple[str, ...]) -> None:
         for engine, a in zip(engines, answers):
             ok = b.expected.matches(a, engine.prove_beyond is not None)
             unexpected += not ok
-            cells.append(f"{abbrev(a)} ({len(a.actions)}) {a.elapsed_ms:.1f}" + ("" if ok else " UNEXPECTED"))
-        expected = f"{b.expected.status.value}, {b.expected.model.value}"
+            cells.append(f"{abbrev(a, compact=True)} {a.elapsed_ms:.1f}" + ("" if ok else " UNEXPECTED"))
+        expected = f"{SHORT_STATUS[b.expected.status]}, {b.expected.model.value}"
         table.add_row(b.name, expected, *cells, "yes" if not disagreements(answers) else "NO")
-    out.print(table)
+    print_table(table, 2, "a wider terminal")
     out.print("plans: " + ", ".join(f"{letter} {action.value}" for action, letter in SHORT.items())
-              + "; (n) actions; ms per plan, whole pipeline")
+              + f"; {STATUS_LEGEND}; ms per plan, whole pipeline")
     out.print("all answers as expected" if not unexpected else f"{unexpected} answer(s) differ from expectation")
     _demo_drive()
     sys.exit(ExitCode.NO if unexpected else ExitCode.OK)

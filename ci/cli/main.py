@@ -15,7 +15,7 @@ from typing import NoReturn
 
 import click
 
-from ci.cli import audit, crossval, library, planning, simulation
+from ci.cli import audit, crossval, library, planning, report, simulation
 from ci.cli.signals import handled, received
 from spec.errors import ExitCode, SuiteError
 
@@ -27,7 +27,7 @@ def cli() -> None:
 
 
 for command in (*planning.COMMANDS, *library.COMMANDS, *simulation.COMMANDS, *audit.COMMANDS,
-                *crossval.COMMANDS):
+                *crossval.COMMANDS, *report.COMMANDS):
     cli.add_command(command)
 
 

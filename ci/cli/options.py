@@ -45,6 +45,7 @@ RUNS = Whole(1, 100_000)
 HORIZON = Whole(0, MAX_HORIZON)  # actions in a plan
 MAX_STATES = Whole(1, 10**9)  # stored states: a billion does not fit in any machine's memory
 PER_RUN = Whole(0, 10_000)  # scenarios kept, decisions replayed per run: a run makes a few thousand
+FRAMED = Whole(0, 20)  # closest calls drawn per folder: each replays a drive from its start
 REPRODUCERS = Whole(0, 1000)  # failures shrunk per property: each shrink is minutes of engine runs
 
 

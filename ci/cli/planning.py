@@ -18,6 +18,7 @@ from ci.cli.common import (
     out,
     print_json,
     print_states,
+    print_table,
     sound_options,
     strategy_option,
 )
@@ -85,7 +86,7 @@ def _plan_all(scenario: Scenario, strategy: Strategy, model: ModelChoice | None,
         for a in answers:
             table.add_row(a.engine, a.status.value, a.model.value if a.model else "-", str(len(a.actions)),
                           abbrev(a), f"{a.elapsed_ms:.1f}")
-        out.print(table)
+        print_table(table)
         out.print(f"agreement: all {len(answers)} engines agree" if not problems
                   else "DISAGREEMENT: " + "; ".join(problems))
     return ExitCode.DISAGREE if problems else answers[0].status.exit_code

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from ci.cli.common import err, faults_options, out, print_json, strategy_option
+from ci.cli.common import err, faults_options, print_json, print_table, strategy_option
 from ci.cli.options import CELL_M, KM, RUNS, SCHEDULER, SEED, TOLERANCE, WORKERS
 from ci.cli.options import out_dir as out_dir_checked
 from ci.executors import ExecutorChoice, ExecutorKind, check_executor
@@ -87,11 +87,11 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: S
         print_json([r.to_json() for r in results])
     else:
         for table in (runs_table(results), totals_table(results), deviations_table(results)):
-            out.print(table)
+            print_table(table, 1, "runs.jsonl")
         if until_failure:
-            out.print(paper_table(results, km))
+            print_table(paper_table(results, km), 1, "runs.jsonl")
         if campaign.faults:
-            out.print(faults_table(results))
+            print_table(faults_table(results), 1, "runs.jsonl")
     sys.exit(ExitCode.NO if any(r.failures for r in results) else ExitCode.OK)
 
 

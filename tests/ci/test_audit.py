@@ -67,6 +67,32 @@ def test_missed_opportunities_are_estimated_per_reason_from_the_checked_share() 
     assert row.missed_per_1000_km != row.missed_per_1000_km  # NaN: qualified, never checked
 
 
+def test_an_undefined_rate_prints_as_a_dash_never_nan() -> None:
+    from collections import Counter
+
+    from ci.audit import Done, markdown
+    from sim.opportunity import OpportunityReport
+    from sim.summary import RunSummary
+
+    unchecked = OpportunityReport({"outside_window": Counter(qualifying=3)})
+    table = rows([Done(DriveConfig(5.0), RunSummary(1, km=0.0, opportunities=unchecked))])
+    text = markdown(table, [], {})
+    assert "nan" not in text.lower() and "| - |" in text
+
+
+def test_a_deviation_quantile_is_a_bound_never_above_the_largest_seen() -> None:
+    from ci.audit import Done, markdown
+    from sim.summary import RunSummary
+    from sim.tolerance import HISTOGRAM_BINS, ToleranceReport
+
+    bins = [0] * (HISTOGRAM_BINS + 1)
+    bins[3] = 10  # every deviation in the bin (0.03, 0.04]: its edge 0.04 exceeds the largest, 0.031
+    tolerance = ToleranceReport(histogram={"drive": bins}, largest={"drive": 0.031})
+    (row,) = rows([Done(DriveConfig(5.0), RunSummary(1, km=1.0, tolerance=tolerance))])
+    assert row.deviation["drive"] == {"p50": 0.031, "p95": 0.031, "max": 0.031}
+    assert "≤ 0.031 / ≤ 0.031 / 0.031" in markdown([row], [], {})
+
+
 def test_the_audit_command_writes_its_reports(tmp_path: Path) -> None:
     done = run("audit", "--cells", "21", "--traffic", "paper", "--sensing", "exact,noisy", "--km", "0.3",
                "--workers", "1", "--engines", "interpreter", "--snapshots", "2", "--out", str(tmp_path), "--json",

@@ -33,7 +33,7 @@ import pytest
 
 from ci.cli.crossval import DEFAULT_SPACE
 from ci.cli.main import cli
-from ci.cli.options import HORIZON, MAX_STATES, PER_RUN, REPRODUCERS, RUNS, SEED, WORKERS
+from ci.cli.options import FRAMED, HORIZON, MAX_STATES, PER_RUN, REPRODUCERS, RUNS, SEED, WORKERS
 from ci.conform import COUNT
 from spec.errors import ExitCode
 from spec.grid import PAPER_GRID
@@ -77,6 +77,7 @@ BASE: dict[str, tuple[str, ...]] = {
     "crossval": ("crossval", "--source", "exhaustive", "--space", SPACE, "--properties", "existence", "--engines",
                  "interpreter", "--workers", "1", "--out", "crossval"),
     "conform": ("--count", "1", "--engines", "interpreter,z3", "--strategy", "shortest", "--out", "conform"),
+    "report": ("report", "report_in", "--out", "report.html"),
 }
 
 NOT_NUMBERS = ("nan", "inf", "-inf", "1e308", "-1", "ten")
@@ -227,6 +228,13 @@ def _hostile_files(folder: Path) -> None:
     for name, text in files.items():
         (folder / name).write_text(text)
     (folder / "binary.json").write_bytes(bytes(range(256)) * 4)
+    for name in ("report_in", "report_zero", "report_fifo", "report_malformed"):
+        (folder / name).mkdir()
+    (folder / "report_in" / "mutation.json").write_text(
+        '[{"mutant": "m", "caught_by": "tests", "seconds": 1.0, "reproducer": "", "errors": []}]')
+    (folder / "report_zero" / "summary.json").symlink_to("/dev/zero")
+    os.mkfifo(folder / "report_fifo" / "audit.json")
+    (folder / "report_malformed" / "audit.json").write_text('{"settings": {')
 
 
 CASES: list[Case] = [
@@ -305,6 +313,14 @@ CASES: list[Case] = [
     _case("conform", "--engines=interpreter", named="--engines"),
     *out_dirs("conform"), _case("conform", "--bogus", named="--bogus"),
     no_spin("conform", "--engines=interpreter,spin", "--strategy=sensible"),
+    # report: folders that are not there or hold nothing readable (a device, a pipe, malformed JSON), outputs
+    *(Case(("report", folder), named) for folder, named in (
+        ("missing", "FOLDER='missing': no such folder"), ("a_file", "FOLDER='a_file': not a folder"),
+        ("a_folder", "no campaign output"), ("report_zero", "no campaign output"),
+        ("report_fifo", "no campaign output"), ("report_malformed", "no campaign output"))),
+    *out_files("report"), *out_files("report", "--markdown"), *unknown("report"),
+    *whole("report", "--frames", FRAMED),
+    *(_case("report", f"--title={value}", named="--title") for value in ("", " ", "a\nb", "x" * 201)),
 ]
 
 

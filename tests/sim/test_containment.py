@@ -35,7 +35,7 @@ def watch(left: dict[int, float], oncoming: dict[int, float]) -> Containment:
         Reading(Lane.RIGHT, b, dx) for b, dx in oncoming.items())
     from sim.discretiser import discretise
 
-    scenario = discretise(readings, Lane.LEFT, PAPER_GRID)
+    scenario = discretise(readings, Lane.LEFT, PAPER_GRID, measured=True)  # as the simulator watches
     cars = [car(b, dx) for b, dx in (left | oncoming).items()]
     return Containment(1, SOUND, scenario, readings, PAPER_GRID, 0.0, 0.0, cars)  # type: ignore[arg-type]
 
@@ -71,6 +71,36 @@ def test_a_vehicle_outside_its_bounds_breaches_once_naming_the_bound(lane: Lane,
         found += c.check(t_s, 0.0, AV, left, oncoming, "drive", never)  # type: ignore[arg-type]
     assert [b.kind for b in found] == [kind] and found[0].body == 1 and found[0].by_m > 0
     assert c.world_breached() and kind.ends_decision and not kind.inside
+
+
+def test_a_vehicle_stopping_inside_its_cell_breaches_the_interval_it_was_measured_in() -> None:
+    """The audit's collision inside the assumptions (spread traffic, seed 2): the vehicle ahead, sensed 21.6 m away,
+    stopped within 2 s; its cell (21 .. 42 m and more) still held it, the interval the plan was proved against did
+    not. Containment now holds each vehicle to where it was measured."""
+    c = watch({1: 21.6}, {})
+    (breach,) = c.check(2.0, 0.0, AV, [car(1, 25.0, 0.0)], [], "drive", never)  # type: ignore[list-item]
+    assert breach.kind is BreachKind.TOO_SLOW and breach.by_m == pytest.approx(21.6 + 2 * 4.9 - 25.0)
+
+
+def test_two_readings_in_one_cell_are_one_vehicle_over_their_hull() -> None:
+    c = watch({1: 25.0, 2: 30.0, 3: 70.0}, {})  # 25 and 30 m: both in cell 11
+    assert c.tracked[1] is c.tracked[2] and c.tracked[3].index == 1
+    assert (c.tracked[1].lo_m, c.tracked[1].hi_m) == (25.0, 30.0)
+    moved = [car(1, 25.0 + 5.0, 5.0), car(2, 30.0 + 9.0, 9.0), car(3, 70.0 + 7.0, 7.0)]
+    assert c.check(1.0, 0.0, AV, moved, [], "drive", never) == []  # type: ignore[arg-type]
+
+
+def test_a_miss_below_the_rounding_of_positions_is_no_breach() -> None:
+    """The paper's world: exact sensing and every vehicle at 7 m/s make intervals of no width."""
+    readings = (Reading(Lane.LEFT, 1, 42.0),)
+    from sim.discretiser import discretise
+
+    scenario = discretise(readings, Lane.LEFT, PAPER_GRID, measured=True)
+    c = Containment(1, Sound(world_bounds("paper", "exact")), scenario, readings, PAPER_GRID, 0.0, 0.0,
+                    [car(1, 42.0)])  # type: ignore[list-item]
+    assert c.check(1.0, 0.0, AV, [car(1, 49.0 + 1e-9)], [], "drive", never) == []  # type: ignore[list-item]
+    (breach,) = c.check(1.0, 0.0, AV, [car(1, 49.0 + 1e-3)], [], "drive", never)  # type: ignore[list-item]
+    assert breach.kind is BreachKind.TOO_FAST
 
 
 def test_a_vehicle_sensed_farther_off_than_the_error_bound_breaches_at_the_snapshot() -> None:
