@@ -42,7 +42,7 @@ from sim.tracking import Detection, Tracker
 from sim.vehicle import KinematicCar, Pose, first_contact
 from spec.actions import ACTION_RULES, Action
 from spec.answers import Answer, Status
-from spec.envelope import MINIMAL_RISK, TRACKING
+from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING
 from spec.errors import ScenarioError
 from spec.faults import lost_control
 from spec.files import scenario_to_dict
@@ -657,6 +657,8 @@ class Simulator:
                 closing = self.lead.closing_mps(speed)
                 if SAFETY.violated(self.lead.dx_m - CAR.length_m, closing):
                     target, decel = max(0.0, speed - closing), mr.emergency_decel_mps2
+                    if self.lead.measured_mps is not None and self.lead.measured_mps > CLOSING_EPS_MPS:
+                        target = min(target, max(0.0, command - decel * self.executor.dt_s))  # it still closes
             if command > target:
                 command = max(target, command - decel * self.executor.dt_s)
             elif emergency:

@@ -68,8 +68,9 @@ class MinimalRisk:
     for at most ``takeover_s`` (a return into a vehicle ahead at 13 m/s was measured: seed 2); then it brakes in lane
     at ``decel_mps2`` to the hold speed and, while the sensed vehicle ahead is nearer than the safety
     specification allows at the closing speed (``fallback_closing_mps``), at ``emergency_decel_mps2`` down to that
-    vehicle's speed (a standstill when it is not known). It holds for ``takeover_s``, then hands back to a new
-    decision (which may take over again).
+    vehicle's speed (a standstill when it is not known), and on below it while the measured gap still closes (the
+    car may run above its speed command: measured, 0.17 m/s at 7 m/s, and the gap closed until contact). It holds
+    for ``takeover_s``, then hands back to a new decision (which may take over again).
     """
 
     decel_mps2: float = RAMP_SHARE * CAR.max_brake_mps2
