@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import math
 import os
 import stat
 from collections import Counter
@@ -17,6 +16,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
+from ci.audit import figure
 from ci.report.closest import closest_figures, gap_order
 from ci.report.document import Figure, Report, Section, Table, from_rich
 from ci.report.road import reproducer_drawing
@@ -24,6 +24,7 @@ from sim.paper import MEDIAN_KM
 from sim.summary import RunSummary
 from sim.tables import deviations_table, faults_table, paper_table, runs_table, totals_table
 
+CAMPAIGN_LOGS = {"simulate": "runs.jsonl", "audit": "audit.jsonl"}  # the runs whose closest calls are drawn
 MAX_SPACETIME_PLOTS = 4  # per simulation folder: the page stays readable (the rest are named)
 MAX_WORST = 12  # closest calls listed per audit
 MAX_DRAWN_REPRODUCERS = 3  # per crossval folder: each drawing runs its property's engines again (the rest: traces)
@@ -35,14 +36,12 @@ class Unreadable(Exception):
 
 def rate(count: float, km: float, per: float = 1000.0) -> str:
     """``count`` per ``per`` km, or "-" where no km were driven (a rate of nothing is undefined, never "nan")."""
-    return f"{per * count / km:.1f}" if km > 0 else "-"
+    return figure(per * count / km if km > 0 else None)
 
 
 def number(value: Any, digits: int = 2) -> str:
-    """A figure from a JSON record as text: "-" for a missing or undefined one."""
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "-"
-    return f"{value:.{digits}f}" if isinstance(value, float) else str(value)
+    """A figure from a JSON record as text (``ci.audit.figure`` for a float: "-" for a missing or undefined one)."""
+    return figure(value, digits) if value is None or isinstance(value, float) else str(value)
 
 
 #: The largest campaign file read (a 1,000 km campaign's runs.jsonl is tens of megabytes).
@@ -350,9 +349,9 @@ def collect(folders: Iterable[Path], frames: int = 0) -> Report:
         except Unreadable as error:
             skipped.append((str(folder), str(error)))
             continue
-        log = folder / {"simulate": "runs.jsonl", "audit": "audit.jsonl"}.get(kind, "")
-        if frames and kind in ("simulate", "audit") and _readable(log):
-            figures, notes = closest_figures(log, frames, section.key)
+        log = CAMPAIGN_LOGS.get(kind)
+        if frames and log is not None and _readable(folder / log):
+            figures, notes = closest_figures(folder / log, frames, section.key)
             section.figures += figures
             section.findings += notes
         sections.append(section)
