@@ -12,8 +12,7 @@ import pybullet as p
 
 from sim.parts import DriveConfig
 from sim.scene import Scene
-from sim.simulator import Simulator
-from sim.tolerance import ToleranceReport
+from sim.simulator import Simulator, assemble
 from spec.physical import ROAD
 
 #: Colours (RGBA) of the AV, same-direction vehicles and oncoming vehicles, and of the lane lines.
@@ -55,9 +54,7 @@ def replay_frames(seed: int, config: DriveConfig, event_t_s: float, kind: str, c
     ("contact", "near_miss") at that time; fewer frames when the replay ends before."""
     times = [max(0.0, event_t_s - before_s + i * before_s / max(1, count - 1)) for i in range(count)]
     stop_s = event_t_s + AFTER_S
-    tolerance = ToleranceReport(config.step_tolerance_cells, config.plan_tolerance_cells)
-    sim = Simulator(seed, config.parts(()), config.replan_on_violation, tolerance, None, config.snapshots,
-                    config.restart_after_collision, config.opportunity_checks)
+    sim = assemble(seed, config)
     frames: list[Frame] = []
     tick = sim._tick
     lines: dict[Scene, list[int]] = {}  # per scene (a collision restarts the drive in a fresh one): its road bodies

@@ -841,8 +841,14 @@ def run_drive(seed: int, config: DriveConfig, out_dir: str | None = None, report
         if out_dir:
             Path(out_dir).mkdir(parents=True, exist_ok=True)
             observers = (TraceWriter(stack.enter_context((Path(out_dir) / f"trace-seed{seed}.jsonl").open("w"))),)
-        tolerance = ToleranceReport(config.step_tolerance_cells, config.plan_tolerance_cells)
-        sim = Simulator(seed, config.parts(observers), config.replan_on_violation, tolerance, report,
-                        config.snapshots, config.restart_after_collision, config.opportunity_checks)
+        sim = assemble(seed, config, observers, report)
         stack.callback(sim.close)
         return sim.drive(config.km, config.until_failure)
+
+
+def assemble(seed: int, config: DriveConfig, observers: tuple[TraceWriter, ...] = (),
+             report: Report | None = None) -> Simulator:
+    """The simulator of the drive of ``seed`` under ``config`` (what ``run_drive`` drives, and a replay redrives)."""
+    tolerance = ToleranceReport(config.step_tolerance_cells, config.plan_tolerance_cells)
+    return Simulator(seed, config.parts(observers), config.replan_on_violation, tolerance, report, config.snapshots,
+                     config.restart_after_collision, config.opportunity_checks)
