@@ -335,7 +335,7 @@ def _replay(execute: Execute, args: list[str], problem: Problem, explored: int) 
 
 # -- servers: one per verifier, process and thread ---------------------------------------------------
 #: The folder served verifiers' work folders are made in: a campaign sets it to a folder of its own, which it removes
-#: (``ci.executors.served_scope``); otherwise the system's temporary folder.
+#: (``ci.shared.executors.served_scope``); otherwise the system's temporary folder.
 SERVED_DIR_ENV = "OVERTAKE_SERVED_DIR"
 #: A server's work folder (``overtake-served-PID-...``, named for the process that made it, for people).
 SERVED_PREFIX = "overtake-served-"
@@ -493,7 +493,7 @@ _FINALIZED: set[int] = set()  # processes whose exit closes their servers
 
 def _close_at_exit() -> None:
     """Close this process's servers when it ends normally: a worker process of a pool ends without running atexit
-    handlers, but runs multiprocessing's finalizers (its SIGTERM is ``ci.executors.worker_setup``'s)."""
+    handlers, but runs multiprocessing's finalizers (its SIGTERM is ``ci.shared.executors.worker_setup``'s)."""
     if os.getpid() not in _FINALIZED:
         _FINALIZED.add(os.getpid())
         multiprocessing.util.Finalize(None, close_servers, exitpriority=0)

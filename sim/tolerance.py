@@ -52,8 +52,9 @@ class ToleranceReport:
     checks: dict[str, int] = field(default_factory=lambda: defaultdict(int))
     violations: list[Violation] = field(default_factory=list)  # this process's, in full (the trace has them too)
     violations_by_action: dict[str, int] = field(default_factory=lambda: defaultdict(int))
-    #: per action, how many checks added a deviation in each bin of HISTOGRAM_BIN cells (the last: beyond)
+    #: per action, how many checks added a deviation in each bin of ``bin_cells`` cells (the last: beyond)
     histogram: dict[str, list[int]] = field(default_factory=dict)
+    bin_cells: float = HISTOGRAM_BIN
 
     def check(self, plan: int, step: int, action: str, vehicle: str, predicted_m: float,
               start_dx_m: float, now_dx_m: float, previous_deviation: float) -> float:
@@ -67,7 +68,7 @@ class ToleranceReport:
         self.largest[action] = max(self.largest[action], added)
         self.checks[action] += 1
         bins = self.histogram.setdefault(action, [0] * (HISTOGRAM_BINS + 1))
-        bins[min(HISTOGRAM_BINS, int(added / HISTOGRAM_BIN))] += 1
+        bins[min(HISTOGRAM_BINS, int(added / self.bin_cells))] += 1
         kind = (ViolationKind.STEP if added > self.step_tolerance
                 else ViolationKind.PLAN if abs(deviation) > self.plan_tolerance else None)
         if kind is not None:
@@ -85,7 +86,7 @@ class ToleranceReport:
                 "checks": dict(self.checks), "violations": self.violation_count,
                 "violations_by_action": dict(self.violations_by_action),
                 "largest_step_deviation_cells": {k: round(v, 3) for k, v in self.largest.items()},
-                "added_histogram": {"bin_cells": HISTOGRAM_BIN, "counts": self.histogram}}
+                "added_histogram": {"bin_cells": self.bin_cells, "counts": self.histogram}}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> ToleranceReport:
@@ -95,6 +96,7 @@ class ToleranceReport:
         report.largest.update(data["largest_step_deviation_cells"])
         report.violations_by_action.update(data["violations_by_action"])
         report.histogram.update(data["added_histogram"]["counts"])
+        report.bin_cells = float(data["added_histogram"]["bin_cells"])
         return report
 
 

@@ -1,7 +1,7 @@
 """The cost the ``optimal`` strategy minimises: its terms, most important first, and what one action adds to each.
 
 One declaration that the Z3 encoding (``oracle.bmc``) translates into an objective and the conformance checker
-(``ci.properties``) computes on its own, so an engine that orders or counts the terms differently is caught.
+(``ci.conformance.properties``) computes on its own, so an engine that orders or counts the terms differently is caught.
 """
 
 from __future__ import annotations

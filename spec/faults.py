@@ -88,7 +88,8 @@ class FaultSpec:
 
 NO_FAULTS = FaultSpec()
 
-#: The paper's faults at rates calibrated against its Table 1 (``ci/calibrate.py``, 2026-11-26; ``--faults paper``).
+#: The paper's faults at rates calibrated against its Table 1 (``ci/simulation/calibrate.py``, 2026-11-26;
+#: ``--faults paper``).
 #: Fixed: the paper model, 21 m cells, paper traffic, exact sensing, the interpreter, sensible, the paper's sensor
 #: ranges, the stated persistences; calibration seeds 1001 on, disjoint from the evaluation's. Each kind alone at a
 #: trial rate over 400 km gave its failures per fault started (fake gap 28 of 1,474, left-lane ghost 43 of 2,963,

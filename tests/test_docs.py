@@ -3,6 +3,7 @@ printed (or with --km, --runs or --count made smaller, the override named here).
 
 from __future__ import annotations
 
+import itertools
 import re
 import shlex
 import subprocess
@@ -81,3 +82,67 @@ def _run(args: list[str], cwd: Path) -> int:
                           timeout=1200)
     assert "Traceback" not in done.stderr, done.stderr[-2000:]
     return done.returncode
+
+
+# -- the commands docs/ shows ----------------------------------------------------------------------------------------
+#: A command docs/ prints, as a user would copy it: ``overtake ...`` or ``python -m ci.MODULE ...`` (``python3`` and a
+#: ``/usr/bin/time -v`` prefix alike), in a code block or inline. A synopsis (``[...]``, ``A | B``, ``...``,
+#: ``ci.bench.NAME``) is not one, nor is a command's bare name in prose (``overtake plan``).
+DOC_COMMAND = re.compile(r"^(?:/usr/bin/time -v )?(overtake [a-z].* .*|python3? -m ci\.[a-z_.]+(?: .*)?)$")
+#: What a placeholder in a printed command stands for when the command is checked.
+PLACEHOLDERS = {"FILE": str(ROOT / "spec" / "scenarios" / "paper_example.toml"), "N": "2"}
+
+
+def _docs_commands() -> list[tuple[str, list[str]]]:
+    """(page, argv) of every command docs/ prints, placeholders filled (``DIR`` becomes a folder in the test's tmp)."""
+    found: dict[str, tuple[str, list[str]]] = {}
+    for page in sorted((ROOT / "docs").glob("*.md")):
+        text = page.read_text()
+        lines = [line for block in re.findall(r"```\w*\n(.*?)```", text, re.DOTALL)
+                 for line in block.replace("\\\n", " ").splitlines()]
+        lines += re.findall(r"`([^`]+)`", re.sub(r"```.*?```", "", text, flags=re.DOTALL).replace("\n", " "))
+        for line in lines:
+            command = " ".join(line.split("  #")[0].removeprefix("$ ").split())
+            if DOC_COMMAND.match(command) and not re.search(r"[\[\]|]|\.\.\.", command):
+                argv = [PLACEHOLDERS.get(word, word) for word in shlex.split(command.removeprefix("/usr/bin/time -v "))]
+                found.setdefault(" ".join(argv), (page.name, argv))
+    return sorted(found.values())
+
+
+def test_docs_show_commands() -> None:
+    pages = {page for page, _ in _docs_commands()}
+    assert pages >= {"audit.md", "benchmarks.md", "closed-loop.md", "crossval.md", "engines.md", "faults.md",
+                     "simulator.md", "sound.md", "usage.md"}, pages
+
+
+def _command_id(value: object) -> str:
+    words = [Path(w).name if w.startswith(str(ROOT)) else w for w in value] if isinstance(value, list) else [value]
+    return " ".join(map(str, words[:5]))
+
+
+@pytest.mark.parametrize(("page", "argv"), _docs_commands(), ids=_command_id)
+def test_every_docs_command_parses_as_printed(page: str, argv: list[str], tmp_path: Path,
+                                              monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each command docs/ prints is one its program accepts: an ``overtake`` command parses (every option exists and
+    every value passes its checks, as ``overtake`` would run it); a ``python -m ci...`` module exists and its
+    ``--help`` names every option the command gives. (The README's commands are run; these are the reference's
+    campaigns and benchmarks, minutes to hours each, run when their figures are measured.)"""
+    monkeypatch.chdir(tmp_path)
+    argv = [str(tmp_path / "out") if word == "DIR" else word for word in argv]
+    if argv[0] == "overtake":
+        import click
+
+        from ci.cli.main import cli
+
+        with cli.make_context("overtake", argv[1:2]) as group:
+            command = cli.get_command(group, argv[1])
+            assert command is not None, f"{page}: no command {argv[1]!r}"
+            command.make_context(argv[1], argv[2:], parent=group).close()
+        assert isinstance(command, click.Command)
+        return
+    module, words = argv[2], list(itertools.takewhile(lambda word: not word.startswith("-"), argv[3:]))
+    done = subprocess.run([sys.executable, "-m", module, *words, "--help"], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=120)  # a sub-command's words first: its own options are in its help
+    assert done.returncode == 0, f"{page}: {module} --help: {done.stderr[-500:]}"
+    for option in (word.split("=")[0] for word in argv[3:] if word.startswith("--")):
+        assert option in done.stdout, f"{page}: {module} has no option {option}"

@@ -10,7 +10,8 @@ import click
 from rich.table import Table
 
 from ci.cli.common import err, faults_options, out, print_json, print_table
-from ci.cli.options import (
+from ci.shared.executors import ExecutorChoice, ExecutorKind, check_executor
+from ci.shared.options import (
     CELL_M,
     FRACTION,
     KM,
@@ -25,9 +26,8 @@ from ci.cli.options import (
     convert,
     names,
 )
-from ci.cli.options import out_dir as out_dir_checked
-from ci.executors import ExecutorChoice, ExecutorKind, check_executor
-from ci.records import campaign_lock
+from ci.shared.options import out_dir as out_dir_checked
+from ci.shared.records import campaign_lock
 from spec.errors import ExitCode, OptionError
 from spec.grid import STANDARD_CELLS_M, grid_for
 from spec.physical import EVENTS, NOISE
@@ -108,8 +108,8 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
           scheduler: str | None, out_dir: str, fresh: bool, faults: str, steering_offset_deg: float,
           tracking: bool, as_json: bool) -> None:
     """Audit the grid abstraction: cell size x traffic model x sensing model x seeds, driven closed-loop."""
-    from ci.audit import AuditPlan, figure, label, planning_cost, rows, run_audit, write_reports
-    from ci.progress import km_progress
+    from ci.audit.campaign import AuditPlan, figure, label, planning_cost, rows, run_audit, write_reports
+    from ci.shared.progress import km_progress
     from sim.parts import PLANNING_MODELS, SENSOR_MODELS, TRAFFIC_MODELS, DriveConfig
     from spec.engines import get_engine
 

@@ -52,7 +52,7 @@ def strategy_option(default: Strategy = Strategy.SENSIBLE, choices: tuple[Strate
 def faults_options(command: Any) -> Any:
     """``--faults KIND=RATE[/SWEEPS],...`` and ``--steering-offset-deg``: the fault injectors of every drive
     (``spec.faults``), checked when the campaign's configuration is made."""
-    from ci.cli.options import DEGREES
+    from ci.shared.options import DEGREES
     from spec.faults import DEFAULT_STEERING_OFFSET_DEG, FaultKind
 
     kinds = ", ".join(k.value for k in FaultKind)
@@ -69,14 +69,14 @@ def faults_options(command: Any) -> Any:
 
 
 def horizon_option() -> Any:
-    from ci.cli.options import HORIZON
+    from ci.shared.options import HORIZON
 
     return click.option("--horizon", type=HORIZON, default=None,
                         help=f"Maximum plan length (default: the scenario's, else {DEFAULT_HORIZON}).")
 
 
 def cell_option() -> Any:
-    from ci.cli.options import CELL_M
+    from ci.shared.options import CELL_M
 
     return click.option("--cell-m", "cell_m", type=CELL_M, default=None,
                         help="Cell length in metres (21, 10.5, 7, 5.25; default: the file's, else 21).")
@@ -166,7 +166,7 @@ SOUND_OPTIONS = ("bounds", "same_mps", "oncoming_mps", "sensing_error_m", "phant
 def sound_options(command: Any) -> Any:
     """The sound model's options, handed to the command as one ``sound`` argument: a function that puts the chosen
     model on a scenario (unchanged when none of them is given and the file has no ``bounds`` table)."""
-    from ci.cli.options import METRES, SPEED
+    from ci.shared.options import METRES, SPEED
 
     def wrapper(**kwargs: Any) -> Any:
         given = {k: kwargs.pop(k) for k in SOUND_OPTIONS}

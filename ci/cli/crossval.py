@@ -15,10 +15,10 @@ from rich.table import Table
 from rich.text import Text
 
 from ci.cli.common import cell_option, err, horizon_option, out, print_json, print_table, sound_options
-from ci.cli.options import MAX_WORKERS, REPRODUCERS, SCHEDULER, SECONDS, SEED, WORKERS, names
-from ci.cli.options import out_dir as checked_out_dir
-from ci.executors import ExecutorChoice, ExecutorKind, check_executor
-from ci.records import campaign_lock
+from ci.shared.executors import ExecutorChoice, ExecutorKind, check_executor
+from ci.shared.options import MAX_WORKERS, REPRODUCERS, SCHEDULER, SECONDS, SEED, WORKERS, names
+from ci.shared.options import out_dir as checked_out_dir
+from ci.shared.records import campaign_lock
 from oracle.coverage import CoverageTarget
 from spec.assumptions import DEFAULT_PROFILE, profile
 from spec.errors import ExitCode, OptionError
@@ -27,7 +27,7 @@ from spec.scenario import Scenario
 from spec.sound import Checks, Sound
 
 if TYPE_CHECKING:
-    from ci.properties import PropertyName
+    from ci.conformance.properties import PropertyName
 
 SOURCES = ("library", "hypothesis", "exhaustive")
 MODELS = ("paper", "sound")
@@ -78,7 +78,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
              model_name: str, sound: Callable[[Scenario], Scenario]) -> None:
     """Check every property on scenarios from a source; exit 0 when all hold, 6 on any failure, 7 when every property
     held but the coverage target was missed."""
-    from ci.crossval import (
+    from ci.conformance.crossval import (
         VERDICTS_FILE,
         Campaign,
         Summary,
@@ -87,7 +87,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
         parse_space,
         write_reports,
     )
-    from ci.properties import PROPERTIES
+    from ci.conformance.properties import PROPERTIES
     from spec.grid import grid_for
 
     if list_only:
@@ -133,7 +133,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
     summary = Summary(CoverageTarget(coverage_text), float(grid.cell_m), paper=model is None)
     started = time.perf_counter()
     if source == "hypothesis":
-        from ci.hypo import run_hypothesis
+        from ci.conformance.hypo import run_hypothesis
 
         results, reproducers = run_hypothesis(campaign, out_path, executor, max_reproducers, err)
         for result in results:
@@ -160,7 +160,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
 
 def _properties(text: str) -> tuple[PropertyName, ...]:
     """Registered property names, or "all"."""
-    from ci.properties import PROPERTIES, PropertyName
+    from ci.conformance.properties import PROPERTIES, PropertyName
 
     if text.strip() == "all":
         return tuple(PROPERTIES)
@@ -177,7 +177,7 @@ def _model(name: str, sound: Callable[[Scenario], Scenario], grid: Any, source: 
            engines: tuple[str, ...]) -> Sound | str | None:
     """The campaign's model: None (the paper's rules), the sound model the options choose, or drawn with each
     scenario (the hypothesis source without bounds options); bad input names the option, the value and why."""
-    from ci.crossval import DRAWN
+    from ci.conformance.crossval import DRAWN
     from spec.engines import get_engine, load_engines
     from spec.scenario import make_scenario
 
@@ -215,7 +215,7 @@ def _engines(text: str) -> tuple[str, ...]:
 
 
 def _sweep(campaign: Any, scenarios: list[Any], out_path: Path, executor: ExecutorChoice, summary: Any) -> list[Any]:
-    from ci.crossval import run_sweep
+    from ci.conformance.crossval import run_sweep
 
     columns = (TextColumn("crossval"), BarColumn(), MofNCompleteColumn(), RateColumn(),
                TextColumn("{task.fields[failed]} failing"), TimeRemainingColumn())
@@ -236,8 +236,8 @@ def _sweep(campaign: Any, scenarios: list[Any], out_path: Path, executor: Execut
 
 
 def _reproduce(summary: Any, campaign: Any, out_path: Path, max_reproducers: int) -> list[dict[str, Any]]:
-    from ci.properties import PropertyName
-    from ci.repro import reproduce
+    from ci.conformance.properties import PropertyName
+    from ci.conformance.repro import reproduce
     from spec.files import scenario_from_dict
 
     written = []

@@ -16,7 +16,7 @@ from typing import NoReturn
 import click
 
 from ci.cli import audit, crossval, library, planning, report, simulation
-from ci.cli.signals import handled, received
+from ci.shared.signals import handled, received
 from spec.errors import ExitCode, SuiteError
 
 

@@ -22,7 +22,7 @@ from ci.cli.common import (
     sound_options,
     strategy_option,
 )
-from ci.cli.options import MAX_STATES, SECONDS, out_file
+from ci.shared.options import MAX_STATES, SECONDS, out_file
 from oracle.conform import disagreements
 from oracle.planner import plan as run_plan
 from oracle.planner import validate_pipeline

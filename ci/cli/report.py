@@ -10,7 +10,7 @@ from pathlib import Path
 import click
 
 from ci.cli.common import err, out
-from ci.cli.options import FRAMED, out_file
+from ci.shared.options import FRAMED, out_file
 from spec.errors import OptionError
 
 DEFAULT_TITLE = "overtake: conformance, simulation and audit"

@@ -8,10 +8,10 @@ from pathlib import Path
 import click
 
 from ci.cli.common import err, faults_options, print_json, print_table, strategy_option
-from ci.cli.options import CELL_M, KM, RUNS, SCHEDULER, SEED, TOLERANCE, WORKERS
-from ci.cli.options import out_dir as out_dir_checked
-from ci.executors import ExecutorChoice, ExecutorKind, check_executor
-from ci.records import campaign_lock
+from ci.shared.executors import ExecutorChoice, ExecutorKind, check_executor
+from ci.shared.options import CELL_M, KM, RUNS, SCHEDULER, SEED, TOLERANCE, WORKERS
+from ci.shared.options import out_dir as out_dir_checked
+from ci.shared.records import campaign_lock
 from spec.answers import Strategy
 from spec.engines import get_engine
 from spec.errors import ExitCode, OptionError
@@ -57,9 +57,9 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: S
              step_tolerance: float, plan_tolerance: float, paper_replanning: bool, faults: str,
              steering_offset_deg: float, tracking: bool, as_json: bool) -> None:
     """Drive the PyBullet simulator closed-loop and check every action against the model's prediction."""
-    from ci.progress import km_progress
-    from ci.simulate import RUNS_FILE
-    from ci.simulate import simulate as run_campaign
+    from ci.shared.progress import km_progress
+    from ci.simulation.campaign import RUNS_FILE
+    from ci.simulation.campaign import simulate as run_campaign
     from sim.parts import DriveConfig
     from sim.tables import deviations_table, faults_table, paper_table, runs_table, totals_table
 

@@ -9,8 +9,8 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from ci.records import read_records
 from ci.report.document import Figure
+from ci.shared.records import read_records
 
 FRAMES, BEFORE_S = 4, 3.0
 

@@ -16,9 +16,10 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-from ci.audit import figure
+from ci.audit.campaign import figure
 from ci.report.closest import closest_figures, gap_order
 from ci.report.document import Figure, Report, Section, Table, from_rich
+from ci.report.histograms import breach_histograms, deviation_histograms
 from ci.report.road import reproducer_drawing
 from sim.paper import MEDIAN_KM
 from sim.summary import RunSummary
@@ -40,7 +41,8 @@ def rate(count: float, km: float, per: float = 1000.0) -> str:
 
 
 def number(value: Any, digits: int = 2) -> str:
-    """A figure from a JSON record as text (``ci.audit.figure`` for a float: "-" for a missing or undefined one)."""
+    """A figure from a JSON record as text (``ci.audit.campaign.figure`` for a float: "-" for a missing or undefined
+    one)."""
     return figure(value, digits) if value is None or isinstance(value, float) else str(value)
 
 
@@ -145,7 +147,7 @@ def _reproducer(section: Section, folder: Path, repro: dict[str, Any], number_: 
 
 # -- simulate -----------------------------------------------------------------------------------------------------
 def simulation_section(folder: Path, key: str) -> Section:
-    from ci.records import read_records
+    from ci.shared.records import read_records
 
     check_file(folder / "runs.jsonl")
     try:
@@ -197,6 +199,7 @@ def _simulation(folder: Path, key: str, records: list[dict[str, Any]]) -> Sectio
     if config.get("faults"):
         tables.append(faults_table(runs))
     section.tables += [from_rich(t) for t in tables]
+    section.figures += [f for f in (deviation_histograms(runs, key), breach_histograms(runs, key)) if f is not None]
     plots = sorted((p for p in folder.glob("spacetime-seed*.png") if p.stem.removeprefix("spacetime-seed").isdigit()
                     and _readable(p)), key=lambda p: int(p.stem.removeprefix("spacetime-seed")))
     section.figures += [f for p in plots[:MAX_SPACETIME_PLOTS] if (f := _figure(

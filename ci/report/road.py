@@ -6,7 +6,7 @@ from __future__ import annotations
 from html import escape
 from pathlib import Path
 
-from ci.properties import PROPERTIES, PropertyName, first_difference
+from ci.conformance.properties import PROPERTIES, PropertyName, first_difference
 from ci.report.document import Drawing
 from oracle.planner import solve
 from oracle.planner import verdict_for as validate

@@ -16,7 +16,7 @@ from dataclasses import replace
 
 import pytest
 
-from ci.crossval import parse_space
+from ci.conformance.crossval import parse_space
 from oracle import sound
 from oracle.engine import INTERPRETER
 from oracle.interpreter import validate as paper_validate

@@ -15,7 +15,7 @@ from fractions import Fraction
 
 import pytest
 
-from ci.gen import random_scenarios
+from ci.shared.gen import random_scenarios
 from oracle import search
 from spec.actions import Action
 from spec.answers import Limits, SearchResult, Status, Strategy

@@ -1,0 +1,218 @@
+"""Single-rule faults the project's own checks must catch: each is one exact text replacement in one file.
+
+``python -m ci.mutation.check`` applies each to a scratch copy of the checkout and runs the detectors
+``.ci/run`` runs, cheapest first, until one catches it. A mutant is kept only if it changes
+behaviour somewhere: an equivalent one would be a test that cannot fail. One such was measured
+and left out: swapping the cost's first two terms (lane changes, right-lane steps) in the Z3
+objective changes no plan, since every plan of a model and start lane has the same number of
+lane changes except in preparations case B, where the plan without a lane change also has no
+right-lane step. Another was measured and replaced: counting a target alongside the AV as
+behind it (``spec.rules.behind_line`` one cell later) changes no plan, since the goal wants the
+AV in its own lane, where a vehicle alongside is a collision.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True, slots=True)
+class Mutant:
+    """One fault: in ``path``, ``old`` (which occurs exactly once) becomes ``new``."""
+
+    name: str
+    path: str
+    old: str
+    new: str
+    what: str
+
+
+MUTANTS: tuple[Mutant, ...] = (
+    # -- Spin (the Promela printer) ---------------------------------------------------------------
+    Mutant("promela-danger-zone", "promela/render.py", "    return hi - av\n", "    return max(0, hi - av - 1)\n",
+           "the oncoming danger zone one cell narrower in Promela"),
+    Mutant("promela-no-check-after-tick", "promela/render.py",
+           "right[i] = right[i] - 1; i++ :: else -> break od; collide() }",
+           "right[i] = right[i] - 1; i++ :: else -> break od }",
+           "no collision check after an oncoming tick in Promela"),
+    Mutant("promela-goal-on-crashed-path", "promela/render.py",
+           "finish = (f'if :: !crashed -> printf", "finish = (f'if :: true -> printf",
+           "the goal checked on a path that has crashed, in Promela"),
+    Mutant("promela-lane-change-limit", "promela/render.py", 'guard.append("lc < MAX_LC")',
+           'guard.append("lc <= MAX_LC")', "one lane change more than the model allows, in Promela"),
+    Mutant("promela-horizon", "promela/render.py", 'guard = ["!crashed", "steps < horizon"]',
+           'guard = ["!crashed", "steps <= horizon"]', "one step beyond the horizon, in Promela"),
+    Mutant("spin-unknown-ending-no-plan", "promela/runner.py",
+           '    raise EngineError(f"pan failed ({_ending(returncode)}): {_first_line(text)}")\n',
+           '    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), explored, "pan ended")\n',
+           "an unrecognised ending of pan (a signal, unknown output) answered as no plan within the horizon"),
+    Mutant("spin-signal-is-an-ending", "promela/runner.py",
+           "    if returncode == 0 and summary is not None:",
+           "    if returncode <= 0 and summary is not None:",
+           "a pan killed by a signal read like a clean exit"),
+    Mutant("spin-unclean-report-is-no-plan", "promela/runner.py",
+           "        if errors == 0 and _clean_report(text):",
+           "        if errors == 0:",
+           "a report that is not pan's clean one (interrupted, a warning, an unknown line) answered as no plan"),
+    Mutant("promela-left-path-landing-only", "promela/render.py",
+           "    path = list(left_path(shift)) if shift else []",
+           "    path = [shift] if shift else []",
+           "a left-lane vehicle checked only where it ends, not in every cell it passes, in Promela (finer grids)"),
+    # -- Z3 -----------------------------------------------------------------------------------------
+    Mutant("z3-cost-order", "oracle/bmc.py",
+           "        for index, name in enumerate(COST_TERMS):\n            floor, best = ",
+           "        for index, name in enumerate((*COST_TERMS[:2], COST_TERMS[3], COST_TERMS[2])):\n"
+           "            floor, best = ",
+           "brakes and plan length swapped in the Z3 objective"),
+    Mutant("z3-warm-start-skips-a-bound", "oracle/bmc.py",
+           "start, not_before = guess, [z3.Not(kept.goal(k)) for k in range(guess)]",
+           "start, not_before = guess + 1, [z3.Not(kept.goal(k)) for k in range(guess + 1)]",
+           "Z3's shortest, warm-started, skips the bound it guessed"),
+    Mutant("z3-goal-lane", "oracle/bmc.py", "            parts.append(s.right == (goal.av_lane is Lane.RIGHT))",
+           "            parts.append(True)", "the goal's lane condition dropped in the Z3 encoding"),
+    Mutant("z3-oncoming-passed", "oracle/bmc.py", "c - s.o <= passed_line(grid))",
+           "c - s.o <= passed_line(grid) + 1)", "'oncoming passed' one cell late in the Z3 encoding"),
+    Mutant("z3-left-path-landing-only", "oracle/bmc.py",
+           "for i, c in enumerate(self.left) for j in left_path(shift)]",
+           "for i, c in enumerate(self.left) for j in (shift,)]",
+           "a left-lane vehicle checked only where it ends, not in every cell it passes, in Z3 (finer grids)"),
+    # -- the interpreter and its searches -------------------------------------------------------------
+    Mutant("interpreter-no-check-after-tick", "oracle/interpreter.py",
+           "        hit = collision_in(after, rules, grid, tick)\n", "        hit = None\n",
+           "no collision check after an oncoming tick in the interpreter's step"),
+    Mutant("offsets-oncoming-passed", "oracle/abstraction.py",
+           "o_at_least = max(scenario.right_lane) - passed_line(grid)",
+           "o_at_least = min(scenario.right_lane) - passed_line(grid)",
+           "'oncoming passed' waits for the nearest oncoming vehicle only, in the offset form"),
+    Mutant("bitplan-no-smear", "oracle/bitplan.py", "        for i in range(0, len(flat.smear), 2):",
+           "        for i in range(0, 0, 2):", "the bitset search's end-row smear dropped (finer grids)"),
+    # -- spec/ and the discretiser --------------------------------------------------------------------
+    Mutant("spec-danger-zone", "spec/models.py", "danger_m=Fraction(21), max_lane_changes=2),  # one paper cell",
+           "danger_m=Fraction(42), max_lane_changes=2),  # one paper cell",
+           "the final model's danger zone twice as long (every engine follows: the library's plans change)"),
+    Mutant("discretiser-oncoming-rounding", "spec/cells.py",
+           "    return grid.av_cell + math.trunc(dx_m / grid.cell)",
+           "    return grid.av_cell + round(dx_m / grid.cell)",
+           "an oncoming vehicle's cell rounded away from the AV"),
+    # -- the conformance properties and their coverage ---------------------------------------------
+    Mutant("crossval-no-plan-proof-at-horizon", "ci/conformance/properties.py",
+           "\nDEEPER = 2\n",
+           "\nDEEPER = 1\n",
+           "no_plan_proof searches only up to the horizon, not beyond it"),
+    Mutant("crossval-trace-prefix", "ci/conformance/properties.py",
+           "    return None if len(ours) == len(theirs) else min(len(ours), len(theirs))\n",
+           "    return None\n",
+           "trace_equality compares the traces only as far as the shorter goes (a missing or extra state passes)"),
+    Mutant("coverage-never-in-passing", "oracle/coverage.py",
+           "    return problem_collision(problem, landed) is None\n",
+           "    return False\n",
+           "rule coverage never sees a left-lane vehicle hit in passing (finer grids look covered when they are not)"),
+    # -- the simulator --------------------------------------------------------------------------------
+    Mutant("sim-no-oncoming-contacts", "sim/simulator.py",
+           "car = first_contact(self.scene, self.car.body, self.traffic.cars())",
+           "car = first_contact(self.scene, self.car.body, self.traffic.left)",
+           "contacts with oncoming vehicles ignored by the simulator"),
+    Mutant("sim-no-left-contacts", "sim/simulator.py",
+           "car = first_contact(self.scene, self.car.body, self.traffic.cars())",
+           "car = first_contact(self.scene, self.car.body, self.traffic.oncoming)",
+           "contacts with same-direction vehicles ignored by the simulator"),
+    Mutant("traffic-oncoming-odds-reversed", "sim/traffic.py",
+           "    odds = np.array([float(f) for f in spec.oncoming_gap_odds])",
+           "    odds = np.array([float(f) for f in spec.oncoming_gap_odds][::-1])",
+           "the paper's odds for oncoming spawn gaps reversed"),
+    Mutant("traffic-four-in-a-row", "sim/traffic.py", "if g > 1 or run < spec.max_consecutive]",
+           "if g > 1 or run <= spec.max_consecutive]", "four left-lane vehicles spawned without an empty cell"),
+    Mutant("tolerance-plan-one-sided", "sim/tolerance.py",
+           "else ViolationKind.PLAN if abs(deviation) > self.plan_tolerance else None)",
+           "else ViolationKind.PLAN if deviation > self.plan_tolerance else None)",
+           "the plan tolerance checked on one side only (a vehicle falling behind its prediction passes)"),
+    Mutant("traffic-oncoming-odds-first-two-swapped", "sim/traffic.py",
+           "p=odds / odds.sum()",
+           "p=odds[[1, 0, 2, 3]] / odds.sum()",
+           "the oncoming spawn odds of 8 and 12 cells swapped (1/4, 1/8, 1/4, 3/8)"),
+    Mutant("spec-oncoming-odds-first-two-swapped", "spec/physical.py",
+           "(Fraction(1, 8), Fraction(1, 4), Fraction(1, 4), Fraction(3, 8))",
+           "(Fraction(1, 4), Fraction(1, 8), Fraction(1, 4), Fraction(3, 8))",
+           "the paper's oncoming odds stated wrongly in spec/ (the sampler and the old tests read the same numbers)"),
+    Mutant("traffic-initial-run-one-short", "sim/traffic.py",
+           "            self.run = self.run + 1 if gap == 1 else 1  # the vehicle just placed",
+           "            self.run = self.run + 1 if gap == 1 else 0  # the vehicle just placed",
+           "the first platoon counted one short: four left-lane vehicles in a row at the start"),
+    Mutant("idm-desired-gap-no-dynamic-term", "sim/idm.py",
+           "speed_mps * spec.time_gap_s + speed_mps * closing_mps",
+           "speed_mps * spec.time_gap_s + 0 * speed_mps * closing_mps",
+           "the v dv / (2 sqrt(a b)) term dropped from IDM's desired gap"),
+    Mutant("safety-closing-reversed", "sim/safety.py",
+           "pose.speed_mps - car.velocity_mps",
+           "car.velocity_mps - pose.speed_mps",
+           "the safety monitor's closing speed to the vehicle ahead reversed"),
+    Mutant("tolerance-doubled", "sim/tolerance.py", "ViolationKind.STEP if added > self.step_tolerance",
+           "ViolationKind.STEP if added > 2 * self.step_tolerance", "the step tolerance check twice as lax"),
+    # -- the sound model (every engine would share these declarations: the continuous-motion checks must see them)
+    # -- the sound model's translations, one engine each (caught by crossval --model sound) ------------
+    Mutant("spin-sound-widening-a-tick-late", "promela/sound.py",
+           "{\treturn S_LO[i] + SAME_LOW * (a->t + dt) < a->x + dx + E_X + LEN + a->gap + EPS_M;",
+           "{\treturn S_LO[i] + SAME_LOW * (a->t + dt + UNIT_S) < a->x + dx + E_X + LEN + a->gap + EPS_M;",
+           "Spin's translation widens a vehicle ahead one time unit late (its slowest end assumed farther)"),
+    Mutant("spin-sound-rounding-inwards", "promela/sound.py",
+           "lo = measured ? v[at++] : ONCOMING_EXTENT[cell][0];",
+           "lo = measured ? v[at++] : ONCOMING_EXTENT[cell][0] + CELL_M / 2;",
+           "Spin's translation rounds an oncoming vehicle's cell inwards (its near end half a cell farther)"),
+    Mutant("spin-sound-phantom-dropped", "promela/sound.py",
+           "for (j = 0; j < N_PHANTOMS; j++)  /* the unseen stretch",
+           "for (j = 1; j < N_PHANTOMS; j++)  /* the unseen stretch",
+           "Spin's translation drops the first phantom (the same-direction one beyond the left sensor's range)"),
+    Mutant("spin-sound-envelope-ignored", "promela/sound.py",
+           "    ahead = s.required_gap_m(b.ahead.v_mps + e_v - same.low_mps)",
+           "    ahead = s.required_gap_m(b.ahead.v_mps - same.low_mps)",
+           "Spin's translation ignores the AV's speed error in the gap it requires ahead"),
+    Mutant("z3-sound-widening-a-tick-late", "oracle/bmc_sound.py",
+           "            need = self._ahead_need(b.ahead) + EPS_M\n",
+           "            need = self._ahead_need(b.ahead) - self.low * self.table.unit_s + EPS_M\n",
+           "Z3's translation widens a vehicle ahead one time unit late (its slowest end assumed farther)"),
+    Mutant("z3-sound-rounding-inwards", "oracle/bmc_sound.py",
+           "[(lo - e, hi + e) for lo, hi in oncoming]",
+           "[(lo + grid.cell / 2 - e, hi + e) for lo, hi in oncoming]",
+           "Z3's translation rounds an oncoming vehicle's cell inwards (its near end half a cell farther)"),
+    Mutant("z3-sound-phantom-dropped", "oracle/bmc_sound.py",
+           "        for p in b.phantom_vehicles():",
+           "        for p in b.phantom_vehicles()[1:]:",
+           "Z3's translation drops the first phantom (the same-direction one beyond the left sensor's range)"),
+    Mutant("z3-sound-envelope-ignored", "oracle/bmc_sound.py",
+           "self.gap(at.v_mps + self.ev - self.low)",
+           "self.gap(at.v_mps - self.low)",
+           "Z3's translation ignores the AV's speed error in the gap it requires ahead"),
+    Mutant("sound-no-widening", "spec/sound.py",
+           'out.append(Vehicle(Lane.LEFT, i, lo - e, hi + e, f"left_lane[{i}] (cell {cell})"))',
+           'out.append(Vehicle(Lane.LEFT, i, lo, hi, f"left_lane[{i}] (cell {cell})"))',
+           "same-direction vehicles not widened by the sensing error"),
+    Mutant("sound-rounding-inwards", "spec/cells.py",
+           "lo, hi = (offset - 0.5) * grid.cell, (offset + 0.5) * grid.cell",
+           "lo, hi = (offset - 0.25) * grid.cell, (offset + 0.25) * grid.cell",
+           "a same-direction cell taken as its middle half (rounded inwards, not outwards)"),
+    Mutant("sound-time-gap-halved", "spec/sound.py",
+           "base + s.time_gap_s * (p.v0_mps + tr.speed_mps - low)",
+           "base + s.time_gap_s / 2 * (p.v0_mps + tr.speed_mps - low)",
+           "half the time gap to a vehicle ahead (a safe distance too short)"),
+    Mutant("sound-goal-oncoming-nearest-end", "spec/sound.py",
+           "not self.passed(v, x_m, t_s) for v in self.oncoming if v.index is not None))",
+           "self.oncoming_low(v, t_s) + length > x_m for v in self.oncoming if v.index is not None))",
+           "an oncoming vehicle counted past the AV when its nearest position is (not every position)"),
+    Mutant("sound-phantoms-dropped", "spec/sound.py",
+           "    for p in sound.bounds.phantom_vehicles():  # the whole unseen stretch",
+           "    for p in sound.bounds.phantom_vehicles()[:0]:  # the whole unseen stretch",
+           "no phantom: traffic from beyond the sensors' ranges ignored"),
+    Mutant("sound-envelope-ignored-ahead", "spec/sound.py",
+           "        base = p.x0_m - low * p.t0_s + tr.position_m + s.vehicle_length_m",
+           "        base = p.x0_m - low * p.t0_s + s.vehicle_length_m",
+           "the AV's position error ignored towards a vehicle ahead"),
+)
+
+
+def mutant(name: str) -> Mutant:
+    found = {m.name: m for m in MUTANTS}.get(name)
+    if found is None:
+        from spec.errors import OptionError
+
+        raise OptionError("--mutants", name, f"unknown mutant (known: {', '.join(m.name for m in MUTANTS)})")
+    return found

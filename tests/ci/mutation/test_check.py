@@ -1,0 +1,61 @@
+"""The mutants check themselves: each names text that occurs once, in a file of the project, and changes it; the
+daily rotation reaches every mutant within its stated number of days."""
+
+from __future__ import annotations
+
+import datetime
+import math
+import re
+from pathlib import Path
+
+import pytest
+
+from ci.mutation.check import ROOT, apply, main, rotation
+from ci.mutation.mutants import MUTANTS, Mutant, mutant
+from spec.errors import OptionError
+
+LAYERS = {"spec", "oracle", "promela", "sim", "ci"}
+
+
+@pytest.mark.parametrize("m", MUTANTS, ids=lambda m: m.name)
+def test_each_mutant_changes_text_that_occurs_once_in_the_project(m: Mutant, tmp_path: Path) -> None:
+    source = ROOT / m.path
+    assert m.path.split("/")[0] in LAYERS and source.read_text().count(m.old) == 1 and m.old != m.new
+    (tmp_path / m.path).parent.mkdir(parents=True)
+    (tmp_path / m.path).write_text(source.read_text())
+    apply(m, tmp_path)
+    assert (tmp_path / m.path).read_text() != source.read_text()
+
+
+def test_there_are_mutants_in_every_engine_spec_the_discretiser_and_the_simulator() -> None:
+    files = {m.path for m in MUTANTS}
+    assert len(MUTANTS) >= 15 and len({m.name for m in MUTANTS}) == len(MUTANTS)
+    for needed in ("promela/render.py", "oracle/bmc.py", "oracle/interpreter.py", "spec/models.py", "spec/cells.py",
+                   "sim/simulator.py", "sim/traffic.py", "sim/tolerance.py", "promela/sound.py", "oracle/bmc_sound.py",
+                   "spec/sound.py"):
+        assert needed in files
+
+
+@pytest.mark.parametrize("per_day", [1, 3, 5])
+def test_the_rotation_reaches_every_mutant_within_its_days(per_day: int) -> None:
+    days = math.ceil(len(MUTANTS) / per_day)
+    start = datetime.date(2026, 11, 23)
+    seen = {m.name for d in range(days) for m in rotation(per_day, start + datetime.timedelta(days=d))}
+    assert seen == {m.name for m in MUTANTS}
+
+
+def test_cis_daily_share_reaches_every_mutant_within_a_week() -> None:
+    """``.ci/run`` checks ``--rotate K`` mutants a day: K must grow with the mutants so that a week sees them all."""
+    found = re.search(r"ci\.mutation\.check --rotate (\d+)", (ROOT / ".ci" / "run").read_text())
+    assert found is not None
+    assert math.ceil(len(MUTANTS) / int(found.group(1))) <= 7
+
+
+def test_bad_mutation_input_is_exit_two(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--mutants", "no-such-mutant"]) == 2
+    assert main(["--rotate", "0"]) == 2
+    assert main(["--rotate", "2", "--date", "23/11/2026"]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 3 and "no-such-mutant" in lines[0] and "--date" in lines[-1]
+    with pytest.raises(OptionError):
+        mutant("nope")
