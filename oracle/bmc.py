@@ -43,7 +43,6 @@ import z3
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.answers import Limits, SearchResult, Status, Strategy
 from spec.cost import COST_DOC, COST_TERMS, total_cost
-from spec.engines import Engine, register
 from spec.lanes import Lane
 from spec.rules import behind_line, collision_span, left_path, nearest_span, passed_line
 from spec.scenario import Problem, Scenario
@@ -518,25 +517,3 @@ def _cancelled(reason: str) -> bool:
 CANCEL_MARGIN_S = 0.05  # a check cancelled with more than this left of its limit was not stopped by the limit
 
 SOLVERS = {Strategy.SHORTEST: shortest, Strategy.OPTIMAL: optimal}
-
-
-def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult:
-    """shortest: incremental bounds; optimal: lexicographic tightening. sensible is left to the search engines. A
-    scenario with a sound model goes to ``oracle.bmc_sound``.
-    Z3 refusing a call because the context was interrupted (an interrupt that lands between checks) is an interrupt
-    too, never an engine failure."""
-    try:
-        if problem.scenario.sound is not None:
-            from oracle import bmc_sound  # it builds on this module's solvers: imported when first needed
-
-            return bmc_sound.SOLVERS[strategy](problem, limits)
-        return SOLVERS[strategy](problem, limits)
-    except z3.Z3Exception as err:
-        if _cancelled(str(err)):
-            raise KeyboardInterrupt("z3: interrupted") from None
-        raise
-
-
-Z3 = register(Engine("z3", tuple(SOLVERS), _solve,
-                     "Z3 bounded model checking: shortest lengths, optimal plans, proofs within the horizon",
-                     sound=True))

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from oracle import bitplan, bmc, offsets
+from oracle import bitplan, bmc, offsets, z3_engine
 from oracle.interpreter import validate
 from oracle.optimum import plan_cost
 from spec.answers import Limits, SearchResult, Status, Strategy
@@ -109,7 +109,7 @@ def test_a_check_interrupted_before_its_limit_is_keyboard_interrupt_never_an_ans
     thread.start()
     try:
         with pytest.raises(KeyboardInterrupt):
-            bmc._solve(problem, Strategy.OPTIMAL, Limits(timeout_s=limit_s))
+            z3_engine._solve(problem, Strategy.OPTIMAL, Limits(timeout_s=limit_s))
     finally:
         stop.set()
         thread.join()

@@ -20,7 +20,7 @@ from dataclasses import replace
 
 import pytest
 
-from oracle import bmc, bmc_sound, planner, sound
+from oracle import bmc, bmc_sound, planner, sound, z3_engine
 from spec.answers import Limits, Status, Strategy
 from spec.assumptions import Bounds, SpeedBounds, profile
 from spec.cost import COST_TERMS, total_cost
@@ -163,7 +163,7 @@ def test_a_time_out_is_incomplete_never_no_plan(strategy: Strategy) -> None:
     scenario = replace(make_scenario("right", [13, 17], [], 1, horizon=30), sound=Sound(profile("default")))
     problem = problem_for(scenario, ModelKind.FINAL)
     key = (bmc_sound.Optimal if strategy is Strategy.OPTIMAL else bmc_sound.Shortest, bmc_sound.shape(problem))
-    found = bmc._solve(problem, strategy, Limits(timeout_s=1e-9))
+    found = z3_engine._solve(problem, strategy, Limits(timeout_s=1e-9))
     assert found.status is Status.INCOMPLETE
     assert key not in bmc._kept  # a solver that gave up is not kept
 
