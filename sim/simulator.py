@@ -126,6 +126,8 @@ class Simulator:
         self.proved: Containment | None = None  # the containment of the last sound decision that was executed
         self.sweep: tuple[Reading, ...] | None = ()  # the last sweep the sensors delivered (None: it was dropped)
         self.lead: Lead | None = None  # the nearest vehicle sensed ahead in the left lane, for the fallback
+        self._room: bool = False  # whether the fallback opens the gap ahead (``_room_needed``), and on which sweep
+        self._room_sweep: tuple[Reading, ...] | None = None
         # with tracking, the planner sees the tracker's vehicles (``sim.tracking``); bodies only for bookkeeping
         self.tracker = Tracker(self.parts.bounds) if self.parts.tracking and self.parts.bounds is not None else None
         self.track_body: dict[int, int] = {}  # track -> the body of the reading last assigned to it (bookkeeping)
@@ -659,6 +661,8 @@ class Simulator:
                     target, decel = max(0.0, speed - closing), mr.emergency_decel_mps2
                     if self.lead.measured_mps is not None and self.lead.measured_mps > CLOSING_EPS_MPS:
                         target = min(target, max(0.0, command - decel * self.executor.dt_s))  # it still closes
+                elif self.lead.measured_mps is not None and self._room_needed(mr.handback_mps(speed, hold)):
+                    target = min(hold, max(0.0, speed - self.lead.measured_mps - mr.open_mps))
             if command > target:
                 command = max(target, command - decel * self.executor.dt_s)
             elif emergency:
@@ -670,6 +674,28 @@ class Simulator:
             if not emergency and self.interrupt and self.swept():
                 break
         return True
+
+    def _room_needed(self, speed_mps: float) -> bool:
+        """Whether the fallback opens the gap ahead (``MinimalRisk.open_mps``): a decision from the last sweep at
+        ``speed_mps`` would find no safe step in lane, the vehicle ahead (its speed measured) is nearer than the one
+        behind, and the one behind is farther than the specification allows at the opening's closing speed. Asked
+        once per sweep."""
+        if self.sweep is None or self.lead is None or self.planner.sound is None:
+            return False  # a dropped sweep, nothing ahead, or the paper's rules (no decision to hand back to)
+        if self._room_sweep is self.sweep:
+            return self._room
+        self._room_sweep, self._room = self.sweep, False
+        behind = [-r.dx_m for r in self.sweep if r.lane is Lane.LEFT and r.dx_m <= 0]
+        rear_m = min(behind) - CAR.length_m if behind else math.inf
+        ahead_m = self.lead.dx_m - CAR.length_m
+        if ahead_m >= rear_m or SAFETY.violated(rear_m, MINIMAL_RISK.open_mps):
+            return False
+        try:
+            scenario = self.planner.scenario(self.sweep, self.executor.lane, speed_mps)
+        except ScenarioError:
+            return False
+        self._room = keep_lane(problem_for(scenario, ModelKind.FINAL)) is None
+        return self._room
 
     def _hand_back(self) -> None:
         """A decision found a plan or a safe step: the take-over under way (if any) ends here."""
