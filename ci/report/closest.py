@@ -4,12 +4,11 @@ seconds before it, beside what the AV was doing and what the attribution said.""
 
 from __future__ import annotations
 
-import io
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from ci.report.document import Figure
+from ci.report.document import Figure, png_bytes, pyplot
 from ci.shared.records import read_records
 
 FRAMES, BEFORE_S = 4, 3.0
@@ -67,17 +66,9 @@ def closest_figures(log: Path, limit: int, key: str) -> tuple[list[Figure], list
 
 def _strip(frames: list[Any]) -> bytes:
     """The frames side by side, each titled with its time, as PNG bytes."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, len(frames), figsize=(3.2 * len(frames), 1.9))
+    fig, axes = pyplot().subplots(1, len(frames), figsize=(3.2 * len(frames), 1.9))
     for axis, frame in zip(axes if len(frames) > 1 else [axes], frames):
         axis.imshow(frame.image)
         axis.set_title(f"t = {frame.t_s:.1f} s", fontsize=9)
         axis.axis("off")
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=80, bbox_inches="tight")
-    plt.close(fig)
-    return buffer.getvalue()
+    return png_bytes(fig)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -39,6 +40,24 @@ class Figure:
             return self.data
         assert self.path is not None
         return self.path.read_bytes()
+
+
+def pyplot() -> Any:
+    """matplotlib's pyplot on the Agg backend (no display): the report draws its own figures headless."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def png_bytes(fig: Any) -> bytes:
+    """A matplotlib figure as the PNG bytes of a ``Figure`` (80 dpi, cropped to what is drawn); the figure is closed."""
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=80, bbox_inches="tight")
+    pyplot().close(fig)
+    return buffer.getvalue()
 
 
 @dataclass(frozen=True, slots=True)

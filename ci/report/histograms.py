@@ -7,21 +7,10 @@ containment monitor's first breaches of each run (``sim.containment``: by how mu
 
 from __future__ import annotations
 
-import io
 from collections import defaultdict
-from typing import Any
 
-from ci.report.document import Figure
+from ci.report.document import Figure, png_bytes, pyplot
 from sim.summary import RunSummary
-
-
-def _png(fig: Any) -> bytes:
-    import matplotlib.pyplot as plt
-
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=80, bbox_inches="tight")
-    plt.close(fig)
-    return buffer.getvalue()
 
 
 def deviation_histograms(runs: list[RunSummary], key: str) -> Figure | None:
@@ -38,12 +27,7 @@ def deviation_histograms(runs: list[RunSummary], key: str) -> Figure | None:
             counts[action] = [a + b for a, b in zip(total, bins, strict=True)]
     if not counts or bin_cells <= 0:
         return None
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(8, 3.6))
+    fig, ax = pyplot().subplots(figsize=(8, 3.6))
     for action, bins in sorted(counts.items()):
         edges = [i * bin_cells for i in range(len(bins) + 1)]
         ax.stairs(bins, edges, label=f"{action} ({sum(bins):,} checks)")
@@ -57,7 +41,7 @@ def deviation_histograms(runs: list[RunSummary], key: str) -> Figure | None:
     caption = (f"deviation from the model's prediction per action type, every vehicle after every action, all runs, "
                f"in cells of the paper's 21 m grid (tolerance {step:g} per action, {plan:g} per plan: what the paper "
                f"model's tolerance check allows)")
-    return Figure(None, caption, _png(fig), f"{key}-deviations")
+    return Figure(None, caption, png_bytes(fig), f"{key}-deviations")
 
 
 def breach_histograms(runs: list[RunSummary], key: str) -> Figure | None:
@@ -68,12 +52,7 @@ def breach_histograms(runs: list[RunSummary], key: str) -> Figure | None:
             by_kind[breach.kind.value].append(breach.by_m)
     if not by_kind:
         return None
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(8, 3.6))
+    fig, ax = pyplot().subplots(figsize=(8, 3.6))
     largest = max(max(v) for v in by_kind.values())
     edges = [i * max(largest, 1e-6) / 30 for i in range(31)]
     for kind, sizes in sorted(by_kind.items()):
@@ -85,4 +64,4 @@ def breach_histograms(runs: list[RunSummary], key: str) -> Figure | None:
     counted = sum(run.containment.count for run in runs)
     caption = (f"containment breaches by how far they went past the bound they broke, per bound: the {recorded:,} "
                f"recorded of {counted:,} counted (each run records its first breaches in full)")
-    return Figure(None, caption, _png(fig), f"{key}-breaches")
+    return Figure(None, caption, png_bytes(fig), f"{key}-breaches")
