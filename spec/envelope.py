@@ -86,7 +86,7 @@ class MinimalRisk:
     #: How much slower than the vehicle ahead the fallback drives to open the gap a decision needs to hand back to:
     #: the executor's stated speed error (``TRACKING.speed_mps``), so that the gap opens whatever the car's speed
     #: error within its envelope (measured: 0.17 m/s above a command of 7 m/s held a 2 m gap for 35 km, seed 12).
-    open_mps: float = 1.5
+    open_mps: float = TRACKING.speed_mps
 
     def hold_mps(self, speed_mps: float, slowest_ahead_mps: float) -> float:
         """The speed the manoeuvre brakes to: at most the slowest speed a vehicle ahead may keep (so the reference
