@@ -5,28 +5,31 @@ A decision (a plan, a step in lane, or the paper model's plan, measured the same
 under the drive's bounds (``spec.assumptions.world_bounds``) each vehicle of that snapshot is an interval that grows
 with its lane's speeds (``spec.sound.reach_m``), and where the sensors cannot see, a phantom's interval covers what
 may come from beyond. At every control step each vehicle's true position since the snapshot must be inside its own
-interval; a vehicle the decision did not know (missed, occluded, respawned) must be inside a phantom's, or behind
-the AV in the oncoming lane (past it). Where followers react (``Bounds.followers_react``), a same-direction vehicle
-behind the AV in its lane is assumed to follow it (``spec.sound``: a rear-end collision is the follower's to avoid):
-one nearer than the safety specification allows at its closing speed breaks that assumption; where they keep their
-speed, the model protects the AV from them (``Conflict.BEHIND``) and they are held to their intervals like any other
-vehicle. The AV must be inside its envelope (``spec.envelope.TRACKING``) around the
-executor's reference, its sideways move finished in the stated time. A departure is a ``Breach``, recorded once
-per decision and vehicle with the bound it broke and by how much; an AV envelope breach is an executor fault, which
-counts as inside the assumptions.
+interval, and each vehicle the decision knew must drive at a speed within its lane's bounds (the reach sets are
+positions, but the safety specification's gaps depend on closing speeds: a vehicle ahead that brakes hard is inside
+its interval for seconds after its speed left the bounds the proof assumed); a vehicle the decision did not know
+(missed, occluded, respawned) must be inside a phantom's, or behind the AV in the oncoming lane (past it). Where
+followers react (``Bounds.followers_react``), a same-direction vehicle behind the AV in its lane is assumed to follow
+it (``spec.sound``: a rear-end collision is the follower's to avoid): one nearer than the safety specification allows
+at its closing speed breaks that assumption; where they keep their speed, the model protects the AV from them
+(``Conflict.BEHIND``) and they are held to their intervals like any other vehicle. The AV must be inside its envelope
+(``spec.envelope.TRACKING``) around the executor's reference, its sideways move finished in the stated time. A
+departure is a ``Breach``, recorded once per decision and vehicle with the bound it broke and by how much; an AV
+envelope breach is an executor fault, which counts as inside the assumptions.
 """
 
 from __future__ import annotations
 
 import enum
+import math
 from collections import Counter
 from collections.abc import Callable, Iterable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 from sim.discretiser import in_window, reading_cell
 from sim.scene import Scene
-from sim.sensors import Reading
+from sim.sensors import SHADOW_BODY, Reading
 from sim.vehicle import KinematicCar, Pose
 from spec.grid import Grid
 from spec.lanes import Lane
@@ -41,13 +44,15 @@ MAX_RECORDS = 200
 #: origin (~1e-13 m), not motion. The paper's world makes it matter: exact sensing and every vehicle at 7 m/s give
 #: intervals of no width, which every vehicle left by 1e-12 m within a control step (each decision ended by a breach).
 ROUNDING_M = 1e-6
+#: The same for speeds: the paper's world sets every vehicle's speed to the bound's one value, exactly.
+ROUNDING_MPS = 1e-9
 
 
 class BreachKind(enum.Enum):
     """Which assumption a breach broke."""
 
-    TOO_SLOW = "too slow"  # behind its interval's slow end: slower than its lane's lowest speed
-    TOO_FAST = "too fast"  # beyond its interval's fast end
+    TOO_SLOW = "too slow"  # behind its interval's slow end, or driving slower than its lane's lowest speed
+    TOO_FAST = "too fast"  # beyond its interval's fast end, or driving faster than its lane's highest speed
     SENSING = "sensing error"  # outside its interval at the snapshot itself: sensed farther off than the error bound
     APPEARED = "appeared"  # a vehicle the decision did not know, where no phantom could be
     FOLLOWER = "follower too close"  # one behind the AV in its lane nearer than the safety specification allows
@@ -75,8 +80,14 @@ class Breach:
     vehicle: str
     body: int  # -1: the AV
     kind: BreachKind
-    by_m: float  # metres (or m/s for an AV speed error) beyond the bound
+    by_m: float  # beyond the bound: metres, or m/s for a speed (``speed``)
     doing: str
+    speed: bool = False  # whether the bound broken is a speed (a vehicle's or the AV's), not a position
+
+    @property
+    def size(self) -> str:
+        """How far beyond the bound, with its unit."""
+        return f"{self.by_m:.1f} {'m/s' if self.speed else 'm'}"
 
     def to_json(self) -> dict[str, Any]:
         return {**asdict(self), "kind": self.kind.value, "km": round(self.km, 3), "t_s": round(self.t_s, 2),
@@ -132,6 +143,10 @@ class Containment:
             cells = [(c, r) for r in readings if in_window(c := reading_cell(r, scenario.lane, grid), grid)]  # hull
             order = sorted({c for c, _ in cells})
             for cell, reading in cells:
+                if reading.body == SHADOW_BODY:  # the hidden stretch: any vehicle from there on may be in it
+                    shadow = by_index[(lane, order.index(cell))]
+                    self.phantoms[lane].append(replace(shadow, index=None, hi_m=math.inf))
+                    continue
                 self.tracked[reading.body] = by_index[(lane, order.index(cell))]
         self.generation = {car.body: car.respawns for car in cars}  # a respawned car is a new vehicle
         self.breached: dict[int, Breach] = {}  # body (-1: the AV) -> its first breach under this decision
@@ -172,6 +187,8 @@ class Containment:
                 dx = car.x_m - self.x0_m
                 misses = [_outside(dx, *reach_m(v, self.bounds, elapsed)) for v in sets]
                 if not misses or min(abs(m) for m in misses) == 0.0:
+                    if known is not None and (speeding := self._speed(lane, car, name, t_s, km, doing)):
+                        out.append(speeding)
                     continue
                 miss = min(misses, key=abs)
                 if known is None and not sensed(car):
@@ -185,6 +202,16 @@ class Containment:
                     kind = BreachKind.TOO_SLOW if slow else BreachKind.TOO_FAST
                 out.append(self._breach(Breach(self.decision, km, t_s, name, car.body, kind, abs(miss), doing)))
         return out
+
+    def _speed(self, lane: Lane, car: KinematicCar, name: str, t_s: float, km: float, doing: str) -> Breach | None:
+        """``car``'s breach of its lane's speed bounds, if it drives outside them (its true speed along the lane)."""
+        bounds = self.bounds.speeds(lane)
+        along_mps = car.velocity_mps if lane is Lane.LEFT else -car.velocity_mps
+        miss = _outside(along_mps, bounds.low_mps, bounds.high_mps, ROUNDING_MPS)
+        if miss == 0.0:
+            return None
+        kind = BreachKind.TOO_SLOW if miss < 0 else BreachKind.TOO_FAST
+        return self._breach(Breach(self.decision, km, t_s, name, car.body, kind, abs(miss), doing, speed=True))
 
     def check_av(self, t_s: float, km: float, av: Pose, x_ref_m: float, v_ref_mps: float, lane_due: Lane | None,
                  doing: str) -> Breach | None:
@@ -201,7 +228,7 @@ class Containment:
         if by <= 0:
             return None
         return self._breach(Breach(self.decision, km, t_s, f"the AV ({what})", -1, BreachKind.AV_ENVELOPE, by,
-                                   doing))
+                                   doing, speed=what == "speed"))
 
     def _breach(self, breach: Breach) -> Breach:
         self.breached[breach.body] = breach
@@ -212,8 +239,8 @@ class Containment:
         return any(body != -1 and b.kind.ends_decision for body, b in self.breached.items())
 
 
-def _outside(x: float, low: float, high: float) -> float:
-    """How far ``x`` is outside ``[low, high]``: negative below, positive above, 0 inside (or within
-    ``ROUNDING_M`` of it)."""
+def _outside(x: float, low: float, high: float, rounding: float = ROUNDING_M) -> float:
+    """How far ``x`` is outside ``[low, high]``: negative below, positive above, 0 inside (or within ``rounding``
+    of it)."""
     miss = x - low if x < low else x - high if x > high else 0.0
-    return 0.0 if abs(miss) <= ROUNDING_M else miss
+    return 0.0 if abs(miss) <= rounding else miss

@@ -56,6 +56,37 @@ def _right_sensor(x: float, y: float, end: tuple[float, float, float], z: float)
     return (x, side_y, z)
 
 
+#: The body of the reading that stands in for the oncoming lane hidden behind left-lane vehicles (``shadow_reading``).
+SHADOW_BODY = -3
+
+
+def shadow_reading(readings: tuple[Reading, ...], av_y_m: float, error_m: float,
+                   spec: SensorSpec = SENSORS) -> Reading | None:
+    """Where the front-right sensor's view of the oncoming lane is first blocked by a sensed left-lane vehicle, as a
+    reading of an oncoming vehicle there (None: nothing sensed blocks it within range).
+
+    The sensor sees a vehicle when the ray from the AV's front-right corner to the vehicle's centre reaches it first
+    (``RaySensor``); a left-lane vehicle ahead hides the oncoming lane's centres beyond the point where that ray
+    first touches its body (the body widened by the sensing error ``error_m``: its reading may be that far off). A
+    vehicle hidden there is no vehicle a decision could know, and no phantom at the sensor's range covers it
+    (measured: the AV ended a lane change 0.5 m left of its lane's centre, the vehicle it had just passed hid an
+    oncoming one 64 m ahead, and the next decision started an overtake towards it). An oncoming vehicle farther
+    away arrives later, so a plan safe against one at the shadow's start is safe against any in the shadow."""
+    sx, sy = CAR.length_m / 2 + 0.05, av_y_m - CAR.width_m / 2 - 0.05  # the sensor, from the AV's centre
+    ty, body_low = Scene.lane_y(Lane.RIGHT), Scene.lane_y(Lane.LEFT) - CAR.width_m / 2
+    if sy <= body_low or sy <= ty:
+        return None  # the sensor looks from below the left lane's bodies: they hide nothing of the oncoming lane
+    starts = []
+    for r in readings:
+        near_m = r.interval_m[0] - error_m - CAR.length_m / 2
+        if r.lane is not Lane.LEFT or r.interval_m[1] + error_m + CAR.length_m / 2 <= sx:
+            continue
+        lo = max(near_m, sx)  # the ray reaches the body's near end at the left lane's lower edge, or further on
+        starts.append(max(lo, sx + (sy - ty) * (lo - sx) / (sy - body_low)))
+    start = min(starts, default=math.inf)
+    return Reading(Lane.RIGHT, SHADOW_BODY, start) if start <= spec.right_range_m else None
+
+
 @dataclass(frozen=True, slots=True)
 class Truth:
     """Every vehicle within range of its lane's sensor, where it really is, and where the AV is."""

@@ -35,14 +35,14 @@ from sim.faults import GHOST_BODY, FaultEvent, FaultySensor, SteeringFault, attr
 from sim.observers import StepEvent, TraceWriter
 from sim.parts import DriveConfig, Parts
 from sim.safety import SafetyMonitor
-from sim.sensors import RaySensor, Reading, SensorModel, in_range
+from sim.sensors import RaySensor, Reading, SensorModel, in_range, shadow_reading
 from sim.summary import Failure, RunSummary, Takeover
 from sim.tolerance import ToleranceReport, Violation
 from sim.tracking import Detection, Tracker
 from sim.vehicle import KinematicCar, Pose, first_contact
 from spec.actions import ACTION_RULES, Action
 from spec.answers import Answer, Status
-from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING
+from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING, fitted_closing_mps
 from spec.errors import ScenarioError
 from spec.faults import lost_control
 from spec.files import scenario_to_dict
@@ -125,7 +125,10 @@ class Simulator:
         self.takeover: Takeover | None = None  # the fallback's take-over under way
         self.proved: Containment | None = None  # the containment of the last sound decision that was executed
         self.sweep: tuple[Reading, ...] | None = ()  # the last sweep the sensors delivered (None: it was dropped)
-        self.lead: Lead | None = None  # the nearest vehicle sensed ahead in the left lane, for the fallback
+        # for the fallback: the nearest vehicles sensed ahead and behind in the left lane, ahead in the oncoming one
+        self.lead: Nearest | None = None
+        self.follower: Nearest | None = None
+        self.oncoming: Nearest | None = None
         self._room: bool = False  # whether the fallback opens the gap ahead (``_room_needed``), and on which sweep
         self._room_sweep: tuple[Reading, ...] | None = None
         # with tracking, the planner sees the tracker's vehicles (``sim.tracking``); bodies only for bookkeeping
@@ -248,7 +251,7 @@ class Simulator:
         breach = c.breached.get(body)
         if breach is None or breach.kind.inside:
             return "inside the assumptions"
-        return (f"after an assumption broke: {breach.kind.value} by {breach.by_m:.1f} m, "
+        return (f"after an assumption broke: {breach.kind.value} by {breach.size}, "
                 f"{self.summary.sim_time_s - breach.t_s:.1f} s before")
 
     def _event(self, kind: FailureKind, cause: str, detail: str) -> Failure:
@@ -337,7 +340,9 @@ class Simulator:
                                        (0.0, 0.0) if t.read_m is not None else (t.place_m - t.lo_m, t.hi_m - t.place_m))
                                for t in told)
             self.unresolved = view.unresolved
-        self.lead = Lead.after(self.lead, self.sweep, SENSORS.sweep_hz)
+        self.lead = Nearest.after(self.lead, self.sweep, SENSORS.sweep_hz)
+        self.follower = Nearest.after(self.follower, self.sweep, SENSORS.sweep_hz, behind=True)
+        self.oncoming = Nearest.after(self.oncoming, self.sweep, SENSORS.sweep_hz, Lane.RIGHT)
         self.executor.steer_offset_rad = self.steering.on_sweep()
         if self.steering.active is not None and self.steering.active not in self.steered:
             self.steered.append(self.steering.active)
@@ -502,6 +507,11 @@ class Simulator:
             self._watch((), pose.x_m, lane)
             self._fail(FailureKind.SENSING, err.reason, str(err))
             return self._fallback(f"sensing: {err.reason}")
+        assert self.sound is not None
+        shadow = shadow_reading(readings, pose.y_m, self.sound.bounds.sensing_error_m)
+        if shadow is not None:  # the oncoming lane hidden behind a left-lane vehicle: one may be there
+            readings = (*readings, shadow)
+            self.summary.shadowed += 1
         self._watch(readings, pose.x_m, lane)
         if self.containment is not None:
             self._contain(pose, 0.0)  # the snapshot itself: sensed farther off than the error bound, or unknown
@@ -552,6 +562,8 @@ class Simulator:
         decision's assumptions and breaks this one's too hands the AV to the fallback."""
         self._hand_back()
         self.proved = self.containment
+        # a breach seen while a take-over was under way did not interrupt it; it ends this decision before its step
+        self.interrupt = self.interrupt or (self.containment is not None and self.containment.world_breached())
         self.executor.reset_reference()
         known = {r.body for r in readings} if readings else {r.body for r in self._sense()}
         # a breach at the snapshot itself (sensed farther off than the error bound, a vehicle it missed): no step
@@ -611,31 +623,94 @@ class Simulator:
     def _await_room_to_return(self) -> bool:
         """The fallback in the right lane: hold the lane until the sensed left lane leaves room to return
         (``MinimalRisk``: nothing alongside within the specification's least gap, the vehicle ahead not nearer than
-        it allows at the measured closing speed once the return, at the speed it starts at, is over), braking
-        meanwhile down to that vehicle's speed (below it while beside it: dropping back behind it); at most
-        ``takeover_s``, then back regardless (the oncoming lane is the greater danger). False on a collision."""
+        it allows at the fitted closing speed once the return, at the speed it starts at, is over, and where
+        followers keep their speed the vehicle behind not nearer than it allows then either), meanwhile driving at
+        the left lane's speed (``_waiting_mps``); for ``takeover_s``, and on while the oncoming lane leaves time
+        (``_oncoming_leaves_time``), then back regardless (the oncoming lane is the greater danger). False on a
+        collision."""
         mr = MINIMAL_RISK
         y_ref = self.scene.lane_y(Lane.RIGHT)
         command = self.car.pose().speed_mps
         change_s = float(ACTION_RULES[Action.LEFT_LANE_CHANGE].duration_s)
-        for _ in range(max(1, round(mr.takeover_s / self.executor.dt_s))):
+        held = 0
+        while True:
             speed = self.car.pose().speed_mps
             alongside = any(r.lane is Lane.LEFT and -CAR.length_m - SAFETY.min_gap_m < r.dx_m <= 0
                             for r in self._sense())
             closing = 0.0 if self.lead is None else self.lead.closing_mps(speed)
             # the return runs at the speed it starts at: the gap it will leave at its end must still do
-            left_m = 0.0 if self.lead is None else self.lead.dx_m - CAR.length_m - closing * change_s
+            left_m = 0.0 if self.lead is None else self.lead.gap_m - closing * change_s
             near = self.lead is not None and SAFETY.violated(left_m, closing)
-            if not alongside and not near:
+            blocks = self._follower_blocks(change_s)
+            if not alongside and not near and not blocks:
                 return True
-            if near:  # down to its speed; below it while beside it (drop back behind it, as the return needs)
-                beside = self.lead is not None and self.lead.dx_m - CAR.length_m < SAFETY.min_gap_m
-                target = 0.0 if beside else max(0.0, speed - closing)
+            held += 1
+            if held * self.executor.dt_s > mr.takeover_s and not self._oncoming_leaves_time(change_s):
+                return True
+            target = self._waiting_mps(speed, near, alongside, blocks)
+            if target is not None and command > target:
                 command = max(target, command - mr.emergency_decel_mps2 * self.executor.dt_s)
+            elif target is not None:
+                command = min(target, command + mr.accel_mps2 * self.executor.dt_s)
             self.executor.reset_reference()
             if not self.executor.control(command, y_ref, 0.0, self._tick):
                 return False
-        return True
+
+    def _waiting_mps(self, speed_mps: float, near: bool, alongside: bool, blocks: bool) -> float | None:
+        """The speed the fallback drives at while it waits in the right lane for room (None: the one it has): the
+        vehicle ahead's while it is too near (a vehicle beside the AV: on past it if the AV is the faster, else
+        ``open_mps`` slower, dropping back behind it; its speed not measured yet: the one it has); a vehicle
+        alongside behind: ``open_mps`` slower than it if it is the faster (it passes), else the speed the AV has
+        (the AV pulls ahead of it: matching its speed would hold the AV beside it, measured: seed 12); a follower
+        too near (not alongside) that keeps its speed: its speed (the closing speed that makes its gap too small
+        goes). Speeds from the fitted closing speeds (a vehicle ahead not measured yet: it may stand); the lowest
+        target wins. Beside a moving vehicle a standstill is never the target (measured: seed 6 of the faults
+        evaluation braked to 0 beside a vehicle at 7 m/s, stood 3 s in the oncoming lane, and was rear-ended when
+        it returned at a crawl)."""
+        mr, targets = MINIMAL_RISK, []
+        if near and self.lead is not None:
+            closing = self.lead.closing_mps(speed_mps)
+            lead_mps = max(0.0, speed_mps - closing)
+            if self.lead.gap_m >= SAFETY.min_gap_m:
+                targets.append(lead_mps)
+            elif self.lead.measured_mps is not None and self.lead.measured_mps <= CLOSING_EPS_MPS:
+                targets.append(max(0.0, lead_mps - mr.open_mps))  # beside it and not the faster: drop back
+        f = self.follower
+        if f is not None and f.measured_mps is not None and (alongside or blocks):
+            follower_mps = max(0.0, speed_mps + f.measured_mps)
+            if f.gap_m < SAFETY.min_gap_m:  # alongside: the faster one passes the other
+                if f.measured_mps > CLOSING_EPS_MPS:
+                    targets.append(max(0.0, follower_mps - mr.open_mps))
+            elif blocks:
+                targets.append(follower_mps)
+        return min(targets) if targets else None
+
+    def _follower_blocks(self, change_s: float) -> bool:
+        """Where followers keep their speed (the drive's bounds: ``Bounds.followers_react`` False), whether the
+        vehicle sensed behind in the left lane would be nearer than the specification allows at its fitted closing
+        speed once a return of ``change_s`` is over (not measured yet: it blocks, for the two sweeps a fit needs)."""
+        f = self.follower
+        if f is None or self.watch is None or self.watch.bounds.followers_react:
+            return False
+        if f.measured_mps is None:
+            return True
+        closing = max(0.0, f.measured_mps)
+        return SAFETY.violated(f.gap_m - closing * change_s, closing)
+
+    def _oncoming_leaves_time(self, change_s: float) -> bool:
+        """Whether the fallback may wait one more sweep in the right lane: the nearest oncoming vehicle sensed would
+        still be farther than the specification allows at its fitted closing speed after that sweep and a return of
+        ``change_s`` (none sensed within the front-right sensor's range: yes, each sweep looks again; a dropped
+        sweep, or its speed not measured yet: no)."""
+        if self.sweep is None:
+            return False
+        o = self.oncoming
+        if o is None:
+            return True
+        if o.measured_mps is None:
+            return False
+        closing = max(0.0, o.measured_mps)
+        return not SAFETY.violated(o.gap_m - closing * (change_s + 1 / SENSORS.sweep_hz), closing)
 
     def _brake_in_lane(self, emergency: bool) -> bool:
         """The minimal-risk manoeuvre for ``MINIMAL_RISK.takeover_s``: brake in lane to the hold speed; with
@@ -657,7 +732,7 @@ class Simulator:
             if emergency and self.lead is not None:
                 speed = self.car.pose().speed_mps
                 closing = self.lead.closing_mps(speed)
-                if SAFETY.violated(self.lead.dx_m - CAR.length_m, closing):
+                if SAFETY.violated(self.lead.gap_m, closing):
                     target, decel = max(0.0, speed - closing), mr.emergency_decel_mps2
                     if self.lead.measured_mps is not None and self.lead.measured_mps > CLOSING_EPS_MPS:
                         target = min(target, max(0.0, command - decel * self.executor.dt_s))  # it still closes
@@ -687,7 +762,7 @@ class Simulator:
         self._room_sweep, self._room = self.sweep, False
         behind = [-r.dx_m for r in self.sweep if r.lane is Lane.LEFT and r.dx_m <= 0]
         rear_m = min(behind) - CAR.length_m if behind else math.inf
-        ahead_m = self.lead.dx_m - CAR.length_m
+        ahead_m = self.lead.gap_m
         if ahead_m >= rear_m or SAFETY.violated(rear_m, MINIMAL_RISK.open_mps):
             return False
         try:
@@ -837,22 +912,33 @@ class Simulator:
 
 
 @dataclass(frozen=True, slots=True)
-class Lead:
-    """The nearest vehicle sensed ahead in the left lane at the last sweep, and its closing speed over the sweep
-    before when that was the same vehicle (its distance changed by at most a car length; else None: not measured)."""
+class Nearest:
+    """The nearest vehicle sensed in one lane on one side of the AV (ahead, or behind) at the last sweep: its
+    distance (centre to centre, positive either side), its distances at the last sweeps while it was the same vehicle
+    (the distance changed by at most a car length from one sweep to the next; at most ``MinimalRisk.fit_sweeps``,
+    oldest first), and the closing speed fitted through them (None: fewer than three)."""
 
     dx_m: float
     measured_mps: float | None
+    distances_m: tuple[float, ...] = ()
 
     @staticmethod
-    def after(before: Lead | None, sweep: tuple[Reading, ...] | None, sweep_hz: float) -> Lead | None:
-        ahead = [r.dx_m for r in sweep or () if r.lane is Lane.LEFT and r.dx_m > 0]
-        if not ahead:
+    def after(before: Nearest | None, sweep: tuple[Reading, ...] | None, sweep_hz: float, lane: Lane = Lane.LEFT,
+              behind: bool = False) -> Nearest | None:
+        found = [(-r.dx_m if behind else r.dx_m) for r in sweep or ()
+                 if r.lane is lane and (r.dx_m <= 0 if behind else r.dx_m > 0)]
+        if not found:
             return None
-        dx = min(ahead)
+        dx = min(found)
         if before is None or abs(before.dx_m - dx) > CAR.length_m:
-            return Lead(dx, None)
-        return Lead(dx, (before.dx_m - dx) * sweep_hz)
+            return Nearest(dx, None, (dx,))
+        distances = (*before.distances_m, dx)[-MINIMAL_RISK.fit_sweeps:]
+        return Nearest(dx, fitted_closing_mps(distances, sweep_hz), distances)
+
+    @property
+    def gap_m(self) -> float:
+        """The gap between the bumpers."""
+        return self.dx_m - CAR.length_m
 
     def closing_mps(self, speed_mps: float) -> float:
         """The closing speed the fallback brakes for (``MinimalRisk.fallback_closing_mps``)."""

@@ -70,6 +70,7 @@ class RunSummary:
     breach_replans: int = 0  # sound decisions ended by a breach
     keep_lane_steps: int = 0  # sound decisions without an overtake: one safe step in lane
     minimal_risk_steps: int = 0  # sound decisions without a plan or a step: the last decision's proved continuation
+    shadowed: int = 0  # sound decisions whose snapshot had the oncoming lane hidden behind a left-lane vehicle
     takeovers: list[Takeover] = field(default_factory=list)
     sweeps: int = 0  # the sensors' sweeps (``spec.physical.SENSORS.sweep_hz``)
     refusals: int = 0  # with tracking: overtakes not started while a lane held a contradiction (no failure)
@@ -120,7 +121,7 @@ class RunSummary:
                 "snapshots": self.snapshots, "restarts": self.restarts, "opportunities": self.opportunities.to_json(),
                 "decisions": self.decisions, "containment": self.containment.to_json(),
                 "breach_replans": self.breach_replans, "keep_lane_steps": self.keep_lane_steps,
-                "minimal_risk_steps": self.minimal_risk_steps,
+                "minimal_risk_steps": self.minimal_risk_steps, "shadowed": self.shadowed,
                 "takeovers": [asdict(t) for t in self.takeovers], "sweeps": self.sweeps, "faults": self.faults,
                 "refusals": self.refusals}
 
@@ -140,7 +141,7 @@ class RunSummary:
                    else ContainmentReport(), breach_replans=data.get("breach_replans", 0),
                    keep_lane_steps=data.get("keep_lane_steps", 0), minimal_risk_steps=data.get("minimal_risk_steps", 0),
                    takeovers=[Takeover(**t) for t in data.get("takeovers", [])], sweeps=data.get("sweeps", 0),
-                   refusals=data.get("refusals", 0),
+                   refusals=data.get("refusals", 0), shadowed=data.get("shadowed", 0),
                    faults={k: dict(v) for k, v in data.get("faults", {}).items()})
 
 

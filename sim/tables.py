@@ -50,6 +50,8 @@ def totals_table(results: list[RunSummary]) -> Table:
             *sorted((f"  {kind}", str(n)) for kind, n in sum((Counter(r.containment.by_kind) for r in results),
                                                             Counter()).items()),
             ("sound model: decisions ended by a breach", str(sum(r.breach_replans for r in results))),
+            ("sound model: decisions with the oncoming lane hidden behind a left-lane vehicle",
+             str(sum(r.shadowed for r in results))),
             ("sound model: keep-lane steps / minimal-risk manoeuvres",
              f"{sum(r.keep_lane_steps for r in results)} / {sum(r.minimal_risk_steps for r in results)}"),
             ("sound model: fallback take-overs (after a breach)",

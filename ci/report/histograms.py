@@ -49,7 +49,7 @@ def breach_histograms(runs: list[RunSummary], key: str) -> Figure | None:
     by_kind: dict[str, list[float]] = defaultdict(list)
     for run in runs:
         for breach in run.containment.breaches:
-            by_kind[breach.kind.value].append(breach.by_m)
+            by_kind[f"{breach.kind.value}, {'speed (m/s)' if breach.speed else 'position (m)'}"].append(breach.by_m)
     if not by_kind:
         return None
     fig, ax = pyplot().subplots(figsize=(8, 3.6))
@@ -57,7 +57,7 @@ def breach_histograms(runs: list[RunSummary], key: str) -> Figure | None:
     edges = [i * max(largest, 1e-6) / 30 for i in range(31)]
     for kind, sizes in sorted(by_kind.items()):
         ax.hist(sizes, bins=edges, histtype="step", label=f"{kind} ({len(sizes):,})")
-    ax.set_xlabel("beyond the bound (m; m/s for the AV's speed)")
+    ax.set_xlabel("beyond the bound (m for a position, m/s for a speed)")
     ax.set_ylabel("breaches")
     ax.legend(fontsize=7)
     recorded = sum(len(v) for v in by_kind.values())

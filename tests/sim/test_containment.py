@@ -160,3 +160,32 @@ def test_a_decision_under_the_paper_bounds_knows_its_vehicles_by_cell() -> None:
     c = Containment(1, Sound(world_bounds("paper", "exact")), scenario, readings, PAPER_GRID, 0.0, 0.0,
                     [car(1, 42.0), car(2, 210.0, -7.0)])  # type: ignore[list-item]
     assert set(c.tracked) == {1, 2} and c.tracked[1].index == 0 and c.tracked[2].lane is Lane.RIGHT
+
+
+@pytest.mark.parametrize(("lane", "speed_mps", "kind"), [(Lane.LEFT, 0.4, BreachKind.TOO_SLOW),
+                                                         (Lane.LEFT, 12.0, BreachKind.TOO_FAST),
+                                                         (Lane.RIGHT, 3.0, BreachKind.TOO_SLOW),
+                                                         (Lane.RIGHT, 12.0, BreachKind.TOO_FAST)])
+def test_a_known_vehicle_driving_outside_its_speed_bounds_breaches_while_still_inside_its_interval(
+        lane: Lane, speed_mps: float, kind: BreachKind) -> None:
+    """The audit's near miss counted inside the assumptions (following traffic, seed 6): the vehicle ahead braked from
+    6.9 to 0.4 m/s in 2.5 s and stayed inside its interval for 2 s more; the safety specification's gap to it
+    depends on its speed, which had left the bounds the plan was proved against."""
+    start = 60.0 if lane is Lane.LEFT else 250.0
+    c = watch({1: start} if lane is Lane.LEFT else {}, {} if lane is Lane.LEFT else {1: start})
+    sign = 1.0 if lane is Lane.LEFT else -1.0
+    t_s = 0.1  # the position barely moved: inside the interval
+    moved = [car(1, start + sign * 7.0 * t_s, sign * speed_mps)]
+    left, oncoming = (moved, []) if lane is Lane.LEFT else ([], moved)
+    (breach,) = c.check(t_s, 0.0, AV, left, oncoming, "drive", never)  # type: ignore[arg-type]
+    bounds = BOUNDS.speeds(lane)
+    expected = bounds.low_mps - speed_mps if kind is BreachKind.TOO_SLOW else speed_mps - bounds.high_mps
+    assert breach.kind is kind and breach.speed and breach.by_m == pytest.approx(expected)
+    assert breach.size.endswith("m/s") and c.world_breached()
+
+
+def test_an_unknown_vehicle_is_held_to_a_phantom_by_position_only() -> None:
+    """A vehicle beyond the sensor's range is no vehicle the plan knew: only the phantom's set speaks of it."""
+    c = watch({}, {})
+    beyond = car(5, SENSORS.left_range_m + 10.0, 0.0)
+    assert c.check(0.1, 0.0, AV, [beyond], [], "drive", lambda _c: True) == []  # type: ignore[list-item]

@@ -82,20 +82,28 @@ def test_a_models_name_and_bounds_scale_are_part_of_a_drives_configuration() -> 
             DriveConfig(1.0, **bad)  # type: ignore[arg-type]
 
 
-def test_the_lead_is_the_nearest_vehicle_ahead_and_its_closing_speed_is_measured_only_on_the_same_one() -> None:
+def test_the_lead_is_the_nearest_vehicle_ahead_and_its_closing_speed_is_fitted_only_on_the_same_one() -> None:
     from sim.sensors import Reading
-    from sim.simulator import Lead
+    from sim.simulator import Nearest as Lead
+    from spec.envelope import MINIMAL_RISK
     from spec.lanes import Lane
 
     sweep = (Reading(Lane.LEFT, 1, 30.0), Reading(Lane.LEFT, 2, 9.0), Reading(Lane.LEFT, 3, -8.0),
              Reading(Lane.RIGHT, 4, 5.0))
     first = Lead.after(None, sweep, 10.0)
-    assert first == Lead(9.0, None)
+    assert first == Lead(9.0, None, (9.0,))
     closer = Lead.after(first, (Reading(Lane.LEFT, 2, 8.5),), 10.0)
-    assert closer is not None and closer.dx_m == 8.5 and closer.measured_mps == pytest.approx(5.0)
-    assert Lead.after(closer, (Reading(Lane.LEFT, 1, 29.5),), 10.0) == Lead(29.5, None)  # another vehicle
+    assert closer is not None and closer.dx_m == 8.5 and closer.measured_mps is None  # two readings: not measured
+    closer = Lead.after(closer, (Reading(Lane.LEFT, 2, 8.0),), 10.0)
+    assert closer is not None and closer.measured_mps == pytest.approx(5.0)
+    assert Lead.after(closer, (Reading(Lane.LEFT, 1, 29.5),), 10.0) == Lead(29.5, None, (29.5,))  # another vehicle
     assert Lead.after(closer, None, 10.0) is None  # a dropped sweep: nothing sensed
     assert Lead.after(closer, (Reading(Lane.LEFT, 3, -7.0),), 10.0) is None  # nothing ahead
+    lead = None
+    for k in range(3 * MINIMAL_RISK.fit_sweeps):
+        lead = Lead.after(lead, (Reading(Lane.LEFT, 2, 20.0 - 0.3 * k),), 10.0)
+    assert lead is not None and len(lead.distances_m) == MINIMAL_RISK.fit_sweeps
+    assert lead.measured_mps == pytest.approx(3.0)
 
 
 def test_the_fallback_neither_brakes_below_traffic_that_keeps_its_speed_nor_returns_into_it() -> None:
@@ -108,15 +116,71 @@ def test_the_fallback_neither_brakes_below_traffic_that_keeps_its_speed_nor_retu
     10 m before the one behind, where no decision found a safe step: 1,648 take-overs in a row from 15.4 km. It now
     opens the gap towards the middle of its slot, for the speed it hands back at, and no decision is left without
     a safe step in lane."""
+    takeovers = 0
     for seed, km in ((6, 3.0), (4, 22.0), (12, 17.0)):
         summary = run_drive_summary(seed, km)
         assert summary.failure is None, (seed, summary.failure)
-        assert summary.takeovers  # the fallback did act
+        takeovers += len(summary.takeovers)
         stuck = [t for t in summary.takeovers if t.cause.endswith("no safe step in lane")]
         assert len(stuck) <= 1, (seed, len(stuck), stuck[:3])
+    assert takeovers  # the fallback did act (seed 6 no longer needs it by 3 km: the shadowed oncoming lane)
 
 
 def run_drive_summary(seed: int, km: float) -> RunSummary:
     from sim.simulator import run_drive
 
     return run_drive(seed, DriveConfig(km, until_failure=True, faults="paper", tracking=True, model="sound"))
+
+
+def test_the_follower_and_the_oncoming_vehicle_are_the_nearest_behind_and_ahead_in_their_lanes() -> None:
+    from sim.sensors import Reading
+    from sim.simulator import Nearest
+    from spec.lanes import Lane
+
+    follower = oncoming = None
+    for k in range(4):  # a follower 20 m behind closing at 2 m/s; an oncoming vehicle 200 m ahead closing at 14
+        sweep = (Reading(Lane.LEFT, 1, -20.0 + 0.2 * k), Reading(Lane.LEFT, 2, -60.0), Reading(Lane.LEFT, 3, 30.0),
+                 Reading(Lane.RIGHT, 4, 200.0 - 1.4 * k), Reading(Lane.RIGHT, 5, -10.0))
+        follower = Nearest.after(follower, sweep, 10.0, behind=True)
+        oncoming = Nearest.after(oncoming, sweep, 10.0, Lane.RIGHT)
+    assert follower is not None and follower.dx_m == pytest.approx(19.4)
+    assert follower.measured_mps == pytest.approx(2.0)
+    assert oncoming is not None and oncoming.dx_m == pytest.approx(195.8)
+    assert oncoming.measured_mps == pytest.approx(14.0)
+
+
+def _fallback_view(follower: object, oncoming: object, react: bool, sweep: object = ()) -> object:
+    from types import SimpleNamespace
+
+    return SimpleNamespace(follower=follower, oncoming=oncoming, sweep=sweep,
+                           watch=SimpleNamespace(bounds=SimpleNamespace(followers_react=react)))
+
+
+@pytest.mark.parametrize(("gap_m", "closing_mps", "react", "blocks"),
+                         [(30.0, 2.0, False, False), (5.0, 2.0, False, True), (5.0, 2.0, True, False),
+                          (30.0, None, False, True), (30.0, 12.0, False, True)])
+def test_a_follower_that_keeps_its_speed_blocks_the_return_while_nearer_than_the_specification_allows(
+        gap_m: float, closing_mps: float | None, react: bool, blocks: bool) -> None:
+    """Seeds 6 and 8 of the faults evaluation (paper traffic, whose followers never brake): the fallback returned
+    from the right lane slower than the vehicle behind and was rear-ended."""
+    from sim.simulator import Nearest, Simulator
+    from spec.physical import CAR
+
+    follower = Nearest(gap_m + CAR.length_m, closing_mps)
+    assert Simulator._follower_blocks(_fallback_view(follower, None, react), 2.0) is blocks  # type: ignore[arg-type]
+
+
+def test_the_fallback_waits_in_the_right_lane_only_while_the_oncoming_lane_leaves_time() -> None:
+    from sim.simulator import Nearest, Simulator
+    from spec.physical import CAR
+    from spec.safety import SAFETY
+
+    def leaves(oncoming: object, sweep: object = ()) -> bool:
+        return Simulator._oncoming_leaves_time(_fallback_view(None, oncoming, False, sweep), 2.0)  # type: ignore[arg-type]
+
+    closing = 14.0
+    need_m = SAFETY.required_gap_m(closing) + closing * 2.1 + CAR.length_m
+    assert leaves(None)  # none sensed within the front-right sensor's range
+    assert not leaves(None, sweep=None)  # a dropped sweep
+    assert leaves(Nearest(need_m + 1.0, closing)) and not leaves(Nearest(need_m - 1.0, closing))
+    assert not leaves(Nearest(300.0, None))  # its speed not measured yet

@@ -111,3 +111,35 @@ def test_the_sound_models_scenario_carries_where_each_vehicle_was_sensed() -> No
     scenario = discretise(readings, Lane.LEFT, PAPER_GRID, measured=True)
     assert scenario.left_lane == (PAPER_GRID.av_cell + 1, PAPER_GRID.av_cell + 2)
     assert scenario.left_m == ((21.0, 26.5), (52.0, 52.0)) and scenario.right_m == ((150.0, 150.0),)
+
+
+@pytest.mark.parametrize("av_y_offset_m", [0.3, 0.5, 0.7])
+def test_the_oncoming_lane_hidden_behind_a_left_lane_vehicle_starts_where_the_shadow_reading_says(
+        av_y_offset_m: float) -> None:
+    """The front-right sensor's ray from an AV left of its lane's centre passes through the vehicle ahead on its way
+    to the oncoming lane (paper world, seed 9, 19.1 km: an oncoming vehicle 64 m ahead hidden that way). Against the
+    ray sensor itself: an oncoming vehicle 1 m nearer than the shadow reading's start is seen, one 1 m beyond it is
+    not; an AV on its lane's centre has no shadow."""
+    from sim.sensors import SHADOW_BODY, shadow_reading
+
+    av_y = Scene.lane_y(Lane.LEFT) + av_y_offset_m
+    ahead_m = 13.6
+    readings = (Reading(Lane.LEFT, 0, ahead_m),)
+    assert shadow_reading(readings, Scene.lane_y(Lane.LEFT), 0.0) is None
+    shadow = shadow_reading(readings, av_y, 0.0)
+    assert shadow is not None and shadow.lane is Lane.RIGHT and shadow.body == SHADOW_BODY
+    widened = shadow_reading(readings, av_y, 1.0)
+    assert widened is not None and widened.dx_m < shadow.dx_m  # a reading that may be off hides more
+    scene = Scene()
+    try:
+        ahead = KinematicCar(scene, ahead_m, scene.lane_y(Lane.LEFT), 7.0)
+        for dx_m, seen in ((shadow.dx_m - 1.0, True), (shadow.dx_m + 1.0, False)):
+            if dx_m > 357.0:
+                continue
+            oncoming = KinematicCar(scene, dx_m, scene.lane_y(Lane.RIGHT), -7.0)
+            truth = in_range(0.0, av_y, [ahead], [oncoming])
+            found = RaySensor(scene, np.random.default_rng(SEED)).read(truth)
+            assert (oncoming.body in {r.body for r in found}) is seen, (dx_m, shadow.dx_m)
+            scene.client.removeBody(oncoming.body)
+    finally:
+        scene.close()
