@@ -626,8 +626,8 @@ class Simulator:
         it allows at the fitted closing speed once the return, at the speed it starts at, is over, and where
         followers keep their speed the vehicle behind not nearer than it allows then either), meanwhile driving at
         the left lane's speed (``_waiting_mps``); for ``takeover_s``, and on while the oncoming lane leaves time
-        (``_oncoming_leaves_time``), then back regardless (the oncoming lane is the greater danger). False on a
-        collision."""
+        (``_oncoming_leaves_time``) up to ``return_wait_s``, then back regardless (the oncoming lane is the greater
+        danger). False on a collision."""
         mr = MINIMAL_RISK
         y_ref = self.scene.lane_y(Lane.RIGHT)
         command = self.car.pose().speed_mps
@@ -645,7 +645,8 @@ class Simulator:
             if not alongside and not near and not blocks:
                 return True
             held += 1
-            if held * self.executor.dt_s > mr.takeover_s and not self._oncoming_leaves_time(change_s):
+            waited_s = held * self.executor.dt_s
+            if waited_s > mr.return_wait_s or (waited_s > mr.takeover_s and not self._oncoming_leaves_time(change_s)):
                 return True
             target = self._waiting_mps(speed, near, alongside, blocks)
             if target is not None and command > target:

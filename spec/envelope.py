@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from spec.grid import COMMON_SPEED_MPS
 from spec.motion import RAMP_SHARE, Ramp, ramp_s
 from spec.physical import CAR, LOOP, NOISE, SENSORS
 
@@ -97,9 +98,9 @@ class MinimalRisk:
     the AV is the faster (it drops back behind it, or passes it), ``open_mps`` below a faster vehicle alongside
     behind, a too-near follower's own where followers keep their speed (measured: braking to a standstill beside a
     vehicle left the AV standing in the oncoming lane, then returning at a crawl in front of a follower), for
-    ``takeover_s`` and on while the nearest oncoming vehicle sensed stays farther than the specification allows at
-    its closing speed after one more sweep and the lane change (a return into a vehicle ahead at 13 m/s was
-    measured: seed 2); then it brakes in lane
+    ``takeover_s`` and on, up to ``return_wait_s``, while the nearest oncoming vehicle sensed stays farther than the
+    specification allows at its closing speed after one more sweep and the lane change (a return into a vehicle
+    ahead at 13 m/s was measured: seed 2); then it brakes in lane
     at ``decel_mps2`` to the hold speed and, while the sensed vehicle ahead is nearer than the safety
     specification allows at the closing speed (``fallback_closing_mps``), at ``emergency_decel_mps2`` down to that
     vehicle's speed (a standstill when it is not known), and on below it while the measured gap still closes (the
@@ -123,6 +124,11 @@ class MinimalRisk:
     open_mps: float = TRACKING.speed_mps
     #: Sweeps the closing speed on the vehicle ahead is fitted over (``closing_fit_sweeps``).
     fit_sweeps: int = closing_fit_sweeps()
+    #: The longest the fallback waits in the right lane for room, however clear the oncoming lane looks: the time an
+    #: oncoming vehicle at the front-right sensor's range needs to reach the AV closing at twice the common speed
+    #: (25.5 s); a bound, so that a left lane that never leaves room (a vehicle stopped beside the AV) cannot hold
+    #: the drive for ever.
+    return_wait_s: float = SENSORS.right_range_m / float(2 * COMMON_SPEED_MPS)
 
     def hold_mps(self, speed_mps: float, slowest_ahead_mps: float) -> float:
         """The speed the manoeuvre brakes to: at most the slowest speed a vehicle ahead may keep (so the reference
