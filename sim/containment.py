@@ -143,11 +143,11 @@ class Containment:
             cells = [(c, r) for r in readings if in_window(c := reading_cell(r, scenario.lane, grid), grid)]  # hull
             order = sorted({c for c, _ in cells})
             for cell, reading in cells:
+                vehicle = by_index[(lane, order.index(cell))]
                 if reading.body == SHADOW_BODY:  # the hidden stretch: any vehicle from there on may be in it
-                    shadow = by_index[(lane, order.index(cell))]
-                    self.phantoms[lane].append(replace(shadow, index=None, hi_m=math.inf))
-                    continue
-                self.tracked[reading.body] = by_index[(lane, order.index(cell))]
+                    self.phantoms[lane].append(replace(vehicle, index=None, hi_m=math.inf))
+                else:
+                    self.tracked[reading.body] = vehicle
         self.generation = {car.body: car.respawns for car in cars}  # a respawned car is a new vehicle
         self.breached: dict[int, Breach] = {}  # body (-1: the AV) -> its first breach under this decision
 

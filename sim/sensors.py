@@ -72,16 +72,16 @@ def shadow_reading(readings: tuple[Reading, ...], av_y_m: float, error_m: float,
     (measured: the AV ended a lane change 0.5 m left of its lane's centre, the vehicle it had just passed hid an
     oncoming one 64 m ahead, and the next decision started an overtake towards it). An oncoming vehicle farther
     away arrives later, so a plan safe against one at the shadow's start is safe against any in the shadow."""
-    sx, sy = CAR.length_m / 2 + 0.05, av_y_m - CAR.width_m / 2 - 0.05  # the sensor, from the AV's centre
+    sx, sy, _ = _right_sensor(0.0, av_y_m, (math.inf, 0.0, 0.0), 0.0)  # the front-right sensor, from the AV's centre
     ty, body_low = Scene.lane_y(Lane.RIGHT), Scene.lane_y(Lane.LEFT) - CAR.width_m / 2
     if sy <= body_low or sy <= ty:
         return None  # the sensor looks from below the left lane's bodies: they hide nothing of the oncoming lane
     starts = []
     for r in readings:
-        near_m = r.interval_m[0] - error_m - CAR.length_m / 2
         if r.lane is not Lane.LEFT or r.interval_m[1] + error_m + CAR.length_m / 2 <= sx:
             continue
-        lo = max(near_m, sx)  # the ray reaches the body's near end at the left lane's lower edge, or further on
+        # the body's near end: the ray first touches the body there, at the left lane's lower edge, or further on
+        lo = max(r.interval_m[0] - error_m - CAR.length_m / 2, sx)
         starts.append(max(lo, sx + (sy - ty) * (lo - sx) / (sy - body_low)))
     start = min(starts, default=math.inf)
     return Reading(Lane.RIGHT, SHADOW_BODY, start) if start <= spec.right_range_m else None

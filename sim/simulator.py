@@ -761,8 +761,7 @@ class Simulator:
         if self._room_sweep is self.sweep:
             return self._room
         self._room_sweep, self._room = self.sweep, False
-        behind = [-r.dx_m for r in self.sweep if r.lane is Lane.LEFT and r.dx_m <= 0]
-        rear_m = min(behind) - CAR.length_m if behind else math.inf
+        rear_m = self.follower.gap_m if self.follower is not None else math.inf  # the same sweep's vehicle behind
         ahead_m = self.lead.gap_m
         if ahead_m >= rear_m or SAFETY.violated(rear_m, MINIMAL_RISK.open_mps):
             return False
