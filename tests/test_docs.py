@@ -1,9 +1,11 @@
-"""The README and docs/: every link resolves, the README stays short, and every command the README shows runs as
-printed (or with --km, --runs or --count made smaller, the override named here)."""
+"""The README and docs/: every link resolves, the README stays short, and every command the README and docs/ show
+runs as printed (or with --km, --runs or --count made smaller, the override named here; docs/' commands in a slow
+test that .ci/run runs)."""
 
 from __future__ import annotations
 
 import itertools
+import os
 import re
 import shlex
 import subprocess
@@ -125,8 +127,8 @@ def test_every_docs_command_parses_as_printed(page: str, argv: list[str], tmp_pa
                                               monkeypatch: pytest.MonkeyPatch) -> None:
     """Each command docs/ prints is one its program accepts: an ``overtake`` command parses (every option exists and
     every value passes its checks, as ``overtake`` would run it); a ``python -m ci...`` module exists and its
-    ``--help`` names every option the command gives. (The README's commands are run; these are the reference's
-    campaigns and benchmarks, minutes to hours each, run when their figures are measured.)"""
+    ``--help`` names every option the command gives. (The README's commands are run; these are run, made small, by
+    ``test_every_docs_command_runs_as_printed``, a slow test .ci/run runs.)"""
     monkeypatch.chdir(tmp_path)
     argv = [str(tmp_path / "out") if word == "DIR" else word for word in argv]
     if argv[0] == "overtake":
@@ -146,3 +148,45 @@ def test_every_docs_command_parses_as_printed(page: str, argv: list[str], tmp_pa
     assert done.returncode == 0, f"{page}: {module} --help: {done.stderr[-500:]}"
     for option in (word.split("=")[0] for word in argv[3:] if word.startswith("--")):
         assert option in done.stdout, f"{page}: {module} has no option {option}"
+
+
+#: What a docs/ command is run with where it does not print these options (its defaults are campaigns of minutes to
+#: hours: every cell size, traffic and sensing model, every mutant, a profile's examples): each program's own small
+#: sizes, added; where it prints one, ``OVERRIDES`` sets it. Only --km, --runs and --count, as for the README.
+ADDED = {"overtake audit": {"--km": "0.3", "--runs": "1"},
+         "overtake simulate": {"--km": "0.3", "--runs": "1"},
+         "overtake crossval": {"--count": "5"},
+         "python -m ci.bench.audit": {"--km": "0.3"},
+         "python -m ci.bench.sound": {"--count": "5"},
+         "python -m ci.bench.engines_sound": {"--count": "5"},
+         "python -m ci.conformance.tightness": {"--count": "5"},
+         "python -m ci.mutation.check": {"--count": "1"}}
+
+
+def _sizes(argv: list[str]) -> list[str]:
+    """``argv`` made small: ``OVERRIDES`` where it gives one of those options (a mutation check: one mutant), and
+    the program's ``ADDED`` sizes where it gives none."""
+    program = f"python -m {argv[2]}" if argv[0].startswith("python") else " ".join(argv[:2])
+    added = ADDED.get(program, {})
+    sizes = {**OVERRIDES, **added}
+    out = [sizes[argv[i - 1]] if i and argv[i - 1] in sizes else word for i, word in enumerate(argv)]
+    return out + [word for option, value in added.items() if option not in argv for word in (option, value)]
+
+
+@pytest.mark.slow  # about 6 minutes in all: run by .ci/run beside the test command (``pytest -m slow``)
+@pytest.mark.parametrize(("page", "argv"), _docs_commands(), ids=_command_id)
+def test_every_docs_command_runs_as_printed(page: str, argv: list[str], tmp_path: Path) -> None:
+    """Each command docs/ prints runs as a user would copy it (from a folder with the checkout's ``spec/`` beside
+    it, for the scenario files the commands name), made small only as ``_sizes`` says: it exits with a documented
+    answer (0; 1 for "no plan" or a drive that failed; 3 for a verdict an engine's limit left open, as a hypothesis
+    campaign's random draws may), never bad input, a traceback or a hang; an option the
+    program does not know is bad input (exit 2), so a renamed option fails here."""
+    (tmp_path / "spec").symlink_to(ROOT / "spec")
+    argv = [str(tmp_path / "out") if word == "DIR" else word for word in argv]
+    run = _sizes(argv)
+    program = [sys.executable, "-m", "ci.cli.main"] if run[0] == "overtake" else [sys.executable, *run[1:3]]
+    args = run[1:] if run[0] == "overtake" else run[3:]
+    done = subprocess.run([*program, *args], cwd=tmp_path, capture_output=True, text=True, timeout=900,
+                          env={**os.environ, "HYPOTHESIS_PROFILE": "dev"})
+    assert "Traceback" not in done.stderr, f"{page}: {' '.join(run)}: {done.stderr[-2000:]}"
+    assert done.returncode in (0, 1, 3), f"{page}: {' '.join(run)}: exit {done.returncode}: {done.stderr[-1500:]}"

@@ -1,6 +1,6 @@
 """Every engine on the sound model beside the paper's rules: latency per engine and strategy, per cell size, in one run.
 
-Usage: python -m ci.bench.engines_sound [--sample 100] [--seed 2026] [--space left=2@8..20,right=1@12..30,lanes=both]
+Usage: python -m ci.bench.engines_sound [--count 100] [--seed 2026] [--space left=2@8..20,right=1@12..30,lanes=both]
                                         [--cells 21,10.5,7,5.25] [--runs interpreter/sensible,spin/sensible,...]
                                         [--timeout 10]
 
@@ -83,7 +83,7 @@ def measure(scenarios: list[Scenario], key: RunKey, timeout_s: float = TIMEOUT_S
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sample", type=int, default=100)
+    parser.add_argument("--count", type=int, default=100, help="scenarios drawn from the sweep")
     parser.add_argument("--seed", type=int, default=2026)
     parser.add_argument("--space", default=DEFAULT_SPACE)
     parser.add_argument("--cells", type=_cells, default=(21.0, 10.5, 7.0, 5.25))
@@ -92,7 +92,7 @@ def main() -> None:
     args = parser.parse_args()
     console = Console(width=160)
     everything = list(parse_space(args.space, PAPER_GRID).scenarios(PAPER_GRID, None))
-    sample = random.Random(args.seed).sample(everything, min(args.sample, len(everything)))
+    sample = random.Random(args.seed).sample(everything, min(args.count, len(everything)))
     console.print(f"seed {args.seed}; {len(sample)} of the {len(everything)} scenarios of {args.space}; whole "
                   f"pipeline; {args.timeout:g} s per run; {machine()}")
     table = Table(title="every engine, sound model (default profile) beside the paper's rules: latency (ms), answers")

@@ -1,6 +1,6 @@
 """The sound model beside the paper's rules: planning latency and answers on the conformance example sweep, per cell.
 
-Usage: python -m ci.bench.sound [--sample 300] [--seed 2026] [--space left=2@8..20,right=1@12..30,lanes=both]
+Usage: python -m ci.bench.sound [--count 300] [--seed 2026] [--space left=2@8..20,right=1@12..30,lanes=both]
                                 [--strategies sensible,shortest]
 
 A seeded sample of the sweep's scenarios (paper grid), the same traffic cut finer for 10.5, 7 and
@@ -61,7 +61,7 @@ def _strategies(text: str) -> tuple[Strategy, ...]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sample", type=int, default=300)
+    parser.add_argument("--count", type=int, default=300, help="scenarios drawn from the sweep")
     parser.add_argument("--seed", type=int, default=2026)
     parser.add_argument("--space", default=DEFAULT_SPACE)
     parser.add_argument("--strategies", type=_strategies, default=(Strategy.SENSIBLE, Strategy.SHORTEST),
@@ -69,7 +69,7 @@ def main() -> None:
     args = parser.parse_args()
     console = Console(width=150)
     everything = list(parse_space(args.space, PAPER_GRID).scenarios(PAPER_GRID, None))
-    sample = random.Random(args.seed).sample(everything, min(args.sample, len(everything)))
+    sample = random.Random(args.seed).sample(everything, min(args.count, len(everything)))
     console.print(f"seed {args.seed}; {len(sample)} of the {len(everything)} scenarios of {args.space}; interpreter, "
                   f"whole pipeline; {machine()}")
     table = Table(title="sound model beside the paper's rules: latency (ms) and answers")

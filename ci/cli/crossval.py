@@ -16,7 +16,7 @@ from rich.text import Text
 
 from ci.cli.common import cell_option, err, horizon_option, out, print_json, print_table, sound_options
 from ci.shared.executors import ExecutorChoice, ExecutorKind, check_executor
-from ci.shared.options import MAX_WORKERS, REPRODUCERS, SCHEDULER, SECONDS, SEED, WORKERS, names
+from ci.shared.options import CHECK_COUNT, MAX_WORKERS, REPRODUCERS, SCHEDULER, SECONDS, SEED, WORKERS, names
 from ci.shared.options import out_dir as checked_out_dir
 from ci.shared.records import campaign_lock
 from oracle.coverage import CoverageTarget
@@ -60,6 +60,9 @@ class RateColumn(ProgressColumn):
                    "differently from the paper's 21 m; 'all', every rule that can occur there.")
 @click.option("--seed", type=SEED, default=None,
               help="With --source hypothesis (default: drawn, and printed).")
+@click.option("--count", type=CHECK_COUNT, default=None,
+              help="At most this many scenarios: with --source hypothesis, examples per property (instead of the "
+                   "profile's); otherwise that many spread evenly through the library or the space, in its order.")
 @click.option("--max-reproducers", type=REPRODUCERS, default=3, show_default=True,
               help="Failures shrunk per property.")
 @cell_option()
@@ -73,11 +76,12 @@ class RateColumn(ProgressColumn):
                    "hypothesis the bounds are drawn with each scenario unless given).")
 @sound_options
 def crossval(source: str, space: str, property_text: str, engine_text: str, workers: int | None, executor_kind: str,
-             scheduler: str | None, timeout_s: float, coverage_text: str, seed: int | None, max_reproducers: int,
+             scheduler: str | None, timeout_s: float, coverage_text: str, seed: int | None, count: int | None,
+             max_reproducers: int,
              cell_m: float | None, horizon: int | None, out_dir: str, fresh: bool, list_only: bool, as_json: bool,
              model_name: str, sound: Callable[[Scenario], Scenario]) -> None:
-    """Check every property on scenarios from a source; exit 0 when all hold, 6 on any failure, 7 when every property
-    held but the coverage target was missed."""
+    """Check every property on scenarios from a source; exit 0 when all hold, 6 on any failure, 3 when none failed
+    but one could not be decided, 7 when every property held but the coverage target was missed."""
     from ci.conformance.crossval import (
         VERDICTS_FILE,
         Campaign,
@@ -85,6 +89,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
         check_resumable,
         library_scenarios,
         parse_space,
+        spread,
         write_reports,
     )
     from ci.conformance.properties import PROPERTIES
@@ -122,7 +127,8 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
     if source == "hypothesis" and seed is None:
         seed = int.from_bytes(os.urandom(4), "little")
     campaign = Campaign(source, tuple(chosen), engines, float(grid.cell_m), horizon, timeout_s,
-                        the_space.describe() if the_space else None, seed if source == "hypothesis" else None, model)
+                        the_space.describe() if the_space else None, seed if source == "hypothesis" else None, model,
+                        count)
     if fresh:
         (out_path / VERDICTS_FILE).unlink(missing_ok=True)
     check_resumable(out_path / VERDICTS_FILE, campaign)  # before any line: one model and bounds per folder
@@ -142,7 +148,12 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
         if the_space is not None:
             err.print(f"crossval: space {the_space.describe()}: {the_space.candidates()} candidates ...")
             scenarios = list(the_space.scenarios(grid, horizon))
-            err.print(f"crossval: {len(scenarios)} valid scenarios in the space (every one is checked)")
+            err.print(f"crossval: {len(scenarios)} valid scenarios in the space ("
+                      + ("every one is checked)" if count is None or count >= len(scenarios) else
+                         f"{count} spread through it are checked: --count)"))
+        elif count is not None and count < len(scenarios):
+            err.print(f"crossval: {count} of the library's {len(scenarios)} scenarios, spread through it (--count)")
+        scenarios = spread(scenarios, count)
         _sweep(campaign, scenarios, out_path, executor, summary)
         reproducers = _reproduce(summary, campaign, out_path, max_reproducers)
     data = summary.to_json(campaign, reproducers)
@@ -153,8 +164,8 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
     else:
         _print(data, wall_s)
         out.print("written: " + ", ".join(str(p) for p in paths))
-    if not summary.all_held:
-        sys.exit(ExitCode.DISAGREE)
+    if not summary.all_held:  # a failure is a disagreement; a verdict not reached alone claims nothing
+        sys.exit(ExitCode.DISAGREE if summary.any_failed else ExitCode.INCOMPLETE)
     sys.exit(ExitCode.COVERAGE_MISSED if summary.missed() else ExitCode.OK)
 
 

@@ -124,6 +124,14 @@ def library_scenarios(grid: Grid) -> list[Scenario]:
     return [b.load() for b in BUILTINS]
 
 
+def spread(scenarios: list[Scenario], count: int | None) -> list[Scenario]:
+    """At most ``count`` of ``scenarios``, evenly spaced through them in their order (a quick look at a whole
+    space or library, not its first corner); all of them when ``count`` is None or not smaller."""
+    if count is None or count >= len(scenarios):
+        return scenarios
+    return [scenarios[i * len(scenarios) // count] for i in range(count)]
+
+
 # -- one scenario's check (what a worker runs) -------------------------------------------------------
 def scenario_key(scenario: Scenario) -> str:
     return json.dumps(scenario_to_dict(scenario), sort_keys=True)
@@ -175,6 +183,8 @@ class Campaign:
     #: The sound model's assumptions every scenario is checked under (None: the paper's rules; ``DRAWN``: the
     #: hypothesis source draws them with each scenario, ``ci.conformance.hypo.BOUND_CHOICES``).
     sound: Sound | str | None = None
+    #: At most this many scenarios (None: every one the source gives; ``spread`` picks them).
+    count: int | None = None
 
     def key(self) -> dict[str, Any]:
         key = {"source": self.source, "properties": [p.value for p in self.properties], "engines": list(self.engines),
@@ -183,6 +193,8 @@ class Campaign:
         if self.sound is not None:  # a paper campaign's key is what it always was: its records stay resumable
             key["model"] = "sound"
             key["bounds"] = self.sound if isinstance(self.sound, str) else sound_to_table(self.sound)
+        if self.count is not None:  # likewise: a campaign of every scenario keeps its key
+            key["count"] = self.count
         return key
 
     def with_model(self, scenario: Scenario) -> Scenario:
@@ -321,6 +333,11 @@ class Summary:
     def all_held(self) -> bool:
         return all(set(c) <= {Verdict.HELD.value} for c in self.verdicts.values())
 
+    @property
+    def any_failed(self) -> bool:
+        """Whether a property failed somewhere (not merely could not be decided)."""
+        return any(Verdict.FAILED.value in c for c in self.verdicts.values())
+
     def coverage(self) -> dict[str, dict[str, int]]:
         """Per cell size ("21 m"), every rule that can occur there and how many scenarios exercised it."""
         if not self.paper:
@@ -361,7 +378,8 @@ def markdown(data: dict[str, Any]) -> str:
     c = data["campaign"]
     lines = ["# Cross-validation", "",
              f"Source {c['source']}" + (f" ({c['space']})" if c["space"] else "") + (
-                 f", seed {c['seed']}" if c["seed"] is not None else "")
+                 f", seed {c['seed']}" if c["seed"] is not None else "") + (
+                 f", at most {c['count']} (--count)" if c.get("count") else "")
              + f"; engines {', '.join(c['engines'])}; {data['scenarios']} scenarios; cell {c['cell_m']:g} m; "
              + (f"the sound model, bounds {c['bounds']}." if c.get("model") == "sound" else "the paper's rules."), "",
              "| property | checked | held | failed | incomplete |", "|---|---|---|---|---|"]

@@ -152,7 +152,7 @@ def hypothesis_job(name: str, campaign: Campaign, out_dir: str, profile_name: st
     prop = PropertyName(name)
 
     @hypothesis_seed((campaign.seed or 0) + offset)
-    @settings(PROFILES[profile_name],
+    @settings(PROFILES[profile_name], max_examples=campaign.count or PROFILES[profile_name].max_examples,
               database=DirectoryBasedExampleDatabase(str(out / "hypothesis" / name)))
     @given(scenarios(grid, campaign.horizon, campaign.sound))
     def test(scenario: Scenario) -> None:
@@ -191,7 +191,8 @@ def _run(campaign: Campaign, out: Path, executor: ExecutorChoice, max_reproducer
     (out / VERDICTS_FILE).touch()
     check_resumable(out / VERDICTS_FILE, campaign)
     name = profile()
-    console.print(f"crossval: hypothesis profile {name} ({PROFILE_VAR}), seed {campaign.seed}")
+    console.print(f"crossval: hypothesis profile {name} ({PROFILE_VAR}), seed {campaign.seed}"
+                  + (f", {campaign.count} examples per property (--count)" if campaign.count else ""))
     jobs = [(p.value, campaign, str(out), name, n) for n, p in enumerate(campaign.properties)]
     reproducers = []
     shrunk: dict[str, dict[str, Any]] = {}

@@ -1,7 +1,7 @@
 """How tight the sound model is (issue #23, point 8): is every action it refuses broken by some motion within the
 bounds, or refused only because a cell was rounded outwards?
 
-Usage: python -m ci.conformance.tightness [--sample 60] [--seed 2026] [--space left=2@8..20,right=1@12..30,lanes=both]
+Usage: python -m ci.conformance.tightness [--count 60] [--seed 2026] [--space left=2@8..20,right=1@12..30,lanes=both]
                               [--jobs 2] [--max-states 20000] [--show 3]
 
 For a seeded sample of the conformance example sweep (paper grid; the same traffic cut finer for
@@ -655,7 +655,7 @@ def findings_table(rows: dict[tuple[Fraction, str], Counts]) -> Table:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("--sample", type=int, default=SAMPLE, help="scenarios drawn from the sweep (0: all of it)")
+    parser.add_argument("--count", type=int, default=SAMPLE, help="scenarios drawn from the sweep (0: all of it)")
     parser.add_argument("--seed", type=int, default=2026)
     parser.add_argument("--space", default=DEFAULT_SPACE)
     parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1))
@@ -664,7 +664,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     console = Console(width=120)
     everything = list(parse_space(args.space, PAPER_GRID).scenarios(PAPER_GRID, None))
-    n = len(everything) if args.sample <= 0 else min(args.sample, len(everything))
+    n = len(everything) if args.count <= 0 else min(args.count, len(everything))
     sample = everything if n == len(everything) else random.Random(args.seed).sample(everything, n)
     console.print(f"seed {args.seed}; {len(sample)} of the {len(everything)} scenarios of {args.space}; the same "
                   f"traffic at {', '.join(f'{float(c):g}' for c in STANDARD_CELLS_M)} m; profiles "

@@ -47,6 +47,7 @@ HORIZON = Whole(0, MAX_HORIZON)  # actions in a plan
 MAX_STATES = Whole(1, 10**9)  # stored states: a billion does not fit in any machine's memory
 PER_RUN = Whole(0, 10_000)  # scenarios kept, decisions replayed per run: a run makes a few thousand
 FRAMED = Whole(0, 20)  # closest calls drawn per folder: each replays a drive from its start
+CHECK_COUNT = Whole(1, 10**7)  # scenarios or examples a campaign checks: the largest exhaustive space is a million
 REPRODUCERS = Whole(0, 1000)  # failures shrunk per property: each shrink is minutes of engine runs
 
 

@@ -34,7 +34,7 @@ import pytest
 from ci.cli.crossval import DEFAULT_SPACE
 from ci.cli.main import cli
 from ci.conformance.conform import COUNT
-from ci.shared.options import FRAMED, HORIZON, MAX_STATES, PER_RUN, REPRODUCERS, RUNS, SEED, WORKERS
+from ci.shared.options import CHECK_COUNT, FRAMED, HORIZON, MAX_STATES, PER_RUN, REPRODUCERS, RUNS, SEED, WORKERS
 from spec.errors import ExitCode
 from spec.grid import PAPER_GRID
 
@@ -294,6 +294,7 @@ CASES: list[Case] = [
     *numbers("crossval", "--timeout", "--cell-m"),
     *whole("crossval", "--workers", WORKERS), *whole("crossval", "--seed", SEED),
     *whole("crossval", "--max-reproducers", REPRODUCERS), *whole("crossval", "--horizon", HORIZON),
+    *whole("crossval", "--count", CHECK_COUNT),
     *choices("crossval", "--source"), *choices("crossval", "--properties", lists=True),
     *choices("crossval", "--engines", lists=True), *choices("crossval", "--executor"),
     *choices("crossval", "--coverage-target"),
