@@ -16,6 +16,13 @@ at its closing speed breaks that assumption; where they keep their speed, the mo
 (``spec.envelope.TRACKING``) around the executor's reference, its sideways move finished in the stated time. A
 departure is a ``Breach``, recorded once per decision and vehicle with the bound it broke and by how much; an AV
 envelope breach is an executor fault, which counts as inside the assumptions.
+
+That check reads the truth: it is the simulator's bookkeeping (what broke, when, and whose a collision is), and it
+never steers the AV. The AV's own monitor (``Containment.sense``) sees what its planner sees, each sweep's readings
+without identities: a reading that no vehicle's interval nor any phantom's can explain, the sensing error allowed
+once more (the reading's own), is a breach the AV knows of, and that is what ends a sound decision. A vehicle that
+leaves its bounds unseen (a speed outside them while still inside its interval, a reading the sensors missed) goes
+on until the sensors show it; the run counts those decisions (``unseen``).
 """
 
 from __future__ import annotations
@@ -83,6 +90,7 @@ class Breach:
     by_m: float  # beyond the bound: metres, or m/s for a speed (``speed``)
     doing: str
     speed: bool = False  # whether the bound broken is a speed (a vehicle's or the AV's), not a position
+    sensed: bool = False  # found by the AV's own monitor in a sweep's readings (``Containment.sense``), not the truth
 
     @property
     def size(self) -> str:
@@ -150,6 +158,9 @@ class Containment:
                     self.tracked[reading.body] = vehicle
         self.generation = {car.body: car.respawns for car in cars}  # a respawned car is a new vehicle
         self.breached: dict[int, Breach] = {}  # body (-1: the AV) -> its first breach under this decision
+        self.sensed: Breach | None = None  # the first reading the AV's own monitor could not explain (``sense``)
+        self.sensed_lane: Lane | None = None  # and its lane
+        self.ended = False  # the decision has ended (its unseen breaches counted: ``unseen``)
 
     def shift_x(self, dx_m: float) -> None:
         """The world was re-centred by ``dx_m``."""
@@ -230,13 +241,54 @@ class Containment:
         return self._breach(Breach(self.decision, km, t_s, f"the AV ({what})", -1, BreachKind.AV_ENVELOPE, by,
                                    doing, speed=what == "speed"))
 
+    def sense(self, t_s: float, km: float, av_x_m: float, readings: Iterable[Reading], doing: str) -> Breach | None:
+        """The AV's own monitor, on one sweep's readings as its planner gets them (no identities, no truth): the first
+        reading whose interval (a kept track's spread, widened by the sensing error bound: the reading's own error)
+        meets no interval of its lane at ``t_s``, neither a vehicle's the decision knew nor a phantom's, if new. An
+        oncoming reading the AV has passed is no vehicle any condition speaks of. Its kind is read from the nearest
+        interval: behind a known vehicle's (``too slow`` in the left lane), beyond it (``too fast``), or none known
+        near (``appeared``)."""
+        if self.sensed is not None:
+            return None
+        elapsed = t_s - self.t0_s
+        error_m = self.bounds.sensing_error_m
+        for r in readings:
+            if r.lane is Lane.RIGHT and r.dx_m < -CAR.length_m:
+                continue
+            lo, hi = (av_x_m - self.x0_m + end for end in r.interval_m)
+            known = [v for v in self.tracked.values() if v.lane is r.lane]
+            misses = [(_apart(lo - error_m, hi + error_m, *reach_m(v, self.bounds, elapsed)), v.index is not None)
+                      for v in (*known, *self.phantoms[r.lane])]
+            if any(miss == 0.0 for miss, _ in misses):
+                continue
+            miss, of_known = min(misses, key=lambda m: abs(m[0]), default=(math.inf, False))
+            if not of_known or not math.isfinite(miss):
+                kind = BreachKind.APPEARED
+            else:
+                kind = BreachKind.TOO_SLOW if (miss < 0) == (r.lane is Lane.LEFT) else BreachKind.TOO_FAST
+            self.sensed = Breach(self.decision, km, t_s, f"a sensed {r.lane.value}-lane reading at {r.dx_m:+.1f} m",
+                                 -2, kind, abs(miss) if math.isfinite(miss) else 0.0, doing, sensed=True)
+            self.sensed_lane = r.lane
+            return self.sensed
+        return None
+
     def _breach(self, breach: Breach) -> Breach:
         self.breached[breach.body] = breach
         return breach
 
+    def unseen(self) -> bool:
+        """Whether a vehicle broke an assumption that ends a decision (the truth) while the AV's own monitor never
+        sensed a breach: a decision that went on past a breach its sensors did not show."""
+        return self.world_breached() and self.sensed is None
+
     def world_breached(self) -> bool:
         """Whether a vehicle (not the AV) has broken an assumption under this decision that ends it."""
         return any(body != -1 and b.kind.ends_decision for body, b in self.breached.items())
+
+
+def _apart(lo: float, hi: float, low: float, high: float) -> float:
+    """How far ``[lo, hi]`` lies outside ``[low, high]``: negative below, positive above, 0 where they meet."""
+    return _outside(hi, low, math.inf) if hi < low else _outside(lo, -math.inf, high)
 
 
 def _outside(x: float, low: float, high: float, rounding: float = ROUNDING_M) -> float:

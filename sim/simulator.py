@@ -121,7 +121,7 @@ class Simulator:
         self.containment: Containment | None = None  # the sets of the decision under way
         self.enveloped = False  # a sound decision's action is under way: the AV is held to its envelope
         self.interrupt = False  # a breach asks the sound model's decision under way to end
-        self.breached_before: set[int] = set()  # vehicles that broke the previous decision's assumptions
+        self.breached_before: set[int] = set()  # vehicles that broke the previous decision's assumptions (truth)
         self.takeover: Takeover | None = None  # the fallback's take-over under way
         self.proved: Containment | None = None  # the containment of the last sound decision that was executed
         self.sweep: tuple[Reading, ...] | None = ()  # the last sweep the sensors delivered (None: it was dropped)
@@ -196,8 +196,12 @@ class Simulator:
     # -- containment (``sim.containment``) --------------------------------------------------------------------
     def _watch(self, readings: tuple[Reading, ...], pose_x_m: float, lane: Lane) -> None:
         """Containment from this snapshot on, against the drive's bounds (a snapshot that makes no scenario: none)."""
-        self.breached_before = {body for body, b in (self.containment.breached.items() if self.containment else ())
+        old = self.containment
+        self.breached_before = {body for body, b in (old.breached.items() if old else ())
                                 if body != -1 and b.kind.ends_decision}
+        if old is not None and not old.ended:
+            old.ended = True
+            self.summary.unseen_breaches += int(self.sound is not None and old.unseen())
         self.containment, self.interrupt = None, False
         if self.watch is None:
             return
@@ -212,8 +216,9 @@ class Simulator:
                                        self.summary.sim_time_s, self.traffic.cars())
 
     def _contain(self, pose: Pose, dt_s: float) -> None:
-        """One control step's containment check; under the sound model a breach by a vehicle (or of the AV's
-        envelope) ends the decision under way."""
+        """One control step's containment check against the truth (the simulator's bookkeeping); under the sound
+        model a breach of the AV's own envelope (its odometry against its reference) ends the decision under way, a
+        vehicle's only once the AV senses it (``_sense_breach``)."""
         c, report = self.containment, self.summary.containment
         assert c is not None
         report.checked_s += dt_s
@@ -227,8 +232,19 @@ class Simulator:
             found += [av] if av is not None else []
         for breach in found:
             report.add(breach)
-        if any(b.kind.ends_decision for b in found) and self.sound is not None and self.takeover is None:
+        if any(b.body == -1 for b in found) and self.sound is not None and self.takeover is None:
             self.interrupt = True
+
+    def _sense_breach(self, pose: Pose) -> None:
+        """The AV's own monitor on this sweep's readings, as its planner gets them (``Containment.sense``): a reading
+        the decision's sets cannot explain ends a sound decision (not a take-over under way: the next decision
+        ends at once instead)."""
+        c = self.containment
+        if c is None or self.sound is None:
+            return
+        if c.sense(self.summary.sim_time_s, self.summary.km, pose.x_m, self._sense(), self.doing) is not None:
+            self.summary.sensed_breaches += 1
+            self.interrupt = self.interrupt or self.takeover is None
 
     def _sensed(self, car: KinematicCar) -> bool:
         """Whether ``car`` is sensed now (exact rays, whatever the drive's sensor model: a vehicle the sensors could
@@ -340,6 +356,7 @@ class Simulator:
                                        (0.0, 0.0) if t.read_m is not None else (t.place_m - t.lo_m, t.hi_m - t.place_m))
                                for t in told)
             self.unresolved = view.unresolved
+        self._sense_breach(pose)
         self.lead = Nearest.after(self.lead, self.sweep, SENSORS.sweep_hz)
         self.follower = Nearest.after(self.follower, self.sweep, SENSORS.sweep_hz, behind=True)
         self.oncoming = Nearest.after(self.oncoming, self.sweep, SENSORS.sweep_hz, Lane.RIGHT)
@@ -533,7 +550,8 @@ class Simulator:
         if step is not None:
             self.summary.keep_lane_steps += 1
             return self._sound_execute((step,), readings, pose.speed_mps, f"keeping the lane ({why})")
-        if self.proved is not None and not self.proved.world_breached():
+        if self.proved is not None and self.proved.sensed is None and self.proved.sense(
+                self.summary.sim_time_s, self.summary.km, pose.x_m, readings, self.doing) is None:
             return self._keep_proved(why)
         return self._fallback(f"{why}, and no safe step in lane")
 
@@ -558,12 +576,12 @@ class Simulator:
     def _sound_execute(self, actions: tuple[Action, ...], readings: tuple[Reading, ...], speed_mps: float,
                        what: str) -> bool:
         """Execute a sound decision's actions from the car's own speed (its reference starts at the car), while
-        containment holds; a breach ends it at once (after any sideways move), and a vehicle that broke the previous
-        decision's assumptions and breaks this one's too hands the AV to the fallback."""
+        its containment holds as the AV senses it; a sensed breach ends it at once (after any sideways move), and the
+        next decision re-plans from a fresh snapshot."""
         self._hand_back()
         self.proved = self.containment
-        # a breach seen while a take-over was under way did not interrupt it; it ends this decision before its step
-        self.interrupt = self.interrupt or (self.containment is not None and self.containment.world_breached())
+        # a breach sensed while a take-over was under way did not interrupt it; it ends this decision before its step
+        self.interrupt = self.interrupt or (self.containment is not None and self.containment.sensed is not None)
         self.executor.reset_reference()
         known = {r.body for r in readings} if readings else {r.body for r in self._sense()}
         # a breach at the snapshot itself (sensed farther off than the error bound, a vehicle it missed): no step
@@ -588,12 +606,6 @@ class Simulator:
         if not self.interrupt:
             return True
         self.summary.breach_replans += 1
-        assert self.containment is not None
-        again = [b for body, b in self.containment.breached.items()
-                 if body in self.breached_before and b.kind.ends_decision]
-        if again:
-            return self._fallback(f"{again[0].vehicle} broke the assumptions of two decisions running "
-                                  f"({again[0].kind.value})")
         return True
 
     def _fallback(self, cause: str) -> bool:

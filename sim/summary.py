@@ -68,6 +68,8 @@ class RunSummary:
     decisions: int = 0  # snapshots containment was measured from (every decision, both models)
     containment: ContainmentReport = field(default_factory=ContainmentReport)
     breach_replans: int = 0  # sound decisions ended by a breach
+    sensed_breaches: int = 0  # sound decisions whose readings the AV's own monitor could not explain
+    unseen_breaches: int = 0  # sound decisions that went on past a vehicle's breach the AV never sensed
     keep_lane_steps: int = 0  # sound decisions without an overtake: one safe step in lane
     minimal_risk_steps: int = 0  # sound decisions without a plan or a step: the last decision's proved continuation
     shadowed: int = 0  # sound decisions whose snapshot had the oncoming lane hidden behind a left-lane vehicle
@@ -120,7 +122,8 @@ class RunSummary:
                 "safety": self.safety.to_json(), "traffic_collisions": self.traffic_collisions,
                 "snapshots": self.snapshots, "restarts": self.restarts, "opportunities": self.opportunities.to_json(),
                 "decisions": self.decisions, "containment": self.containment.to_json(),
-                "breach_replans": self.breach_replans, "keep_lane_steps": self.keep_lane_steps,
+                "breach_replans": self.breach_replans, "sensed_breaches": self.sensed_breaches,
+                "unseen_breaches": self.unseen_breaches, "keep_lane_steps": self.keep_lane_steps,
                 "minimal_risk_steps": self.minimal_risk_steps, "shadowed": self.shadowed,
                 "takeovers": [asdict(t) for t in self.takeovers], "sweeps": self.sweeps, "faults": self.faults,
                 "refusals": self.refusals}
@@ -139,6 +142,7 @@ class RunSummary:
                    else OpportunityReport(), decisions=data.get("decisions", 0),
                    containment=ContainmentReport.from_json(data["containment"]) if "containment" in data
                    else ContainmentReport(), breach_replans=data.get("breach_replans", 0),
+                   sensed_breaches=data.get("sensed_breaches", 0), unseen_breaches=data.get("unseen_breaches", 0),
                    keep_lane_steps=data.get("keep_lane_steps", 0), minimal_risk_steps=data.get("minimal_risk_steps", 0),
                    takeovers=[Takeover(**t) for t in data.get("takeovers", [])], sweeps=data.get("sweeps", 0),
                    refusals=data.get("refusals", 0), shadowed=data.get("shadowed", 0),

@@ -18,7 +18,7 @@ from spec.grid import PAPER_GRID
 from spec.lanes import Lane
 from spec.physical import CAR, SENSORS
 from spec.scenario import make_scenario
-from spec.sound import Sound
+from spec.sound import Sound, reach_m
 
 BOUNDS = world_bounds("spread", "exact")  # 4.9 .. 9.1 m/s both lanes, no sensing error
 SOUND = Sound(BOUNDS)
@@ -189,3 +189,62 @@ def test_an_unknown_vehicle_is_held_to_a_phantom_by_position_only() -> None:
     c = watch({}, {})
     beyond = car(5, SENSORS.left_range_m + 10.0, 0.0)
     assert c.check(0.1, 0.0, AV, [beyond], [], "drive", lambda _c: True) == []  # type: ignore[list-item]
+
+
+# -- the AV's own monitor: the sweep's readings, no identities, no truth -----------------------------------------------
+NOISY = Sound(world_bounds("spread", "noisy"))  # the same speeds, a sensing error bound
+
+
+def watch_noisy(left: dict[int, float], oncoming: dict[int, float]) -> Containment:
+    readings = tuple(Reading(Lane.LEFT, b, dx) for b, dx in left.items()) + tuple(
+        Reading(Lane.RIGHT, b, dx) for b, dx in oncoming.items())
+    from sim.discretiser import discretise
+
+    scenario = discretise(readings, Lane.LEFT, PAPER_GRID, measured=True)
+    cars = [car(b, dx) for b, dx in (left | oncoming).items()]
+    return Containment(1, NOISY, scenario, readings, PAPER_GRID, 0.0, 0.0, cars)  # type: ignore[arg-type]
+
+
+@given(speed=st.floats(BOUNDS.same_mps.low_mps, BOUNDS.same_mps.high_mps),
+       onc=st.floats(BOUNDS.oncoming_mps.low_mps, BOUNDS.oncoming_mps.high_mps), t_s=st.floats(0.0, 30.0),
+       error=st.floats(-1.0, 1.0), av_mps=st.floats(3.5, 14.0))
+def test_the_avs_monitor_explains_every_reading_within_the_bounds_and_the_error(speed: float, onc: float, t_s: float,
+                                                                                 error: float, av_mps: float) -> None:
+    """Readings of vehicles that kept their lane's speeds, each off by at most the sensing error bound, and read from
+    wherever the AV has got to, are explained: no sensed breach, whatever the readings carry as body ids (none used)."""
+    c = watch_noisy({1: 40.0}, {2: 250.0})
+    err_m = NOISY.bounds.sensing_error_m * error
+    av_x = av_mps * t_s
+    sweep = (Reading(Lane.LEFT, 99, 40.0 + speed * t_s + err_m - av_x),
+             Reading(Lane.RIGHT, 98, 250.0 - onc * t_s + err_m - av_x))
+    assert c.sense(t_s, 0.0, av_x, sweep, "drive") is None and c.sensed is None
+
+
+@pytest.mark.parametrize(("reading", "kind"), [(Reading(Lane.LEFT, 1, 40.0 + 1.0 * 10), BreachKind.TOO_SLOW),
+                                               (Reading(Lane.LEFT, 1, 40.0 + 12.0 * 10), BreachKind.APPEARED),
+                                               (Reading(Lane.RIGHT, 2, 250.0 - 14.0 * 10), BreachKind.TOO_FAST),
+                                               (Reading(Lane.LEFT, 7, 12.0), BreachKind.APPEARED)])
+def test_a_reading_no_set_explains_is_a_sensed_breach_once_and_names_its_lane(reading: Reading,
+                                                                              kind: BreachKind) -> None:
+    """A vehicle ahead that slowed to 1 m/s, one far beyond every interval (into the phantom's stretch it is no
+    breach; short of it, where nothing was known: appeared), an oncoming one at 14 m/s, a reading between the AV and
+    the vehicle it knew: each is found in the sweep alone, once per decision, by the lane it was read in."""
+    c = watch_noisy({1: 40.0}, {2: 250.0})
+    found = c.sense(10.0, 0.0, 0.0, (reading,), "drive")
+    if kind is BreachKind.APPEARED and reading.dx_m > 100:  # beyond the known vehicle, in the phantom's reach or not
+        explained = any(lo <= reading.dx_m <= hi for lo, hi in
+                        (reach_m(v, NOISY.bounds, 10.0) for v in c.phantoms[Lane.LEFT]))
+        assert (found is None) == explained
+        return
+    assert found is not None and found.kind is kind and found.sensed and c.sensed_lane is reading.lane
+    assert c.sense(11.0, 0.0, 0.0, (reading,), "drive") is None  # once
+
+
+def test_the_truth_alone_never_ends_a_decision_a_sensed_reading_does() -> None:
+    """A vehicle outside its interval is the simulator's breach (``check``) but not the AV's until a reading shows
+    it: ``unseen`` until then."""
+    c = watch_noisy({1: 40.0}, {})
+    assert c.check(10.0, 0.0, AV, [car(1, 40.0 + 1.0 * 10, 1.0)], [], "drive", never)  # type: ignore[arg-type]
+    assert c.world_breached() and c.unseen()
+    assert c.sense(10.0, 0.0, 0.0, (Reading(Lane.LEFT, -5, 50.0),), "drive") is not None
+    assert not c.unseen()

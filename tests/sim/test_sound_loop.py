@@ -1,5 +1,6 @@
 """The sound model in the closed loop: plans from the car's measured speed, containment every control step, no
-decision kept past a breach, the fallback when the world breaks the assumptions, every encounter attributed."""
+decision kept past a breach the AV senses, the fallback when the world breaks the assumptions, every encounter
+attributed."""
 
 from __future__ import annotations
 
@@ -15,20 +16,27 @@ from spec.physical import LOOP
 
 
 class Watched(Simulator):
-    """A simulator that checks, on every control step, that no action of a sound decision runs on after a breach by
-    a vehicle for longer than one control step and a sideways move."""
+    """A simulator that checks, on every control step, that no action of a sound decision runs on after a breach the
+    AV sensed for longer than one control step and a sideways move; and how long after the truth's breach the AV
+    sensed one."""
 
     def __init__(self, *args: object, **kwargs: object) -> None:
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
-        self.first_breach: dict[int, float] = {}  # decision -> when a vehicle broke its assumptions
+        self.first_breach: dict[int, float] = {}  # decision -> when the AV sensed a breach of its assumptions
         self.longest_s = 0.0
+        self.truth_first: dict[int, float] = {}  # decision -> when a vehicle broke them (the truth)
+        self.lags_s: list[float] = []  # per decision breached in both: sensed minus true
 
     def _tick(self, dt_s: float) -> bool:
         ok = super()._tick(dt_s)
         c = self.containment
-        if c is not None and c.world_breached() and self.enveloped:
-            since = self.first_breach.setdefault(c.decision, self.summary.sim_time_s)
+        if c is not None and c.world_breached():
+            self.truth_first.setdefault(c.decision, self.summary.sim_time_s)
+        if c is not None and c.sensed is not None and self.enveloped:
+            since = self.first_breach.setdefault(c.decision, c.sensed.t_s)
             self.longest_s = max(self.longest_s, self.summary.sim_time_s - since)
+            if c.decision in self.truth_first and len(self.lags_s) < len(self.first_breach):
+                self.lags_s.append(since - self.truth_first[c.decision])
         return ok
 
 
@@ -49,19 +57,25 @@ def test_sound_plans_start_from_the_cars_measured_speed_and_nothing_inside_the_a
     assert RunSummary.from_json(summary.to_json()).to_json() == summary.to_json()
 
 
-def test_no_sound_decision_runs_on_past_a_breach_and_a_broken_world_is_counted() -> None:
-    config = DriveConfig(1.0, model="sound", traffic="spread", stop_rate_per_h=300.0)  # stops: too slow by far
+def test_no_sound_decision_runs_on_past_a_sensed_breach_and_a_broken_world_is_counted() -> None:
+    """Vehicles that stop (too slow by far): the truth's breaches are counted, the AV senses them from its sweeps and
+    ends its decision within a control step and a sideways move of that, and it senses them no sooner than they
+    happen (the monitor reads no truth)."""
+    config = DriveConfig(1.0, model="sound", traffic="spread", stop_rate_per_h=300.0)
     sim, summary = drive(config, 2)
     assert summary.containment.by_kind.get("too slow", 0) > 0
-    assert summary.breach_replans + len(summary.takeovers) > 0
+    assert summary.sensed_breaches > 0 and summary.breach_replans + len(summary.takeovers) > 0
     assert sim.longest_s <= LOOP.lane_change_lateral_s + 2 * sim.executor.dt_s
+    assert sim.lags_s and min(sim.lags_s) >= 0.0
 
 
-def test_a_breach_at_the_snapshot_itself_ends_the_decision_before_its_first_step() -> None:
-    """Noisy sensing: a reading off by more than the error bound, or a vehicle missed, is out of the set at once."""
+def test_a_sensor_noisier_than_its_bound_is_a_breach_the_av_finds_in_its_sweeps_not_at_the_snapshot() -> None:
+    """Sensing noise 3 m against the bounds' 1.5 m error: the truth shows readings off by more than the bound at the
+    snapshot itself (bookkeeping: ``sensing error``); the AV cannot know a snapshot wrong, but the sweeps after it
+    disagree with the sets made from it by more than twice the bound, and those end its decisions."""
     _, summary = drive(DriveConfig(2.0, model="sound", sensor="noisy", range_sd_m=3.0), 20261126)
     at_snapshot = [b for b in summary.containment.breaches if b.kind.value in ("sensing error", "appeared")]
-    assert at_snapshot and summary.breach_replans > 0
+    assert at_snapshot and summary.sensed_breaches > 0 and summary.breach_replans > 0
 
 
 def test_paper_model_drives_measure_containment_without_acting_on_it() -> None:
@@ -115,14 +129,15 @@ def test_the_fallback_neither_brakes_below_traffic_that_keeps_its_speed_nor_retu
     15.5 km): it now brakes on while the gap still closes. Then it held that gap, 2 m behind the vehicle ahead and
     10 m before the one behind, where no decision found a safe step: 1,648 take-overs in a row from 15.4 km. It now
     opens the gap towards the middle of its slot, for the speed it hands back at, and no decision is left without
-    a safe step in lane."""
+    a safe step in lane for long: a few such take-overs, each handed back (seed 4's two, since the AV's own monitor
+    decides on what it senses: one found no plan where a fault showed what the truth did not)."""
     takeovers = 0
     for seed, km in ((6, 3.0), (4, 22.0), (12, 17.0)):
         summary = run_drive_summary(seed, km)
         assert summary.failure is None, (seed, summary.failure)
         takeovers += len(summary.takeovers)
         stuck = [t for t in summary.takeovers if t.cause.endswith("no safe step in lane")]
-        assert len(stuck) <= 1, (seed, len(stuck), stuck[:3])
+        assert len(stuck) <= 3, (seed, len(stuck), stuck[:3])  # a loop: 75 to 1,648 (2 on seed 4 now: sensed)
     assert takeovers  # the fallback did act (seed 6 no longer needs it by 3 km: the shadowed oncoming lane)
 
 
