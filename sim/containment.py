@@ -159,7 +159,6 @@ class Containment:
         self.generation = {car.body: car.respawns for car in cars}  # a respawned car is a new vehicle
         self.breached: dict[int, Breach] = {}  # body (-1: the AV) -> its first breach under this decision
         self.sensed: Breach | None = None  # the first reading the AV's own monitor could not explain (``sense``)
-        self.sensed_lane: Lane | None = None  # and its lane
         self.ended = False  # the decision has ended (its unseen breaches counted: ``unseen``)
 
     def shift_x(self, dx_m: float) -> None:
@@ -268,7 +267,6 @@ class Containment:
                 kind = BreachKind.TOO_SLOW if (miss < 0) == (r.lane is Lane.LEFT) else BreachKind.TOO_FAST
             self.sensed = Breach(self.decision, km, t_s, f"a sensed {r.lane.value}-lane reading at {r.dx_m:+.1f} m",
                                  -2, kind, abs(miss) if math.isfinite(miss) else 0.0, doing, sensed=True)
-            self.sensed_lane = r.lane
             return self.sensed
         return None
 

@@ -584,7 +584,7 @@ class Simulator:
         self.interrupt = self.interrupt or (self.containment is not None and self.containment.sensed is not None)
         self.executor.reset_reference()
         known = {r.body for r in readings} if readings else {r.body for r in self._sense()}
-        # a breach at the snapshot itself (sensed farther off than the error bound, a vehicle it missed): no step
+        # a breach sensed before the first step (while a take-over was handing back): no step
         executed = () if self.interrupt else actions[: LOOP.replan_after_actions]
         self.pending = actions[len(executed):]
         self.enveloped = True

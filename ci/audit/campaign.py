@@ -458,8 +458,8 @@ def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any])
                      f"{figure(r.collisions_per_1000_km)} | {r.near_misses} | {figure(r.near_misses_per_1000_km)} | "
                      f"{r.opportunity_total('missed')} ({r.opportunity_total('checked')}) | "
                      f"{figure(r.missed_per_1000_km)} | {figure(r.delayed_per_1000_km)} | "
-                     f"{r.traffic_collisions} | {r.min_gap_left_m} | {r.min_gap_oncoming_m} | {r.violations} | "
-                     f"{r.plan_ms_median} |")
+                     f"{r.traffic_collisions} | {figure(r.min_gap_left_m, 2)} | {figure(r.min_gap_oncoming_m, 2)} | "
+                     f"{r.violations} | {figure(r.plan_ms_median, 2)} |")
     lines += models_markdown(audit_rows)
     if any(r.faults for r in audit_rows):
         lines += ["", "## Faults injected (docs/faults.md) and the failures attributed to them", "",
@@ -511,8 +511,10 @@ def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any])
               "verifier for each: the AV's measured speed is part of it; compilation is not in the figures).", "",
               "| cell m | model | engine | n | median ms | p99 ms | median states explored | incomplete |",
               "|---|---|---|---|---|---|---|---|"]
-    lines += [f"| {c.cell_m:g} | {c.model} | {c.engine} | {c.n} | {c.median_ms} | {c.p99_ms} | {c.median_states} | "
-              f"{c.incomplete} |" for c in costs]
+    lines += [f"| {c.cell_m:g} | {c.model} | {c.engine} | {c.n} | {figure(c.median_ms, 2)} | {figure(c.p99_ms, 2)} | "
+              f"{figure(c.median_states, 0)} | {c.incomplete} |" for c in costs]
+    if any(c.n == 0 for c in costs):
+        lines += ["", "\"-\": no snapshot was kept for that row (`--snapshots 0`, or no decision at that cell size)."]
     return "\n".join(lines) + "\n"
 
 

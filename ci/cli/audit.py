@@ -157,7 +157,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
                           f"{r.near_misses} ({figure(r.near_misses_per_1000_km)})",
                           f"{r.opportunity_total('missed')} ({r.opportunity_total('checked')})",
                           figure(r.missed_per_1000_km), figure(r.delayed_per_1000_km), str(r.traffic_collisions),
-                          str(r.min_gap_left_m), str(r.violations), str(r.plan_ms_median))
+                          figure(r.min_gap_left_m, 2), str(r.violations), figure(r.plan_ms_median, 2))
         print_table(table, 4, "audit.md and audit.json")
         models = Table(title="the models side by side: safety inside / after the assumptions, containment, price")
         for col in ("cell m", "traffic", "sensing", "model", "overtakes /km", "collisions in / after /1000 km",
@@ -186,8 +186,8 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
         for col in ("cell m", "model", "engine", "n", "median ms", "p99 ms", "median states", "incomplete"):
             cost_table.add_column(col, justify="right")
         for c in costs:
-            cost_table.add_row(f"{c.cell_m:g}", c.model, c.engine, str(c.n), str(c.median_ms), str(c.p99_ms),
-                               str(c.median_states), str(c.incomplete))
+            cost_table.add_row(f"{c.cell_m:g}", c.model, c.engine, str(c.n), figure(c.median_ms, 2),
+                               figure(c.p99_ms, 2), figure(c.median_states, 0), str(c.incomplete))
         print_table(cost_table, 3, "audit.md and audit.json")
         out.print("written: " + ", ".join(str(p) for p in paths))
     sys.exit(ExitCode.OK)

@@ -236,7 +236,7 @@ def test_a_reading_no_set_explains_is_a_sensed_breach_once_and_names_its_lane(re
                         (reach_m(v, NOISY.bounds, 10.0) for v in c.phantoms[Lane.LEFT]))
         assert (found is None) == explained
         return
-    assert found is not None and found.kind is kind and found.sensed and c.sensed_lane is reading.lane
+    assert found is not None and found.kind is kind and found.sensed and reading.lane.value in found.vehicle
     assert c.sense(11.0, 0.0, 0.0, (reading,), "drive") is None  # once
 
 

@@ -70,14 +70,16 @@ def test_missed_opportunities_are_estimated_per_reason_from_the_checked_share() 
 def test_an_undefined_rate_prints_as_a_dash_never_nan() -> None:
     from collections import Counter
 
-    from ci.audit.campaign import Done, markdown
+    from ci.audit.campaign import Done, markdown, planning_cost
     from sim.opportunity import OpportunityReport
     from sim.summary import RunSummary
 
     unchecked = OpportunityReport({"outside_window": Counter(qualifying=3)})
-    table = rows([Done(DriveConfig(5.0), RunSummary(1, km=0.0, opportunities=unchecked))])
-    text = markdown(table, [], {})
-    assert "nan" not in text.lower() and "| - |" in text
+    done = [Done(DriveConfig(5.0), RunSummary(1, km=0.0, opportunities=unchecked))]
+    costs = planning_cost(done, ("interpreter",))  # no snapshot kept (--snapshots 0): no figure to give
+    text = markdown(rows(done), costs, {})
+    assert costs and costs[0].n == 0
+    assert "nan" not in text.lower() and "none" not in text.lower() and "| - |" in text and "no snapshot" in text
 
 
 def test_a_deviation_quantile_is_a_bound_never_above_the_largest_seen() -> None:
