@@ -423,8 +423,9 @@ def models_markdown(audit_rows: list[Row]) -> list[str]:
              "Collisions and near misses are split by attribution (sim.containment): inside the assumptions (no "
              "breach by the vehicle involved under the decision under way: a soundness failure, each one a bug) or "
              "after an assumption broke. Containment is measured under both models against the world's bounds "
-             "(spec.assumptions.world_bounds); only the sound model acts on a breach (re-plan; the fallback when "
-             "the same vehicle breaks two decisions running, or no plan and no safe step is left).", "",
+             "(spec.assumptions.world_bounds), from the truth, to attribute; only the sound model acts, on the "
+             "breaches its own monitor finds in the sweeps' readings (re-plan; the fallback when no plan and no safe "
+             "step is left).", "",
              "| cell m | traffic | sensing | model | km | overtakes /km | collisions inside / after per 1,000 km | "
              "near misses inside / after per 1,000 km | breaches /1,000 km (by kind) | time after a breach | "
              "decisions | re-plans on a breach | keep-lane steps | minimal-risk | take-overs (after a breach) | "
