@@ -144,6 +144,28 @@ def test_crossval_with_hypothesis_prints_its_seed_and_records_verdicts(tmp_path:
     assert data["properties"]["validity"]["checked"] > 0 and data["properties"]["no_plan_proof"]["checked"] > 0
 
 
+def test_count_spreads_its_scenarios_evenly_through_the_source_in_order() -> None:
+    from ci.conformance.crossval import spread
+
+    space = list(parse_space("left=2@8..12,right=1@12..16,lanes=both", PAPER_GRID).scenarios(PAPER_GRID, None))
+    picked = spread(space, 5)
+    assert len(picked) == 5 and picked[0] == space[0] and picked[-1] in space[len(space) * 4 // 5:]
+    assert [space.index(s) for s in picked] == sorted(space.index(s) for s in picked)  # in the space's order
+    assert spread(space, len(space) + 1) == space and spread(space, None) == space
+
+
+def test_a_campaign_with_a_verdict_not_reached_and_none_failed_exits_3_and_records_its_count(tmp_path: Path) -> None:
+    """Z3 given no time: every verdict that needs it is incomplete, none failed: "nothing is claimed" (exit 3),
+    not "a property failed" (6); --count 2 checks two of the library's scenarios and is part of the record."""
+    done = run_cli("crossval", "--engines", "interpreter,z3", "--properties", "existence,shortest_length",
+                   "--count", "2", "--timeout", "0.0001", "--workers", "1", "--max-reproducers", "0",
+                   "--out", str(tmp_path), "--json", timeout_s=300)
+    assert done.returncode == 3, done.stderr
+    data = json.loads(done.stdout)
+    assert data["properties"]["existence"] == {"checked": 2, "held": 0, "failed": 0, "incomplete": 2}
+    assert data["campaign"]["count"] == 2
+
+
 @pytest.mark.parametrize(("args", "words"), [
     (("--properties", "existence,psychic"), ["--properties", "'psychic'", "unknown property"]),
     (("--engines", "interpreter,quantum"), ["--engine", "unknown engine"]),

@@ -3,6 +3,7 @@ daily rotation reaches every mutant within its stated number of days."""
 
 from __future__ import annotations
 
+import argparse
 import datetime
 import math
 import re
@@ -51,11 +52,21 @@ def test_cis_daily_share_reaches_every_mutant_within_a_week() -> None:
     assert math.ceil(len(MUTANTS) / int(found.group(1))) <= 7
 
 
+def test_count_checks_the_first_of_those_chosen() -> None:
+    from ci.mutation.check import _chosen
+
+    args = argparse.Namespace(mutants=None, rotate=2, date="2026-11-23", count=1)
+    assert [m.name for m in _chosen(args)] == [rotation(2, datetime.date(2026, 11, 23))[0].name]
+    everything = argparse.Namespace(mutants=None, rotate=None, date=None, count=3)
+    assert [m.name for m in _chosen(everything)] == [m.name for m in MUTANTS[:3]]
+
+
 def test_bad_mutation_input_is_exit_two(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--mutants", "no-such-mutant"]) == 2
     assert main(["--rotate", "0"]) == 2
     assert main(["--rotate", "2", "--date", "23/11/2026"]) == 2
+    assert main(["--count", "0"]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
-    assert len(lines) == 3 and "no-such-mutant" in lines[0] and "--date" in lines[-1]
+    assert len(lines) == 4 and "no-such-mutant" in lines[0] and "--date" in lines[2] and "--count" in lines[-1]
     with pytest.raises(OptionError):
         mutant("nope")
