@@ -35,6 +35,7 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 from sim.discretiser import in_window, reading_cell
+from sim.faults import GHOST_BODY
 from sim.scene import Scene
 from sim.sensors import SHADOW_BODY, Reading
 from sim.vehicle import KinematicCar, Pose
@@ -53,6 +54,8 @@ MAX_RECORDS = 200
 ROUNDING_M = 1e-6
 #: The same for speeds: the paper's world sets every vehicle's speed to the bound's one value, exactly.
 ROUNDING_MPS = 1e-9
+#: The ``body`` of a breach the AV's own monitor found: a reading, no vehicle's identity (the AV is -1).
+SENSED_BODY = -4
 
 
 class BreachKind(enum.Enum):
@@ -60,7 +63,8 @@ class BreachKind(enum.Enum):
 
     TOO_SLOW = "too slow"  # behind its interval's slow end, or driving slower than its lane's lowest speed
     TOO_FAST = "too fast"  # beyond its interval's fast end, or driving faster than its lane's highest speed
-    SENSING = "sensing error"  # outside its interval at the snapshot itself: sensed farther off than the error bound
+    SENSING = "sensing error"  # outside its interval at the snapshot itself (sensed farther off than the error
+    # bound), or a reading of no vehicle in the snapshot (a ghost)
     APPEARED = "appeared"  # a vehicle the decision did not know, where no phantom could be
     FOLLOWER = "follower too close"  # one behind the AV in its lane nearer than the safety specification allows
     AV_ENVELOPE = "AV envelope"  # the AV off its reference by more than its stated tracking, or its sideways move late
@@ -156,6 +160,9 @@ class Containment:
                     self.phantoms[lane].append(replace(vehicle, index=None, hi_m=math.inf))
                 else:
                     self.tracked[reading.body] = vehicle
+        # a reading of no vehicle (a ghost a fault made, or one the tracker holds): the snapshot broke the sensing
+        # assumption (every reading within the error bound of a vehicle), whatever it is planned around
+        self.ghosts = [r for r in seen if r.body == GHOST_BODY]
         self.generation = {car.body: car.respawns for car in cars}  # a respawned car is a new vehicle
         self.breached: dict[int, Breach] = {}  # body (-1: the AV) -> its first breach under this decision
         self.sensed: Breach | None = None  # the first reading the AV's own monitor could not explain (``sense``)
@@ -178,6 +185,10 @@ class Containment:
         another is no vehicle a decision could have known)."""
         elapsed = t_s - self.t0_s
         out = []
+        if self.ghosts and GHOST_BODY not in self.breached:
+            ghost = self.ghosts[0]
+            out.append(self._breach(Breach(self.decision, km, t_s, f"a reading of no vehicle ({ghost.lane.value} "
+                                           f"lane, {ghost.dx_m:+.1f} m)", GHOST_BODY, BreachKind.SENSING, 0.0, doing)))
         av_in_left = av.y_m >= 0
         for lane, cars in ((Lane.LEFT, left), (Lane.RIGHT, oncoming)):
             for car in cars:
@@ -266,7 +277,7 @@ class Containment:
             else:
                 kind = BreachKind.TOO_SLOW if (miss < 0) == (r.lane is Lane.LEFT) else BreachKind.TOO_FAST
             self.sensed = Breach(self.decision, km, t_s, f"a sensed {r.lane.value}-lane reading at {r.dx_m:+.1f} m",
-                                 -2, kind, abs(miss) if math.isfinite(miss) else 0.0, doing, sensed=True)
+                                 SENSED_BODY, kind, abs(miss) if math.isfinite(miss) else 0.0, doing, sensed=True)
             return self.sensed
         return None
 

@@ -248,3 +248,19 @@ def test_the_truth_alone_never_ends_a_decision_a_sensed_reading_does() -> None:
     assert c.world_breached() and c.unseen()
     assert c.sense(10.0, 0.0, 0.0, (Reading(Lane.LEFT, -5, 50.0),), "drive") is not None
     assert not c.unseen()
+
+
+def test_a_reading_of_no_vehicle_in_the_snapshot_is_a_sensing_breach_of_the_truth_not_the_avs() -> None:
+    """A ghost (a fault's reading where no vehicle is) in a decision's snapshot broke the sensing assumption: the
+    truth's bookkeeping records it at once (so a take-over it leads to counts as after an assumption broke); the AV,
+    whose sets were made from that snapshot, has nothing to sense."""
+    from sim.discretiser import discretise
+    from sim.faults import GHOST_BODY
+
+    readings = (Reading(Lane.LEFT, 1, 40.0), Reading(Lane.LEFT, GHOST_BODY, -2.0))
+    scenario = discretise(readings, Lane.LEFT, PAPER_GRID, measured=True)
+    c = Containment(1, NOISY, scenario, readings, PAPER_GRID, 0.0, 0.0, [car(1, 40.0)])  # type: ignore[list-item]
+    found = c.check(0.0, 0.0, AV, [car(1, 40.0)], [], "drive", never)  # type: ignore[list-item]
+    assert [(b.kind, b.body) for b in found] == [(BreachKind.SENSING, GHOST_BODY)] and "no vehicle" in found[0].vehicle
+    assert c.world_breached() and c.check(1.0, 0.0, AV, [car(1, 47.0)], [], "drive", never) == []  # type: ignore[list-item]
+    assert c.sense(0.0, 0.0, 0.0, readings, "drive") is None
