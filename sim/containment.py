@@ -165,6 +165,9 @@ class Containment:
         self.ghosts = [r for r in seen if r.body == GHOST_BODY]
         self.generation = {car.body: car.respawns for car in cars}  # a respawned car is a new vehicle
         self.breached: dict[int, Breach] = {}  # body (-1: the AV) -> its first breach under this decision
+        # what may explain a reading of each lane (``sense``): the vehicles the decision knew, then the phantoms
+        self.explaining = {lane: [*dict.fromkeys(v for v in self.tracked.values() if v.lane is lane),
+                                  *self.phantoms[lane]] for lane in Lane}
         self.sensed: Breach | None = None  # the first reading the AV's own monitor could not explain (``sense``)
         self.ended = False  # the decision has ended (its unseen breaches counted: ``unseen``)
 
@@ -266,9 +269,8 @@ class Containment:
             if r.lane is Lane.RIGHT and r.dx_m < -CAR.length_m:
                 continue
             lo, hi = (av_x_m - self.x0_m + end for end in r.interval_m)
-            known = [v for v in self.tracked.values() if v.lane is r.lane]
             misses = [(_apart(lo - error_m, hi + error_m, *reach_m(v, self.bounds, elapsed)), v.index is not None)
-                      for v in (*known, *self.phantoms[r.lane])]
+                      for v in self.explaining[r.lane]]
             if any(miss == 0.0 for miss, _ in misses):
                 continue
             miss, of_known = min(misses, key=lambda m: abs(m[0]), default=(math.inf, False))

@@ -28,7 +28,7 @@ import numpy as np
 
 from oracle.sound import keep_lane
 from sim import opportunity
-from sim.containment import Containment
+from sim.containment import BreachKind, Containment
 from sim.discretiser import discretise, in_window, reading_cell
 from sim.executor import Executor
 from sim.faults import GHOST_BODY, FaultEvent, FaultySensor, SteeringFault, attribute
@@ -121,7 +121,7 @@ class Simulator:
         self.containment: Containment | None = None  # the sets of the decision under way
         self.enveloped = False  # a sound decision's action is under way: the AV is held to its envelope
         self.interrupt = False  # a breach asks the sound model's decision under way to end
-        self.breached_before: set[int] = set()  # vehicles that broke the previous decision's assumptions (truth)
+        self.broken_before = False  # a vehicle broke the previous decision's assumptions (the truth: bookkeeping)
         self.takeover: Takeover | None = None  # the fallback's take-over under way
         self.proved: Containment | None = None  # the containment of the last sound decision that was executed
         self.sweep: tuple[Reading, ...] | None = ()  # the last sweep the sensors delivered (None: it was dropped)
@@ -197,8 +197,7 @@ class Simulator:
     def _watch(self, readings: tuple[Reading, ...], pose_x_m: float, lane: Lane) -> None:
         """Containment from this snapshot on, against the drive's bounds (a snapshot that makes no scenario: none)."""
         old = self.containment
-        self.breached_before = {body for body, b in (old.breached.items() if old else ())
-                                if body != -1 and b.kind.ends_decision}
+        self.broken_before = old is not None and old.world_breached()
         if old is not None and not old.ended:
             old.ended = True
             self.summary.unseen_breaches += int(self.sound is not None and old.unseen())
@@ -232,7 +231,7 @@ class Simulator:
             found += [av] if av is not None else []
         for breach in found:
             report.add(breach)
-        if any(b.body == -1 for b in found) and self.sound is not None and self.takeover is None:
+        if any(b.kind is BreachKind.AV_ENVELOPE for b in found) and self.sound is not None and self.takeover is None:
             self.interrupt = True
 
     def _sense_breach(self, pose: Pose) -> None:
@@ -614,7 +613,7 @@ class Simulator:
         nearer than the safety specification allows (``_brake_in_lane``)."""
         pose = self.car.pose()
         again = self.takeover is not None and self.takeover.outcome == "under way"
-        broke = bool(self.breached_before) or (self.containment is not None and self.containment.world_breached()) \
+        broke = self.broken_before or (self.containment is not None and self.containment.world_breached()) \
             or (again and self.takeover is not None and self.takeover.after_breach)  # one take-over after another
         if again and self.takeover is not None:
             self.takeover.outcome = "taken over again"
