@@ -39,6 +39,7 @@ from sim.faults import GHOST_BODY
 from sim.scene import Scene
 from sim.sensors import SHADOW_BODY, Reading
 from sim.vehicle import KinematicCar, Pose
+from spec.assumptions import Bounds
 from spec.grid import Grid
 from spec.lanes import Lane
 from spec.physical import CAR, ROAD
@@ -150,6 +151,10 @@ class Containment:
         by_index = {(v.lane, v.index): v for v in found if v.index is not None}
         self.phantoms = {lane: [v for v in found if v.index is None and v.lane is lane] for lane in Lane}
         self.tracked: dict[int, Vehicle] = {}
+        cars = list(cars)
+        truth_m = {car.body: car.x_m - av_x_m for car in cars}  # the bookkeeping only
+        own = _own_readings(seen, truth_m)
+        read: dict[Vehicle, None] = {}  # the vehicles the snapshot's readings make, in order: what the AV knows
         for lane in Lane:  # a lane's cells in the window, nearest first, are its scenario's vehicles in order
             readings = sorted((r for r in seen if r.lane is lane), key=lambda r: r.dx_m)  # readings in one cell: one
             cells = [(c, r) for r in readings if in_window(c := reading_cell(r, scenario.lane, grid), grid)]  # hull
@@ -158,16 +163,22 @@ class Containment:
                 vehicle = by_index[(lane, order.index(cell))]
                 if reading.body == SHADOW_BODY:  # the hidden stretch: any vehicle from there on may be in it
                     self.phantoms[lane].append(replace(vehicle, index=None, hi_m=math.inf))
-                else:
+                    continue
+                read[vehicle] = None
+                if own.get(reading.body) is reading:
                     self.tracked[reading.body] = vehicle
-        # a reading of no vehicle (a ghost a fault made, or one the tracker holds): the snapshot broke the sensing
+        # a reading of no vehicle (a ghost a fault made, or one the tracker holds), or a vehicle's second reading away
+        # from it (a fake gap's displaced copy held beside the vehicle's own kept track): the snapshot broke the sensing
         # assumption (every reading within the error bound of a vehicle), whatever it is planned around
         self.ghosts = [r for r in seen if r.body == GHOST_BODY]
+        error_m = self.bounds.sensing_error_m
+        self.misread = [(r, miss) for r in seen if r.body in own and r is not own[r.body]
+                        and (miss := abs(_apart(*r.interval_m, truth_m[r.body] - error_m, truth_m[r.body] + error_m)))]
         self.generation = {car.body: car.respawns for car in cars}  # a respawned car is a new vehicle
         self.breached: dict[int, Breach] = {}  # body (-1: the AV) -> its first breach under this decision
-        # what may explain a reading of each lane (``sense``): the vehicles the decision knew, then the phantoms
-        self.explaining = {lane: [*dict.fromkeys(v for v in self.tracked.values() if v.lane is lane),
-                                  *self.phantoms[lane]] for lane in Lane}
+        # what may explain a reading of each lane (``sense``): the vehicles the decision knew (from its readings, not
+        # the bookkeeping's bodies), then the phantoms
+        self.explaining = {lane: [*(v for v in read if v.lane is lane), *self.phantoms[lane]] for lane in Lane}
         self.sensed: Breach | None = None  # the first reading the AV's own monitor could not explain (``sense``)
         self.ended = False  # the decision has ended (its unseen breaches counted: ``unseen``)
 
@@ -192,6 +203,11 @@ class Containment:
             ghost = self.ghosts[0]
             out.append(self._breach(Breach(self.decision, km, t_s, f"a reading of no vehicle ({ghost.lane.value} "
                                            f"lane, {ghost.dx_m:+.1f} m)", GHOST_BODY, BreachKind.SENSING, 0.0, doing)))
+        for r, miss in self.misread:
+            if r.body not in self.breached:
+                out.append(self._breach(Breach(self.decision, km, t_s, f"a second reading of vehicle {r.body} ("
+                                               f"{r.lane.value} lane, {r.dx_m:+.1f} m)", r.body, BreachKind.SENSING,
+                                               miss, doing)))
         av_in_left = av.y_m >= 0
         for lane, cars in ((Lane.LEFT, left), (Lane.RIGHT, oncoming)):
             for car in cars:
@@ -295,6 +311,49 @@ class Containment:
     def world_breached(self) -> bool:
         """Whether a vehicle (not the AV) has broken an assumption under this decision that ends it."""
         return any(body != -1 and b.kind.ends_decision for body, b in self.breached.items())
+
+
+class Sighting:
+    """The vehicles one snapshot showed, as the planner knows them (readings: a lane and a distance, no identity), for
+    the paper's re-planning rule: re-plan when "new surrounding vehicles were sensed". A later reading is a vehicle
+    sensed anew when no reading of the snapshot can explain it under ``bounds``: that reading's interval (the sensing
+    error allowed), grown by its lane's speeds since (``spec.sound.reach_m``), meets none of the new reading's (its
+    own error allowed). A vehicle read at the snapshot and missed since explains nothing extra; one hidden then and
+    come out, or entered the sensors' range, is new. The oncoming lane's hidden stretch (``SHADOW_BODY``) is no
+    vehicle: what comes out of it is new."""
+
+    def __init__(self, readings: Iterable[Reading], bounds: Bounds, av_x_m: float, t_s: float) -> None:
+        self.bounds, self.x0_m, self.t0_s = bounds, av_x_m, t_s
+        error_m = bounds.sensing_error_m
+        self.known = {lane: [Vehicle(lane, None, r.interval_m[0] - error_m, r.interval_m[1] + error_m, "")
+                             for r in readings if r.lane is lane and r.body != SHADOW_BODY] for lane in Lane}
+
+    def shift_x(self, dx_m: float) -> None:
+        """The world was re-centred by ``dx_m``."""
+        self.x0_m += dx_m
+
+    def new(self, readings: Iterable[Reading], av_x_m: float, t_s: float) -> bool:
+        """Whether a reading of this sweep (the AV at ``av_x_m`` at ``t_s``) is a vehicle the snapshot did not show."""
+        elapsed, error_m = t_s - self.t0_s, self.bounds.sensing_error_m
+        for r in readings:
+            if r.body == SHADOW_BODY:
+                continue
+            lo, hi = (av_x_m - self.x0_m + end for end in r.interval_m)
+            if not any(_apart(lo - error_m, hi + error_m, *reach_m(v, self.bounds, elapsed)) == 0.0
+                       for v in self.known[r.lane]):
+                return True
+        return False
+
+
+def _own_readings(seen: Iterable[Reading], truth_m: dict[int, float]) -> dict[int, Reading]:
+    """Each vehicle's own reading among the snapshot's (the bookkeeping: bodies and the truth): of a vehicle read more
+    than once, the one nearest where it is."""
+    own: dict[int, Reading] = {}
+    for r in seen:
+        if r.body in truth_m and (r.body not in own or abs(r.dx_m - truth_m[r.body]) < abs(own[r.body].dx_m
+                                                                                          - truth_m[r.body])):
+            own[r.body] = r
+    return own
 
 
 def _apart(lo: float, hi: float, low: float, high: float) -> float:

@@ -70,7 +70,7 @@ def replay_frames(seed: int, config: DriveConfig, event_t_s: float, kind: str, c
     sim._tick = watched  # type: ignore[method-assign]
     try:
         with contextlib.suppress(_Reached):
-            sim.drive(config.km, config.until_failure)
+            sim.drive(config.km, config.stops_at_failure, config.until_sensing_failure)
         met = any(e.kind == kind and abs(e.t_s - event_t_s) < 0.05 for e in sim.summary.safety.encounters)
     finally:
         sim.close()

@@ -124,6 +124,9 @@ class DriveConfig:
     faults: str = ""  # the fault injectors, as ``--faults`` takes them (``spec.faults.parse_faults``); kept canonical
     steering_offset_deg: float = DEFAULT_STEERING_OFFSET_DEG  # the steering fault's size
     tracking: bool = False  # the planner sees the tracker's vehicles, not each sweep's readings (``sim.tracking``)
+    #: stop at the first failure a sensing fault caused; restart after any other (counted apart): the reliability
+    #: target's measure, km between sensing-caused failures (docs/faults.md)
+    until_sensing_failure: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "strategy", parse_strategy(self.strategy))
@@ -131,6 +134,9 @@ class DriveConfig:
         check_name("--sensor", self.sensor, SENSOR_MODELS)
         check_name("--model", self.model, PLANNING_MODELS)
         grid_for(self.cell_m)
+        if self.until_failure and self.until_sensing_failure:
+            raise OptionError("--until-sensing-failure", True, "give one of --until-failure (every failure ends a run) "
+                              "and --until-sensing-failure (only one a sensing fault caused does)")
         for option, value, high in (("--km", self.km, math.inf), ("--stop-rate-per-h", self.stop_rate_per_h,
                                                                       MAX_STOP_RATE_PER_H),
                                     ("--min-spawn-gap-m", self.min_spawn_gap_m, math.inf),
@@ -138,6 +144,11 @@ class DriveConfig:
             check_number(option, value, high)
         world_bounds(self.traffic, self.sensor, self.range_sd_m, self.bounds_scale)  # checked here, not in a worker
         object.__setattr__(self, "faults", parse_faults(self.faults, "--faults", self.steering_offset_deg).text())
+
+    @property
+    def stops_at_failure(self) -> bool:
+        """Whether a drive stops at a failure (any, or the first a sensing fault caused)."""
+        return self.until_failure or self.until_sensing_failure
 
     @property
     def events(self) -> EventSpec:
@@ -184,7 +195,8 @@ class DriveConfig:
         if not self.fault_spec.of(FaultKind.STEERING):
             del data["steering_offset_deg"]
         for key, default in (("restart_after_collision", False), ("opportunity_checks", 0), ("model", "paper"),
-                             ("bounds_scale", 1.0), ("faults", ""), ("tracking", False)):
+                             ("bounds_scale", 1.0), ("faults", ""), ("tracking", False),
+                             ("until_sensing_failure", False)):
             if data[key] == default:  # records written before these existed stay the same campaign
                 del data[key]
         return data
@@ -199,7 +211,8 @@ class DriveConfig:
                 "range_sd_m": self.range_sd_m, "miss_rate": self.miss_rate, "snapshots": self.snapshots,
                 "restart_after_collision": self.restart_after_collision,
                 "opportunity_checks": self.opportunity_checks, "model": self.model, "bounds_scale": self.bounds_scale,
-                "faults": self.faults, "steering_offset_deg": self.steering_offset_deg, "tracking": self.tracking}
+                "faults": self.faults, "steering_offset_deg": self.steering_offset_deg, "tracking": self.tracking,
+                "until_sensing_failure": self.until_sensing_failure}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> DriveConfig:

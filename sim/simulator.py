@@ -28,7 +28,7 @@ import numpy as np
 
 from oracle.sound import keep_lane
 from sim import opportunity
-from sim.containment import BreachKind, Containment
+from sim.containment import BreachKind, Containment, Sighting
 from sim.discretiser import discretise, in_window, reading_cell
 from sim.executor import Executor
 from sim.faults import GHOST_BODY, FaultEvent, FaultySensor, SteeringFault, attribute
@@ -42,6 +42,7 @@ from sim.tracking import Detection, Tracker
 from sim.vehicle import KinematicCar, Pose, first_contact
 from spec.actions import ACTION_RULES, Action
 from spec.answers import Answer, Status
+from spec.assumptions import PROFILES
 from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING, fitted_closing_mps
 from spec.errors import ScenarioError
 from spec.faults import lost_control
@@ -119,6 +120,7 @@ class Simulator:
         self._seen: set[int] = set()  # the bodies ``visible`` saw at ``_seen_at`` (the drive's clock)
         self._seen_at = -1.0
         self.containment: Containment | None = None  # the sets of the decision under way
+        self.sighted: Sighting | None = None  # the vehicles the plan under way was made knowing (``_sensed_anew``)
         self.enveloped = False  # a sound decision's action is under way: the AV is held to its envelope
         self.interrupt = False  # a breach asks the sound model's decision under way to end
         self.broken_before = False  # a vehicle broke the previous decision's assumptions (the truth: bookkeeping)
@@ -179,8 +181,9 @@ class Simulator:
             self.car.shift_x(-x)
             self.traffic.shift_x(-x)
             self.executor.x_ref_m -= x
-            if self.containment is not None:
-                self.containment.shift_x(-x)
+            for sets in (self.containment, self.sighted):
+                if sets is not None:
+                    sets.shift_x(-x)
             if self.tracker is not None:
                 self.tracker.shift_x(-x)
             x = 0.0  # the car is now at the origin
@@ -294,13 +297,14 @@ class Simulator:
                 self.manoeuvre_faults.append(event)
 
     # -- the decision clock ------------------------------------------------------------------
-    def drive(self, km: float, until_failure: bool = False) -> RunSummary:
-        """Drive ``km`` kilometres (or until the first failure); at a collision stop, or with
-        ``restart_after_collision`` start again where the drive stands (``_restart``)."""
+    def drive(self, km: float, until_failure: bool = False, sensing_only: bool = False) -> RunSummary:
+        """Drive ``km`` kilometres (or until the first failure, with ``sensing_only`` the first a sensing fault
+        caused); at a collision stop, or with ``restart_after_collision`` start again where the drive stands
+        (``_restart``)."""
         started = time.perf_counter()
         ok = self.executor.hold(START_UP_S, self.grid.speed, self._tick)  # start-up: reach the common speed
         episode_km = 0.0
-        while self.summary.km < km and not (until_failure and self.summary.crash):
+        while self.summary.km < km and not (until_failure and self.summary.ended(sensing_only)):
             if not ok:
                 if not self.restart_after_collision or self.summary.km - episode_km < MIN_EPISODE_KM:
                     break  # a collision ends the drive; so does one that comes again before the AV has moved
@@ -406,6 +410,18 @@ class Simulator:
         """The last sweep's readings (a dropped sweep: none)."""
         return self.sweep or ()
 
+    def _sight(self, readings: tuple[Reading, ...], av_x_m: float) -> None:
+        """The vehicles a plan is made knowing, for the paper's re-planning rule (``Sighting``), under the drive's
+        bounds (without any: the paper's world, every vehicle at the common speed, sensed exactly)."""
+        bounds = self.watch.bounds if self.watch is not None else PROFILES["paper"]
+        self.sighted = Sighting(readings, bounds, av_x_m, self.summary.sim_time_s)
+
+    def _sensed_anew(self) -> bool:
+        """Whether the last sweep shows a vehicle the plan under way was not made knowing: re-plan (the paper's rule;
+        readings carry no identity, so "new" is a reading no vehicle of the plan's snapshot can explain)."""
+        assert self.sighted is not None
+        return self.sighted.new(self._sense(), self.car.pose().x_m, self.summary.sim_time_s)
+
     def _snapshot(self) -> tuple[Reading, ...]:
         """The last sweep as a decision's snapshot; a dropped sweep is a snapshot that cannot be read."""
         if self.sweep is None:
@@ -487,6 +503,7 @@ class Simulator:
         if self._refused(answer.actions, pending):
             self.doing = "driving on in lane (an overtake refused: the tracker holds a contradiction)"
             return self._hold_a_sweep()
+        self._sight(readings, pose.x_m)
         return self._execute(answer.actions, answer.states, seen, pose.speed_mps, frame_mps)
 
     def _sensing_stop(self, pending: tuple[Action, ...], err: ScenarioError) -> bool:
@@ -582,7 +599,7 @@ class Simulator:
         # a breach sensed while a take-over was under way did not interrupt it; it ends this decision before its step
         self.interrupt = self.interrupt or (self.containment is not None and self.containment.sensed is not None)
         self.executor.reset_reference()
-        known = {r.body for r in readings} if readings else {r.body for r in self._sense()}
+        self._sight(readings or self._sense(), self.car.pose().x_m)
         # a breach sensed before the first step (while a take-over was handing back): no step
         executed = () if self.interrupt else actions[: LOOP.replan_after_actions]
         self.pending = actions[len(executed):]
@@ -597,7 +614,7 @@ class Simulator:
                 self.summary.actions += 1
                 if self.interrupt:
                     break
-                if {r.body for r in self._sense()} - known:
+                if self._sensed_anew():
                     self.summary.replans += 1
                     return True
         finally:
@@ -856,7 +873,6 @@ class Simulator:
         # the tolerance check follows vehicles; a ghost a fault injected is none (``sim.faults``)
         tracked = {key: v for key, v in self._tracked(seen, states[0]).items() if key[2] in cars}
         deviation = dict.fromkeys(tracked, 0.0)
-        known = {r.body for r in seen}
         generation = {body: cars[body].respawns for body in cars}
         executed = actions[: LOOP.replan_after_actions]
         for k, (action, profile) in enumerate(zip(executed, plan_profiles(executed, speed_mps, self.grid))):
@@ -879,7 +895,7 @@ class Simulator:
                     (cells[index] - start_cell) * self.grid.cell, start_dx, now[body], deviation[(lane, index, body)])
             new_violations = self.summary.tolerance.violations[violations_before:]
             self._observe(plan_id, k + 1, action, states[k + 1], new_violations)
-            if (self.replan_on_violation and new_violations) or {r.body for r in self._sense()} - known:
+            if (self.replan_on_violation and new_violations) or self._sensed_anew():
                 self.summary.replans += 1
                 self.pending = actions[k + 1:]
                 return True
@@ -966,7 +982,7 @@ def run_drive(seed: int, config: DriveConfig, out_dir: str | None = None, report
             observers = (TraceWriter(stack.enter_context((Path(out_dir) / f"trace-seed{seed}.jsonl").open("w"))),)
         sim = assemble(seed, config, observers, report)
         stack.callback(sim.close)
-        return sim.drive(config.km, config.until_failure)
+        return sim.drive(config.km, config.stops_at_failure, config.until_sensing_failure)
 
 
 def assemble(seed: int, config: DriveConfig, observers: tuple[TraceWriter, ...] = (),
@@ -974,4 +990,4 @@ def assemble(seed: int, config: DriveConfig, observers: tuple[TraceWriter, ...] 
     """The simulator of the drive of ``seed`` under ``config`` (what ``run_drive`` drives, and a replay redrives)."""
     tolerance = ToleranceReport(config.step_tolerance_cells, config.plan_tolerance_cells)
     return Simulator(seed, config.parts(observers), config.replan_on_violation, tolerance, report, config.snapshots,
-                     config.restart_after_collision, config.opportunity_checks)
+                     config.restart_after_collision or config.until_sensing_failure, config.opportunity_checks)

@@ -15,6 +15,7 @@ from sim.containment import ContainmentReport
 from sim.opportunity import OpportunityReport
 from sim.safety import SafetyReport
 from sim.tolerance import ToleranceReport
+from spec.faults import FaultKind
 from spec.kinds import FailureKind
 
 
@@ -98,6 +99,18 @@ class RunSummary:
     def crash(self) -> Failure | None:
         """The first failure proper (a collision or a loss of control: ``FailureKind.ends_run``), if any."""
         return next((f for f in self.failures if f.kind.ends_run), None)
+
+    @property
+    def sensing_crash(self) -> Failure | None:
+        """The first failure proper attributed to a sensing fault (``sim.faults.attribute``): what the reliability
+        target counts (km between sensing-caused failures), if any."""
+        return next((f for f in self.failures if f.kind.ends_run and f.fault is not None
+                     and FaultKind(f.fault).sensing), None)
+
+    def ended(self, sensing_only: bool) -> Failure | None:
+        """The failure that ends a drive until failure: the first one proper, or with ``sensing_only`` the first a
+        sensing fault caused (the others restart the drive and are counted apart)."""
+        return self.sensing_crash if sensing_only else self.crash
 
     @property
     def stops(self) -> list[Failure]:

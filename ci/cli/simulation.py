@@ -25,6 +25,11 @@ from spec.physical import LOOP
 @click.option("--until-failure", is_flag=True,
               help="Stop each run at its first failure, a collision or a loss of control (capped by --km); a "
                    "snapshot that could not be read and a wait without a plan are counted apart.")
+@click.option("--until-sensing-failure", is_flag=True,
+              help="Stop each run at its first failure a sensing fault caused (capped by --km); after any other "
+                   "failure (a steering fault's loss of control, a collision no sensing fault touched) the drive "
+                   "starts again where it stands and the failure is counted apart: km between sensing-caused "
+                   "failures, as the reliability target counts them.")
 @click.option("--seed", type=SEED, default=1, show_default=True, help="Run i uses seed + i.")
 @click.option("--engine", default="interpreter", show_default=True)
 @strategy_option(choices=(Strategy.SENSIBLE, Strategy.SHORTEST))
@@ -51,8 +56,8 @@ from spec.physical import LOOP
               help="Re-plan only as the paper did (not when a deviation exceeds the tolerance).")
 @faults_options
 @click.option("--json", "as_json", is_flag=True)
-def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: Strategy, cell_m: float, model: str,
-             runs: int,
+def simulate(km: float, until_failure: bool, until_sensing_failure: bool, seed: int, engine: str, strategy: Strategy,
+             cell_m: float, model: str, runs: int,
              workers: int, executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool,
              step_tolerance: float, plan_tolerance: float, paper_replanning: bool, faults: str,
              steering_offset_deg: float, tracking: bool, as_json: bool) -> None:
@@ -71,10 +76,11 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: S
         raise OptionError("--seed", seed, f"seed + runs - 1 must stay below 2**32 (runs {runs})")
     campaign = DriveConfig(km, until_failure, engine, strategy, not paper_replanning, step_tolerance, plan_tolerance,
                            cell_m, model=model, faults=faults, steering_offset_deg=steering_offset_deg,
-                           tracking=tracking)
+                           tracking=tracking, until_sensing_failure=until_sensing_failure)
     campaign.parts()  # the engine exists and answers the strategy: bad input before any run starts
     get_engine(engine).ready()  # its tools are installed (exit 4), or every plan of every run would fail
-    limit = f"{km:g} km" + (" or until failure" if until_failure else "")
+    limit = f"{km:g} km" + (" or until failure" if until_failure else "") + (
+        " or until a failure a sensing fault caused (others restart the drive)" if until_sensing_failure else "")
     err.print(f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; {model} model; engine {engine}, "
               f"{strategy.value}, {campaign.grid.describe()}; faults {campaign.faults or 'none'}; "
               f"tracking {'on' if tracking else 'off'}; "
@@ -88,8 +94,8 @@ def simulate(km: float, until_failure: bool, seed: int, engine: str, strategy: S
     else:
         for table in (runs_table(results), totals_table(results), deviations_table(results)):
             print_table(table, 1, "runs.jsonl")
-        if until_failure:
-            print_table(paper_table(results, km), 1, "runs.jsonl")
+        if campaign.stops_at_failure:
+            print_table(paper_table(results, km, until_sensing_failure), 1, "runs.jsonl")
         if campaign.faults:
             print_table(faults_table(results), 1, "runs.jsonl")
     sys.exit(ExitCode.NO if any(r.failures for r in results) else ExitCode.OK)

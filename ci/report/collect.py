@@ -183,19 +183,21 @@ def _simulation(folder: Path, key: str, records: list[dict[str, Any]]) -> Sectio
                              f"{sum(len(r.planner_failures) for r in runs)} decision(s) without a plan; faults "
                              f"{config.get('faults') or 'none'}, tracking {'on' if config.get('tracking') else 'off'}")
     section.facts = {"km": km, "collisions": collisions, "overtakes": overtakes, "runs": len(runs)}
-    if config.get("until_failure"):
-        failed = [r for r in runs if r.crash is not None]
+    sensing_only = bool(config.get("until_sensing_failure"))
+    if config.get("until_failure") or sensing_only:
+        failed = [r for r in runs if r.ended(sensing_only) is not None]
         kms = sorted(r.km for r in runs)
         median = kms[len(kms) // 2] if len(kms) % 2 else (kms[len(kms) // 2 - 1] + kms[len(kms) // 2]) / 2
         censored = len(runs) - len(failed)
+        what = "a sensing-caused failure" if sensing_only else "failure"
         section.findings.append(
-            f"until failure (cap {config['km']:g} km): {len(failed)} of {len(runs)} runs failed, median "
+            f"until {what} (cap {config['km']:g} km): {len(failed)} of {len(runs)} runs failed, median "
             f"{median:.1f} km{' or more' if censored * 2 >= len(runs) else ''} ({censored} reached the cap); "
             f"the paper: a failure every {MEDIAN_KM} km (median)")
         section.facts["until_failure"] = section.findings[-1]
     tables = [totals_table(runs), runs_table(runs), deviations_table(runs)]
-    if config.get("until_failure"):
-        tables.append(paper_table(runs, float(config["km"])))
+    if config.get("until_failure") or sensing_only:
+        tables.append(paper_table(runs, float(config["km"]), sensing_only))
     if config.get("faults"):
         tables.append(faults_table(runs))
     section.tables += [from_rich(t) for t in tables]

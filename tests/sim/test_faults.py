@@ -286,3 +286,29 @@ def test_only_collisions_and_losses_of_control_end_a_run_until_failure() -> None
     from spec.kinds import FailureKind
 
     assert {k for k in FailureKind if k.ends_run} == {FailureKind.COLLISION, FailureKind.LOSS_OF_CONTROL}
+
+
+def test_until_a_sensing_failure_only_a_sensing_fault_ends_the_run() -> None:
+    """The reliability target counts km between failures a sensing fault caused: a steering fault's loss of control
+    and a collision no fault touched are counted, and the drive goes on; the first sensing-caused one ends it."""
+    from sim.summary import Failure, RunSummary
+    from spec.kinds import FailureKind
+
+    spun = Failure(FailureKind.LOSS_OF_CONTROL, "spun", "", 1.0, 10.0, fault="steering")
+    own = Failure(FailureKind.COLLISION, "collision", "", 2.0, 20.0)
+    stop = Failure(FailureKind.SENSING, "unreadable", "", 2.5, 25.0, fault="same-cell")
+    gap = Failure(FailureKind.COLLISION, "collision", "", 3.0, 30.0, fault="fake-gap")
+    summary = RunSummary(1, failures=[spun, own, stop, gap])
+    assert summary.ended(False) is spun and summary.ended(True) is gap and summary.sensing_crash is gap
+    assert RunSummary(1, failures=[spun, own, stop]).ended(True) is None
+
+
+def test_until_a_sensing_failure_a_steering_loss_of_control_restarts_the_drive() -> None:
+    from sim.parts import DriveConfig
+    from sim.simulator import run_drive
+    from spec.kinds import FailureKind
+
+    summary = run_drive(1, DriveConfig(0.3, faults="steering=0.02", until_sensing_failure=True))
+    losses = summary.of_kind(FailureKind.LOSS_OF_CONTROL)
+    assert len(losses) >= 2 and summary.restarts >= 2 and summary.sensing_crash is None and summary.km >= 0.3
+    assert run_drive(1, DriveConfig(0.3, faults="steering=0.02", until_failure=True)).restarts == 0

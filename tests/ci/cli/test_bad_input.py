@@ -274,6 +274,7 @@ CASES: list[Case] = [
     _case("simulate", "--strategy=optimal", named="--strategy"),
     *schedulers("simulate"),
     _case("simulate", "--seed=4294967295", "--runs=2", named="--seed"),
+    _case("simulate", "--until-failure", "--until-sensing-failure", named="--until-sensing-failure"),
     *out_dirs("simulate"), *unknown("simulate"), no_spin("simulate", "--engine=spin"), *faults("simulate"),
     # audit
     *numbers("audit", "--km", "--min-spawn-gap-m", "--range-sd-m", "--miss-rate"),
