@@ -117,9 +117,10 @@ def faults_table(results: list[RunSummary]) -> Table:
                 "flagged by the tracker"):
         table.add_column(col, justify="right")
     km = sum(r.km for r in results)
-    crashes = Counter(c.fault for r in results if (c := r.crash) is not None)
-    flagged = Counter(c.fault for r in results if (c := r.crash) is not None and c.flagged)
-    tracked = any(c.flagged is not None for r in results if (c := r.crash) is not None)
+    proper = [f for r in results for f in r.failures if f.kind.ends_run]  # every one: a run may restart after one
+    crashes = Counter(f.fault for f in proper)
+    flagged = Counter(f.fault for f in proper if f.flagged)
+    tracked = any(f.flagged is not None for f in proper)
     kinds = sorted({k for r in results for k in r.faults})
     for kind in (*kinds, None):
         stats = [r.faults.get(kind, {}) for r in results] if kind else []

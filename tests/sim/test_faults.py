@@ -312,3 +312,22 @@ def test_until_a_sensing_failure_a_steering_loss_of_control_restarts_the_drive()
     losses = summary.of_kind(FailureKind.LOSS_OF_CONTROL)
     assert len(losses) >= 2 and summary.restarts >= 2 and summary.sensing_crash is None and summary.km >= 0.3
     assert run_drive(1, DriveConfig(0.3, faults="steering=0.02", until_failure=True)).restarts == 0
+
+
+def test_the_faults_table_counts_every_failure_of_a_run_that_started_again() -> None:
+    """A run that starts again after a failure (the audit, --until-sensing-failure) may have several: each counts
+    under its fault, not only the run's first."""
+    from sim.summary import Failure, RunSummary
+    from sim.tables import faults_table
+    from spec.kinds import FailureKind
+
+    spun = Failure(FailureKind.LOSS_OF_CONTROL, "spun", "", 1.0, 10.0, fault="steering", flagged=False)
+    gaps = [Failure(FailureKind.COLLISION, "collision", "", km, km * 10, fault="fake-gap", flagged=True)
+            for km in (2.0, 3.0)]
+    stats = {"offered": 10, "started": 2, "sweeps": 60}
+    summary = RunSummary(1, km=100.0, failures=[spun, *gaps], faults={"fake-gap": stats, "steering": stats})
+    table = faults_table([summary])
+    failures = dict(zip(table.columns[0]._cells, table.columns[4]._cells, strict=True))
+    flagged = dict(zip(table.columns[0]._cells, table.columns[6]._cells, strict=True))
+    assert failures == {"fake-gap": "2", "steering": "1", "(no fault)": "0"}
+    assert flagged["fake-gap"] == "2" and flagged["steering"] == "0"
