@@ -279,13 +279,11 @@ class Containment:
         near (``appeared``)."""
         if self.sensed is not None:
             return None
-        elapsed = t_s - self.t0_s
-        error_m = self.bounds.sensing_error_m
+        elapsed, shift_m = t_s - self.t0_s, av_x_m - self.x0_m
         for r in readings:
             if r.lane is Lane.RIGHT and r.dx_m < -CAR.length_m:
                 continue
-            lo, hi = (av_x_m - self.x0_m + end for end in r.interval_m)
-            misses = [(_apart(lo - error_m, hi + error_m, *reach_m(v, self.bounds, elapsed)), v.index is not None)
+            misses = [(_miss_m(r, v, self.bounds, shift_m, elapsed), v.index is not None)
                       for v in self.explaining[r.lane]]
             if any(miss == 0.0 for miss, _ in misses):
                 continue
@@ -334,15 +332,20 @@ class Sighting:
 
     def new(self, readings: Iterable[Reading], av_x_m: float, t_s: float) -> bool:
         """Whether a reading of this sweep (the AV at ``av_x_m`` at ``t_s``) is a vehicle the snapshot did not show."""
-        elapsed, error_m = t_s - self.t0_s, self.bounds.sensing_error_m
+        elapsed, shift_m = t_s - self.t0_s, av_x_m - self.x0_m
         for r in readings:
             if r.body == SHADOW_BODY:
                 continue
-            lo, hi = (av_x_m - self.x0_m + end for end in r.interval_m)
-            if not any(_apart(lo - error_m, hi + error_m, *reach_m(v, self.bounds, elapsed)) == 0.0
-                       for v in self.known[r.lane]):
+            if not any(_miss_m(r, v, self.bounds, shift_m, elapsed) == 0.0 for v in self.known[r.lane]):
                 return True
         return False
+
+
+def _miss_m(r: Reading, v: Vehicle, bounds: Bounds, shift_m: float, elapsed_s: float) -> float:
+    """How far reading ``r`` (its interval moved by ``shift_m`` into the snapshot's frame, widened by the sensing
+    error: the reading's own) lies outside where ``v`` can be ``elapsed_s`` after the snapshot: 0 where they meet."""
+    error_m, (lo, hi) = bounds.sensing_error_m, r.interval_m
+    return _apart(lo + shift_m - error_m, hi + shift_m + error_m, *reach_m(v, bounds, elapsed_s))
 
 
 def _own_readings(seen: Iterable[Reading], truth_m: dict[int, float]) -> dict[int, Reading]:
