@@ -241,7 +241,7 @@ class SoundEncoding:
         self.oncoming = [Interval(self._param(f"oncoming_lo_{i}"), self._param(f"oncoming_hi_{i}"))
                          for i in range(len(scenario.right_lane))]
         self.sensed_oncoming = len(self.oncoming)
-        for p in b.phantom_vehicles():
+        for p in sound.phantoms():
             interval = Interval(p.dx_m, math.inf) if p.dx_m > 0 else Interval(-math.inf, p.dx_m)
             (self.same if p.lane is Lane.LEFT else self.oncoming).append(interval)
         self.targets = scenario.target_indices

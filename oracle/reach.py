@@ -42,6 +42,9 @@ MAX_DT_S = 0.01
 MOTION_DT_S = LOOP.physics_dt_s * LOOP.control_every_steps
 #: How long after a plan the minimal-risk manoeuvre is followed (it reaches its hold speed well within this).
 CONTINUATION_S = 10.0
+#: The corner motions' phantom starts: at the edge, and this many steps into the unseen stretch up to the farthest
+#: a vehicle there can still meet the AV from (``motions``).
+HIDDEN_STEPS = 8
 
 
 @dataclass(frozen=True, slots=True)
@@ -238,7 +241,7 @@ class Motion:
     """One motion within the bounds: each vehicle's true start and speed schedule, the AV's deviation schedule."""
 
     name: str
-    starts_m: tuple[float, ...]  # true start of each vehicle, metres ahead of the AV (phantoms: at their edge)
+    starts_m: tuple[float, ...]  # true start of each vehicle, metres ahead of the AV (phantoms: their edge or beyond)
     speeds: tuple[tuple[tuple[float, float], ...], ...]  # per vehicle: (from time, speed) steps, first from 0
     av_offset: tuple[tuple[float, float], ...]  # (from time, deviation rate m/s); the deviation stays within e_x
 
@@ -246,13 +249,13 @@ class Motion:
 def _drivers(scenario: Scenario) -> tuple[Vehicle, ...]:
     """The vehicles a motion drives, from the declarations alone (not ``spec.sound.vehicles``, whose extents and
     phantoms are what the motions check): the scenario's vehicles (their starts are drawn through the discretiser)
-    and a vehicle at each phantom's edge as the bounds declare them."""
+    and a vehicle for each phantom as the snapshot declares them (``motions`` starts it at the edge or beyond)."""
     cars = [Vehicle(Lane.LEFT, i, math.nan, math.nan, f"left_lane[{i}] (cell {c})")
             for i, c in enumerate(scenario.left_lane)]
     cars += [Vehicle(Lane.RIGHT, i, math.nan, math.nan, f"right_lane[{i}] (cell {c})")
              for i, c in enumerate(scenario.right_lane)]
     cars += [Vehicle(p.lane, None, p.dx_m, p.dx_m, f"phantom ({p.why}, {p.dx_m:+g} m)")
-             for p in _sound(scenario).bounds.phantom_vehicles()]
+             for p in _sound(scenario).phantoms()]
     return tuple(cars)
 
 
@@ -269,7 +272,8 @@ def _sensed_start(rng: random.Random, cell: int, lane: Lane, av_lane: Lane, grid
 
 
 def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, count: int) -> list[Motion]:
-    """The corner motions, then ``count`` random ones, all within the scenario's bounds."""
+    """The corner motions (the phantoms' vehicles at their edges, then into their stretches), then ``count`` random
+    ones, all within the scenario's bounds."""
     sound = _sound(scenario)
     cars = _drivers(scenario)
     end_s = sum(float(ACTION_RULES[a].duration_s) for a in actions) + CONTINUATION_S
@@ -280,11 +284,18 @@ def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, c
         sp = b.same_mps if c.lane is Lane.LEFT else b.oncoming_mps
         return sp.low_mps, sp.high_mps
 
-    def starts(pick: str) -> tuple[float, ...]:
+    # a phantom's vehicle: at its edge, or into its unseen stretch, as far as it can still meet the AV within the plan
+    # (closing at most at its lane's top speed and the AV's): a vehicle farther off may meet a later step
+    av_top_mps = max(action_speed_mps(a, scenario.grid) for a in ACTION_RULES)
+
+    def starts(pick: str, into: float | None = 0.0) -> tuple[float, ...]:
+        """Each vehicle's start: a sensed one's reading (low, high or any within the error), a phantom's ``into``
+        its stretch (a fraction of the farthest that matters; None: anywhere there)."""
         out = []
         for c in cars:
-            if c.index is None:  # a phantom, at its edge
-                out.append(c.lo_m)
+            if c.index is None:
+                far = (rng.random() if into is None else into) * (interval(c)[1] + av_top_mps) * end_s
+                out.append(c.lo_m + far if c.lo_m > 0 else c.lo_m - far)
                 continue
             cells = scenario.left_lane if c.lane is Lane.LEFT else scenario.right_lane
             measured = scenario.left_m if c.lane is Lane.LEFT else scenario.right_m
@@ -310,6 +321,11 @@ def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, c
            Motion("corner: slowest, readings low, AV behind", starts("low"), constant(0), behind),
            Motion(f"corner: slowest then fastest at {mid:.1f} s", starts("low"), switched(0, mid), ahead),
            Motion(f"corner: fastest then slowest at {mid:.1f} s", starts("high"), switched(1, mid), ahead)]
+    if any(c.index is None for c in cars):
+        extremes = (("slowest", "low", 0), ("fastest", "high", 1))
+        out += [Motion(f"corner: {name}, phantoms {k}/{HIDDEN_STEPS} into their stretch",
+                       starts(pick, k / HIDDEN_STEPS), constant(which), ahead)
+                for k in range(1, HIDDEN_STEPS + 1) for name, pick, which in extremes]
     for k in range(count):
         schedules = []
         for c in cars:
@@ -327,7 +343,7 @@ def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, c
             if t >= end_s:
                 break
             offs.append((t, rng.uniform(-ev, ev)))
-        out.append(Motion(f"sampled #{k}", starts("any"), tuple(schedules), tuple(offs)))
+        out.append(Motion(f"sampled #{k}", starts("any", None), tuple(schedules), tuple(offs)))
     return out
 
 

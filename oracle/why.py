@@ -3,8 +3,8 @@
 Z3 refuses the sound model, so every question here goes to the interpreter (``oracle.planner.plan``, strategy
 shortest):
 
-- **vehicles**: a minimal set of sensed vehicles and phantoms (the unseen stretch beyond each sensor's range,
-  ``Bounds.phantom_vehicles``) whose presence leaves no plan, by deletion: start from all of them and drop each
+- **vehicles**: a minimal set of sensed vehicles and phantoms (the unseen stretch beyond each sensor's view,
+  ``spec.sound.Sound.phantoms``) whose presence leaves no plan, by deletion: start from all of them and drop each
   whose removal still leaves no plan, sensed vehicles first (so a phantom that blocks on its own is named rather
   than the sensed vehicle it hides). Checked like the Z3 explanation: the set alone has no plan, and removing any
   one of them gives one (a removal that does not is dropped and the check repeated, so the set is minimal).
@@ -147,17 +147,18 @@ def suspects(scenario: Scenario) -> tuple[Suspect, ...]:
     """Every vehicle of ``scenario`` explain may blame: the sensed ones (left lane, then right), then the phantoms."""
     sensed: list[Suspect] = [(Lane.LEFT, i) for i in range(len(scenario.left_lane))]
     sensed += [(Lane.RIGHT, i) for i in range(len(scenario.right_lane))]
-    return (*sensed, *(scenario.sound.bounds.phantom_vehicles() if scenario.sound is not None else ()))
+    return (*sensed, *(scenario.sound.phantoms() if scenario.sound is not None else ()))
 
 
 @dataclass(frozen=True, slots=True)
 class _SomePhantoms(Bounds):
-    """Bounds with only some of their phantoms (``kept``): how explain removes one phantom and keeps the others."""
+    """Bounds with only some of their phantoms (``kept``, by lane and side: the oncoming one's edge moves with the
+    snapshot's view): how explain removes one phantom and keeps the others."""
 
-    kept: frozenset[Phantom] = frozenset()
+    kept: frozenset[tuple[Lane, bool]] = frozenset()
 
-    def phantom_vehicles(self) -> tuple[Phantom, ...]:
-        return tuple(p for p in Bounds.phantom_vehicles(self) if p in self.kept)
+    def phantom_vehicles(self, oncoming_view_m: float | None = None) -> tuple[Phantom, ...]:
+        return tuple(p for p in Bounds.phantom_vehicles(self, oncoming_view_m) if (p.lane, p.dx_m > 0) in self.kept)
 
 
 def keep_suspects(scenario: Scenario, keep: Iterable[Suspect]) -> Scenario:
@@ -167,8 +168,8 @@ def keep_suspects(scenario: Scenario, keep: Iterable[Suspect]) -> Scenario:
     if scenario.sound is None:
         return reduced
     bounds = scenario.sound.bounds
-    kept = frozenset(p for p in bounds.phantom_vehicles() if p in keep)
-    if len(kept) == len(bounds.phantom_vehicles()):
+    kept = frozenset((p.lane, p.dx_m > 0) for p in scenario.sound.phantoms() if p in keep)
+    if len(kept) == len(scenario.sound.phantoms()):
         return reduced
     some = _SomePhantoms(**{f.name: getattr(bounds, f.name) for f in fields(Bounds)}, kept=kept)
     return replace(reduced, sound=replace(scenario.sound, bounds=some))

@@ -101,13 +101,15 @@ def _left_hit(shape: Shape) -> str:
 
 def scenario_values(problem: Problem) -> str:
     """The scenario as the injected verifier reads it: lane nl cells... nr cells... nt ft horizon; under the sound
-    model then 0, or 1 and each vehicle's sensed interval (``spec.sound.sensed_extents``, same-direction then
-    oncoming, lo hi each, as Python's ``repr`` writes a double: ``strtod`` reads it back exactly)."""
+    model then each phantom's edge (``spec.sound.Sound.phantoms``: where its sensor's view ended), and 0, or 1 and
+    each vehicle's sensed interval (``spec.sound.sensed_extents``, same-direction then oncoming, lo hi each, as
+    Python's ``repr`` writes a double: ``strtod`` reads it back exactly)."""
     s = problem.scenario
     first_target = s.target_indices[0] if s.target_indices else 0
     words: list[object] = [LANE_CODE[s.lane], len(s.left_lane), *s.left_lane, len(s.right_lane), *s.right_lane,
                            len(s.target_indices), first_target, problem.horizon]
     if s.sound is not None:
+        words += [repr(float(p.dx_m)) for p in s.sound.phantoms()]
         if s.left_m is None and s.right_m is None:
             words.append(0)
         else:

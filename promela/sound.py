@@ -19,13 +19,14 @@ What does not depend on the scenario is compiled in from spec/: the windows of
 ``spec.windows.sound_table`` (shapes, early windows, start windows, gains, speeds), the required gap
 at each instant a condition binds (``SafetySpec.required_gap_m`` of the closing speed this module
 forms from the instant's speed, the speed error and the lane's bound), the bounds, the envelope,
-``EPS_M``, whether each window's end closes in (``MinimalRisk.closes_in``), the phantoms and each
-cell's extent (``spec.cells``). The C code does
-the rest itself: the vehicles' intervals (extents widened by the sensing error, then the
-phantoms), their growth over time, the conditions of ``spec.windows``'s docstring, the followers,
-the goal and the continuation. The scenario (AV lane, cells, targets, horizon) is read from
-``OVERTAKE_SCENARIO`` when the verifier starts (``promela.render.scenario_values``), so one
-compiled verifier serves every scenario of its (sound model, model, goal, grid).
+``EPS_M``, whether each window's end closes in (``MinimalRisk.closes_in``), the phantoms' lanes and
+each cell's extent (``spec.cells``). The C code does the rest itself: the vehicles' intervals
+(extents widened by the sensing error, then the phantoms from their edges), their growth over time,
+the conditions of ``spec.windows``'s docstring, the followers, the goal and the continuation. The
+scenario (AV lane, cells, targets, horizon, the phantoms' edges: where a snapshot's view ended) is
+read from ``OVERTAKE_SCENARIO`` when the verifier starts (``promela.render.scenario_values``), so
+one compiled verifier serves every scenario of its (sound model less the snapshot's view, model,
+goal, grid).
 
 Spin refuses a ``c_expr`` that calls a function (it cannot tell a pure one), so each step's test
 stores its answer in the C global ``sound_ok`` and the ``c_expr`` reads it.
@@ -37,7 +38,7 @@ import functools
 import hashlib
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.cells import left_extent_m, oncoming_extent_m
@@ -111,6 +112,7 @@ def shape_of(problem: Problem) -> SoundShape:
     if sound.checks is not Checks.PHYSICAL:
         raise EngineError(f"spin answers the sound model's physical checks only, not {sound.checks.value!r} (the "
                           "identity check is the interpreter's)")
+    sound = replace(sound, oncoming_view_m=None)  # the phantoms' edges are read with the scenario: one verifier
     shape = SoundShape(sound, problem.rules, problem.goal, problem.grid, 1)
     if len(problem.scenario.left_lane) + shape.left_phantoms > WORD_BITS:
         shape = SoundShape(sound, problem.rules, problem.goal, problem.grid, full_words(problem.grid, sound))
@@ -186,7 +188,7 @@ def _tables(shape: SoundShape, table: SoundTable) -> str:
     rel_rows = ",\n".join(
         "  {" + ", ".join("{" + ", ".join("{" + ", ".join(map(str, m)) + "}" for m in by_lane) + "}"
                           for by_lane in by_action) + "}" for by_action in relative)
-    phantoms = [f"{{{LANE_CODE[p.lane]}, {_f(p.dx_m)}}}" for p in b.phantom_vehicles()] or ["{0, 0.0}"]
+    phantoms = [f"{{{LANE_CODE[p.lane]}, 0.0}}" for p in b.phantom_vehicles()] or ["{0, 0.0}"]
     left_ext = ",\n".join(
         "  {" + ", ".join(f"{{{_f(lo)}, {_f(hi)}}}" for lo, hi in (left_extent_m(c, lane, grid)
                                                                  for c in range(grid.road_cells + 1))) + "}"
@@ -218,7 +220,7 @@ def _tables(shape: SoundShape, table: SoundTable) -> str:
         "typedef struct { int n; SoundStretch s[MAX_STRETCHES]; double bt, bx, et, ex; int closes, rear_closes; }"
         " SoundWindow;",
         "typedef struct { int lane, t, d, first, last, moved, action, window; } SoundEarly;",
-        "typedef struct { int lane; double dx; } SoundPhantom;",
+        "typedef struct { int lane; double dx; } SoundPhantom;  /* dx: read with the scenario (its view) */",
         f"static const double UNIT_S = {_f(table.unit_s)}, CELL_M = {_f(table.cell_m)};",
         f"static const double E_X = {_f(tr.position_m)}, E_V = {_f(tr.speed_mps)}, LEN = {_f(s.vehicle_length_m)};",
         f"static const double EPS_M = {_f(EPS_M)};",
@@ -243,7 +245,7 @@ def _tables(shape: SoundShape, table: SoundTable) -> str:
         ",\n".join([*early, "  {-1, -1, -1, -1, -1, -1, -1, -1}"]),
         "};",
         f"static const int START_WINDOW[2] = {{{', '.join(start)}}};",
-        f"static const SoundPhantom PHANTOMS[N_PHANTOMS + 1] = {{{', '.join(phantoms)}}};",
+        f"static SoundPhantom PHANTOMS[N_PHANTOMS + 1] = {{{', '.join(phantoms)}}};",
         "/* where a vehicle in a cell can be, metres ahead of the AV: same direction (by the AV lane), oncoming */",
         "static const double LEFT_EXTENT[2][ROAD_CELLS + 1][2] = {",
         left_ext,
@@ -434,15 +436,16 @@ static void sound_malformed(const char *why)
 	exit(2);
 }
 
-/* the scenario: lane nl cells... nr cells... nt ft horizon, then 0, or 1 and each vehicle's sensed interval (lo hi,
-   same-direction then oncoming); the vehicles as intervals (those, or their cells' extents), then the phantoms */
+/* the scenario: lane nl cells... nr cells... nt ft horizon, each phantom's edge (dx: where its sensor's view ends),
+   then 0, or 1 and each vehicle's sensed interval (lo hi, same-direction then oncoming); the vehicles as intervals
+   (those, or their cells' extents), then the phantoms */
 static void sound_load(void)
 {	char *text = getenv("ENV_NAME"), *end;
-	double v[6 * (ROAD_CELLS + 1) + 16];
+	double v[6 * (ROAD_CELLS + 1) + N_PHANTOMS + 16];
 	int n = 0, at = 0, j, lane, cell, measured;
 	double lo, hi;
 	if (!text) { fprintf(stderr, "overtake: ENV_NAME is not set\n"); exit(2); }
-	while (n < 6 * (ROAD_CELLS + 1) + 16)
+	while (n < 6 * (ROAD_CELLS + 1) + N_PHANTOMS + 16)
 	{	v[n] = strtod(text, &end);
 		if (end == text) { break; }
 		n++; text = end;
@@ -463,6 +466,12 @@ static void sound_load(void)
 	||  v[at] < 0 || v[at] > MAX_HORIZON) { sound_malformed("targets or horizon"); }
 	now.horizon = (int) v[at++];
 	now.lane = lane;
+	if (at + N_PHANTOMS >= n) { sound_malformed("the phantoms' edges"); }
+	for (j = 0; j < N_PHANTOMS; j++)
+	{	PHANTOMS[j].dx = v[at++];
+		if (!(PHANTOMS[j].dx == PHANTOMS[j].dx) || PHANTOMS[j].dx == 0.0
+		||  (PHANTOMS[j].lane == RIGHT && PHANTOMS[j].dx < 0.0)) { sound_malformed("a phantom's edge"); }
+	}
 	measured = (int) v[at++];
 	if ((measured != 0 && measured != 1) || at + (measured ? 2 * (n_left + n_right) : 0) != n)
 	{	sound_malformed("the sensed intervals");
@@ -489,7 +498,7 @@ static void sound_load(void)
 		O_HI[n_onc] = hi + SENSING_ERROR_M;
 		n_onc++;
 	}
-	for (j = 0; j < N_PHANTOMS; j++)  /* the unseen stretch from the range outwards */
+	for (j = 0; j < N_PHANTOMS; j++)  /* the unseen stretch from the view's edge outwards */
 	{	lo = PHANTOMS[j].dx > 0 ? PHANTOMS[j].dx : -__builtin_inf();
 		hi = PHANTOMS[j].dx > 0 ? __builtin_inf() : PHANTOMS[j].dx;
 		if (PHANTOMS[j].lane == LEFT) { S_LO[n_same] = lo; S_HI[n_same] = hi; n_same++; }

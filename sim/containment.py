@@ -31,13 +31,13 @@ import enum
 import math
 from collections import Counter
 from collections.abc import Callable, Iterable
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from sim.discretiser import in_window, reading_cell
 from sim.faults import GHOST_BODY
 from sim.scene import Scene
-from sim.sensors import SHADOW_BODY, Reading
+from sim.sensors import Reading
 from sim.vehicle import KinematicCar, Pose
 from spec.assumptions import Bounds
 from spec.grid import Grid
@@ -161,9 +161,6 @@ class Containment:
             order = sorted({c for c, _ in cells})
             for cell, reading in cells:
                 vehicle = by_index[(lane, order.index(cell))]
-                if reading.body == SHADOW_BODY:  # the hidden stretch: any vehicle from there on may be in it
-                    self.phantoms[lane].append(replace(vehicle, index=None, hi_m=math.inf))
-                    continue
                 read[vehicle] = None
                 if own.get(reading.body) is reading:
                     self.tracked[reading.body] = vehicle
@@ -317,14 +314,14 @@ class Sighting:
     sensed anew when no reading of the snapshot can explain it under ``bounds``: that reading's interval (the sensing
     error allowed), grown by its lane's speeds since (``spec.sound.reach_m``), meets none of the new reading's (its
     own error allowed). A vehicle read at the snapshot and missed since explains nothing extra; one hidden then and
-    come out, or entered the sensors' range, is new. The oncoming lane's hidden stretch (``SHADOW_BODY``) is no
-    vehicle: what comes out of it is new."""
+    come out (of the oncoming lane's stretch a left-lane vehicle hid, ``sim.sensors.oncoming_view_m``), or entered
+    the sensors' range, is new."""
 
     def __init__(self, readings: Iterable[Reading], bounds: Bounds, av_x_m: float, t_s: float) -> None:
         self.bounds, self.x0_m, self.t0_s = bounds, av_x_m, t_s
         error_m = bounds.sensing_error_m
         self.known = {lane: [Vehicle(lane, None, r.interval_m[0] - error_m, r.interval_m[1] + error_m, "")
-                             for r in readings if r.lane is lane and r.body != SHADOW_BODY] for lane in Lane}
+                             for r in readings if r.lane is lane] for lane in Lane}
 
     def shift_x(self, dx_m: float) -> None:
         """The world was re-centred by ``dx_m``."""
@@ -334,8 +331,6 @@ class Sighting:
         """Whether a reading of this sweep (the AV at ``av_x_m`` at ``t_s``) is a vehicle the snapshot did not show."""
         elapsed, shift_m = t_s - self.t0_s, av_x_m - self.x0_m
         for r in readings:
-            if r.body == SHADOW_BODY:
-                continue
             if not any(_miss_m(r, v, self.bounds, shift_m, elapsed) == 0.0 for v in self.known[r.lane]):
                 return True
         return False

@@ -71,13 +71,15 @@ class Planner:
             raise OptionError("--engine", self.engine.name, f"answers the paper model only, not --model sound "
                               f"(the sound model is answered by: {able})")
 
-    def scenario(self, readings: tuple[Reading, ...], lane: Lane, speed_mps: float | None = None) -> Scenario:
+    def scenario(self, readings: tuple[Reading, ...], lane: Lane, speed_mps: float | None = None,
+                 oncoming_view_m: float | None = None) -> Scenario:
         """The snapshot as a scenario on this planner's grid (ScenarioError when it is inconsistent); under the
-        sound model, with the AV's measured speed as the plan's start."""
+        sound model, with the AV's measured speed as the plan's start and the oncoming phantom where the snapshot's
+        view of that lane ended (``sim.sensors.oncoming_view_m``; None: the sensor's range)."""
         scenario = discretise(readings, lane, self.grid, measured=self.sound is not None)
         if self.sound is None:
             return scenario
-        return replace(scenario, sound=replace(self.sound, start_mps=speed_mps))
+        return replace(scenario, sound=replace(self.sound, start_mps=speed_mps, oncoming_view_m=oncoming_view_m))
 
     def plan(self, scenario: Scenario) -> Answer:
         return plan(scenario, self.strategy, engine=self.engine)

@@ -56,24 +56,20 @@ def _right_sensor(x: float, y: float, end: tuple[float, float, float], z: float)
     return (x, side_y, z)
 
 
-#: The body of the reading that stands in for the oncoming lane hidden behind left-lane vehicles (``shadow_reading``).
-SHADOW_BODY = -3
-
-
-def shadow_reading(readings: tuple[Reading, ...], av_y_m: float, error_m: float,
-                   spec: SensorSpec = SENSORS) -> Reading | None:
-    """Where the front-right sensor's view of the oncoming lane is first blocked by a sensed left-lane vehicle, as a
-    reading of an oncoming vehicle there (None: nothing sensed blocks it within range).
+def oncoming_view_m(readings: tuple[Reading, ...], av_y_m: float, error_m: float,
+                    spec: SensorSpec = SENSORS) -> float | None:
+    """Where the front-right sensor's view of the oncoming lane is first blocked by a sensed left-lane vehicle,
+    metres ahead of the AV (None: nothing sensed blocks it within range): the snapshot's oncoming phantom stands there
+    (``spec.sound.Sound.oncoming_view_m``), so a plan is safe against a vehicle anywhere in the hidden stretch.
 
     The sensor sees a vehicle when the ray from the AV's front-right corner to the vehicle's centre reaches it first
     (``RaySensor``); a left-lane vehicle ahead hides the oncoming lane's centres beyond the point where that ray
     first touches its body (the body widened by the sensing error ``error_m``: its reading may be that far off). A
     vehicle hidden there is no vehicle a decision could know, and no phantom at the sensor's range covers it
     (measured: the AV ended a lane change 0.5 m left of its lane's centre, the vehicle it had just passed hid an
-    oncoming one 64 m ahead, and the next decision started an overtake towards it). Known gap: a plan safe against
-    one oncoming vehicle at the shadow's start is not safe against one farther in the shadow (the nearer passes
-    before a lane change the farther one meets); the shadow belongs as the oncoming phantom's start
-    (docs/closed-loop.md, ``tests/sim/test_world.py``'s strict xfail)."""
+    oncoming one 64 m ahead, and the next decision started an overtake towards it). One oncoming vehicle at the
+    shadow's start would not do (the first version): it passes before a lane change that one hidden farther off
+    meets (seed 19 of the reliability campaign, ``tests/sim/test_world.py``)."""
     sx, sy, _ = _right_sensor(0.0, av_y_m, (math.inf, 0.0, 0.0), 0.0)  # the front-right sensor, from the AV's centre
     ty, body_low = Scene.lane_y(Lane.RIGHT), Scene.lane_y(Lane.LEFT) - CAR.width_m / 2
     if sy <= body_low or sy <= ty:
@@ -86,7 +82,7 @@ def shadow_reading(readings: tuple[Reading, ...], av_y_m: float, error_m: float,
         lo = max(r.interval_m[0] - error_m - CAR.length_m / 2, sx)
         starts.append(max(lo, sx + (sy - ty) * (lo - sx) / (sy - body_low)))
     start = min(starts, default=math.inf)
-    return Reading(Lane.RIGHT, SHADOW_BODY, start) if start <= spec.right_range_m else None
+    return start if start < spec.right_range_m else None
 
 
 @dataclass(frozen=True, slots=True)

@@ -35,7 +35,7 @@ from sim.faults import GHOST_BODY, FaultEvent, FaultySensor, SteeringFault, attr
 from sim.observers import StepEvent, TraceWriter
 from sim.parts import DriveConfig, Parts
 from sim.safety import SafetyMonitor
-from sim.sensors import RaySensor, Reading, SensorModel, in_range, shadow_reading
+from sim.sensors import RaySensor, Reading, SensorModel, in_range, oncoming_view_m
 from sim.summary import Failure, RunSummary, Takeover
 from sim.tolerance import ToleranceReport, Violation
 from sim.tracking import Detection, Tracker
@@ -197,8 +197,15 @@ class Simulator:
         return True
 
     # -- containment (``sim.containment``) --------------------------------------------------------------------
-    def _watch(self, readings: tuple[Reading, ...], pose_x_m: float, lane: Lane) -> None:
-        """Containment from this snapshot on, against the drive's bounds (a snapshot that makes no scenario: none)."""
+    def _view_m(self, readings: tuple[Reading, ...], av_y_m: float) -> float | None:
+        """How far the sound model's snapshot sees the oncoming lane (``sim.sensors.oncoming_view_m``, the sensing
+        error its bounds allow): where a left-lane vehicle hides it, the oncoming phantom stands."""
+        assert self.sound is not None
+        return oncoming_view_m(readings, av_y_m, self.sound.bounds.sensing_error_m)
+
+    def _watch(self, readings: tuple[Reading, ...], pose_x_m: float, lane: Lane, view_m: float | None = None) -> None:
+        """Containment from this snapshot on, against the drive's bounds and the snapshot's view of the oncoming lane
+        (a snapshot that makes no scenario: none)."""
         old = self.containment
         self.broken_before = old is not None and old.world_breached()
         if old is not None and not old.ended:
@@ -214,7 +221,8 @@ class Simulator:
         except ScenarioError:
             return
         self.summary.decisions += 1
-        self.containment = Containment(self.summary.decisions, self.watch, scenario, readings, self.grid, pose_x_m,
+        watch = replace(self.watch, oncoming_view_m=view_m)
+        self.containment = Containment(self.summary.decisions, watch, scenario, readings, self.grid, pose_x_m,
                                        self.summary.sim_time_s, self.traffic.cars())
 
     def _contain(self, pose: Pose, dt_s: float) -> None:
@@ -540,16 +548,13 @@ class Simulator:
             self._watch((), pose.x_m, lane)
             self._fail(FailureKind.SENSING, err.reason, str(err))
             return self._fallback(f"sensing: {err.reason}")
-        assert self.sound is not None
-        shadow = shadow_reading(readings, pose.y_m, self.sound.bounds.sensing_error_m)
-        if shadow is not None:  # the oncoming lane hidden behind a left-lane vehicle: one may be there
-            readings = (*readings, shadow)
-            self.summary.shadowed += 1
-        self._watch(readings, pose.x_m, lane)
+        view_m = self._view_m(readings, pose.y_m)
+        self.summary.shadowed += int(view_m is not None)
+        self._watch(readings, pose.x_m, lane, view_m)
         if self.containment is not None:
             self._contain(pose, 0.0)  # the snapshot itself: sensed farther off than the error bound, or unknown
         try:
-            scenario = self.planner.scenario(readings, lane, pose.speed_mps)
+            scenario = self.planner.scenario(readings, lane, pose.speed_mps, view_m)
         except ScenarioError as err:
             self._fail(FailureKind.SENSING, err.reason, str(err))
             return self._fallback(f"sensing: {err.reason}")
@@ -794,7 +799,8 @@ class Simulator:
         if ahead_m >= rear_m or SAFETY.violated(rear_m, MINIMAL_RISK.open_mps):
             return False
         try:
-            scenario = self.planner.scenario(self.sweep, self.executor.lane, speed_mps)
+            scenario = self.planner.scenario(self.sweep, self.executor.lane, speed_mps,
+                                             self._view_m(self.sweep, self.car.pose().y_m))
         except ScenarioError:
             return False
         self._room = keep_lane(problem_for(scenario, ModelKind.FINAL)) is None

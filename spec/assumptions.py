@@ -6,8 +6,9 @@ checks it); outside them an event is an assumption violation, counted as such. S
 speeds are along the AV's direction; oncoming speeds are magnitudes towards the AV. The sensing
 error widens every sensed position by that much either way, on top of the cell it was put in
 (a cell means anywhere within it, ``spec.cells``). A phantom is a vehicle assumed at the edge of
-a sensor's range in each lane, moving within that lane's bounds, so that a vehicle arriving from
-beyond the range is inside the assumptions.
+a sensor's view in each lane (its range; in the oncoming lane, nearer where a left-lane vehicle
+hides the lane), moving within that lane's bounds, so that a vehicle arriving from beyond what the
+sensors see is inside the assumptions.
 """
 
 from __future__ import annotations
@@ -56,14 +57,18 @@ class Bounds:
         """The bounds of the vehicles of ``lane`` (the left lane carries same-direction traffic, the right oncoming)."""
         return self.same_mps if lane is Lane.LEFT else self.oncoming_mps
 
-    def phantom_vehicles(self) -> tuple[Phantom, ...]:
-        """The phantoms: a same-direction vehicle at each end of the left-lane sensor's range, an oncoming one at the
-        end of the front-right sensor's (``spec.physical.SENSORS``); none when the profile has no phantoms."""
+    def phantom_vehicles(self, oncoming_view_m: float | None = None) -> tuple[Phantom, ...]:
+        """The phantoms: a same-direction vehicle at each end of the left-lane sensor's range, an oncoming one where
+        the front-right sensor's view of the oncoming lane ends: its range (``spec.physical.SENSORS``), or nearer,
+        ``oncoming_view_m``, where a left-lane vehicle hides the lane from there on (a snapshot's,
+        ``spec.sound.Sound.oncoming_view_m``). None when the profile has no phantoms."""
         if not self.phantoms:
             return ()
+        oncoming = (Phantom(Lane.RIGHT, SENSORS.right_range_m, "front-right sensor's range")
+                    if oncoming_view_m is None or oncoming_view_m >= SENSORS.right_range_m else
+                    Phantom(Lane.RIGHT, oncoming_view_m, "front-right sensor's view, hidden by a left-lane vehicle"))
         return (Phantom(Lane.LEFT, SENSORS.left_range_m, "left-lane sensor's range, ahead"),
-                Phantom(Lane.LEFT, -SENSORS.left_range_m, "left-lane sensor's range, behind"),
-                Phantom(Lane.RIGHT, SENSORS.right_range_m, "front-right sensor's range"))
+                Phantom(Lane.LEFT, -SENSORS.left_range_m, "left-lane sensor's range, behind"), oncoming)
 
 
 def check_bounds(bounds: Bounds, key: Callable[[str], str] = lambda name: f"--{name.replace('_', '-')}") -> Bounds:

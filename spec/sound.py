@@ -2,7 +2,7 @@
 motion inside the stated assumptions, at every instant, not only at ticks.
 
 Sets, not cells. Every vehicle is an interval of positions at the plan's start (its cell's extent,
-``spec.cells``, widened by the sensing error; a phantom at each sensor's range, ``spec.assumptions``)
+``spec.cells``, widened by the sensing error; a phantom where each sensor's view ends, ``spec.assumptions``)
 that grows with its lane's speed interval: a same-direction vehicle is within ``[lo + v_low t,
 hi + v_high t]``, an oncoming one within ``[lo - v_high t, hi - v_low t]``. The AV is its reference
 (``spec.envelope``) plus the tracking error. A step is safe when, over its whole window (from the
@@ -40,7 +40,7 @@ import math
 from dataclasses import dataclass, replace
 
 from spec.actions import ACTION_RULES, Action
-from spec.assumptions import DEFAULT_PROFILE, Bounds, check_bounds, parse_speeds, profile
+from spec.assumptions import DEFAULT_PROFILE, Bounds, Phantom, check_bounds, parse_speeds, profile
 from spec.cells import left_extent_m, oncoming_extent_m
 from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING, MinimalRisk, Piece, Reference, Tracking
 from spec.errors import OptionError, check_number
@@ -48,6 +48,7 @@ from spec.grid import Grid
 from spec.lanes import Lane
 from spec.models import GoalRule
 from spec.motion import Ramp, action_speed_mps, ramp_gain_m, ramp_s
+from spec.physical import SENSORS
 from spec.safety import SAFETY, Conflict, SafetySpec
 
 #: Conditions are held to this much slack on the safe side, so that float rounding never makes a gap look large.
@@ -73,24 +74,33 @@ class Sound:
     start_mps: float | None = None  # the AV's measured speed at the snapshot; None: the common speed
     minimal_risk: MinimalRisk = MINIMAL_RISK
     checks: Checks = Checks.PHYSICAL
+    #: how far ahead the front-right sensor saw the oncoming lane at the snapshot, metres (None: its whole range): a
+    #: left-lane vehicle hides the lane from there on, and the oncoming phantom stands there (``phantoms``)
+    oncoming_view_m: float | None = None
+
+    def phantoms(self) -> tuple[Phantom, ...]:
+        """The phantoms of this snapshot: the bounds' own, the oncoming one where the view of that lane ended."""
+        return self.bounds.phantom_vehicles(self.oncoming_view_m)
 
     def describe(self) -> str:
         b = self.bounds
         if self.checks is Checks.PAPER_CELLS:
             return f"the sound model's code path with the paper's cell rules (identity check), bounds {b.name}"
+        view = "" if self.oncoming_view_m is None else f" (the oncoming one from {self.oncoming_view_m:g} m)"
         return (f"sound model, bounds {b.name}: same-direction {b.same_mps.low_mps:g}..{b.same_mps.high_mps:g} m/s, "
                 f"oncoming {b.oncoming_mps.low_mps:g}..{b.oncoming_mps.high_mps:g} m/s, sensing error "
-                f"{b.sensing_error_m:g} m, phantoms {'on' if b.phantoms else 'off'}, followers "
+                f"{b.sensing_error_m:g} m, phantoms {'on' if b.phantoms else 'off'}{view}, followers "
                 f"{'react' if b.followers_react else 'keep their speed'}")
 
 
 #: The keys of a scenario file's ``bounds`` table (and the command line's options of the same names).
-BOUNDS_KEYS = ("profile", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react")
+BOUNDS_KEYS = ("profile", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
+               "oncoming_view_m")
 
 
 def sound_from(base: Sound | None, profile_name: str | None = None, same: object = None, oncoming: object = None,
                sensing_error_m: object = None, phantoms: bool | None = None, av_speed_mps: object = None,
-               where: str = "--", followers_react: bool | None = None) -> Sound:
+               where: str = "--", followers_react: bool | None = None, oncoming_view_m: object = None) -> Sound:
     """The sound model from a base (a file's, or None: the default profile), a named profile and overrides of its
     numbers; every value is checked, and bad input names the option or key (``where`` + its name)."""
     def key(name: str) -> str:
@@ -127,7 +137,17 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
     start = base.start_mps if base is not None else None
     if av_speed_mps is not None:
         start = check_number(key("av_speed_mps"), av_speed_mps, high=100.0)
-    return Sound(bounds, start_mps=start) if base is None else replace(base, bounds=bounds, start_mps=start)
+    view = base.oncoming_view_m if base is not None else None
+    if oncoming_view_m is not None:
+        view = check_view_m(key("oncoming_view_m"), oncoming_view_m)
+    if base is None:
+        return Sound(bounds, start_mps=start, oncoming_view_m=view)
+    return replace(base, bounds=bounds, start_mps=start, oncoming_view_m=view)
+
+
+def check_view_m(where: str, value: object) -> float:
+    """How far a snapshot saw the oncoming lane: above 0, at most the front-right sensor's range."""
+    return check_number(where, value, high=SENSORS.right_range_m, positive=True)
 
 
 def sound_from_table(table: object, where: str = "bounds") -> Sound:
@@ -140,7 +160,7 @@ def sound_from_table(table: object, where: str = "bounds") -> Sound:
             raise OptionError(f"{where}.{name}", table[name], f"unknown key (allowed: {', '.join(BOUNDS_KEYS)})")
     return sound_from(None, table.get("profile"), table.get("same_mps"), table.get("oncoming_mps"),
                       table.get("sensing_error_m"), table.get("phantoms"), table.get("av_speed_mps"), f"{where}.",
-                      table.get("followers_react"))
+                      table.get("followers_react"), table.get("oncoming_view_m"))
 
 
 def sound_to_table(sound: Sound) -> dict[str, object]:
@@ -152,6 +172,8 @@ def sound_to_table(sound: Sound) -> dict[str, object]:
                                 "followers_react": b.followers_react}
     if sound.start_mps is not None:
         table["av_speed_mps"] = sound.start_mps
+    if sound.oncoming_view_m is not None:
+        table["oncoming_view_m"] = sound.oncoming_view_m
     return table
 
 
@@ -193,7 +215,7 @@ def vehicles(lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Gr
         out.append(Vehicle(Lane.LEFT, i, lo - e, hi + e, f"left_lane[{i}] (cell {cell})"))
     for i, (cell, (lo, hi)) in enumerate(zip(right, oncoming, strict=True)):
         out.append(Vehicle(Lane.RIGHT, i, lo - e, hi + e, f"right_lane[{i}] (cell {cell})"))
-    for p in sound.bounds.phantom_vehicles():  # the whole unseen stretch: from the range's edge outwards
+    for p in sound.phantoms():  # the whole unseen stretch: from the view's edge outwards
         lo, hi = (p.dx_m, math.inf) if p.dx_m > 0 else (-math.inf, p.dx_m)
         out.append(Vehicle(p.lane, None, lo, hi, f"phantom ({p.why}, {p.dx_m:+g} m)"))
     return tuple(out)

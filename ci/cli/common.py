@@ -160,7 +160,8 @@ def abbrev(answer: Answer, compact: bool = False) -> str:
     return ("" if compact else " ").join(SHORT[a] for a in answer.actions) or "(empty)"
 
 
-SOUND_OPTIONS = ("bounds", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react")
+SOUND_OPTIONS = ("bounds", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
+                 "oncoming_view_m")
 
 
 def sound_options(command: Any) -> Any:
@@ -187,6 +188,9 @@ def sound_options(command: Any) -> Any:
         click.option("--followers-react/--followers-keep-speed", "followers_react", default=None,
                      help="Sound model: whether vehicles behind the AV brake for it (default: the profile's; the "
                      "paper's keep their speed, and the AV must not drive slower than they may while near)."),
+        click.option("--oncoming-view-m", type=METRES, default=None, help="Sound model: how far the snapshot saw "
+                     "the oncoming lane (a left-lane vehicle hid it from there on; the oncoming phantom stands "
+                     "there). Default: the front-right sensor's range."),
     )):
         wrapper = decorate(wrapper)
     return wrapper
@@ -194,11 +198,11 @@ def sound_options(command: Any) -> Any:
 
 def with_sound(scenario: Scenario, bounds: str | None, same_mps: str | None, oncoming_mps: str | None,
                sensing_error_m: float | None, phantoms: bool | None, av_speed_mps: float | None,
-               followers_react: bool | None = None) -> Scenario:
+               followers_react: bool | None = None, oncoming_view_m: float | None = None) -> Scenario:
     """``scenario`` under the sound model the options (over the file's ``bounds``) choose; unchanged without any."""
     if all(v is None for v in (bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
-                               followers_react)):
+                               followers_react, oncoming_view_m)):
         return scenario
     sound = sound_from(scenario.sound, bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
-                       followers_react=followers_react)
+                       followers_react=followers_react, oncoming_view_m=oncoming_view_m)
     return replace(scenario, sound=sound)

@@ -33,7 +33,7 @@ from spec.assumptions import Bounds, SpeedBounds
 from spec.constants import DEFAULT_HORIZON
 from spec.errors import ScenarioError
 from spec.files import scenario_from_dict
-from spec.grid import Grid, grid_for
+from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
 from spec.scenario import Scenario, make_scenario, sensed
 from spec.sound import Sound, sensed_extents
@@ -76,6 +76,12 @@ ERROR_CHOICES = (assumptions.PROFILES["paper"].sensing_error_m,
                  assumptions.PROFILES[assumptions.DEFAULT_PROFILE].sensing_error_m)
 
 
+#: Where a snapshot's view of the oncoming lane may end (``Sound.oncoming_view_m``: a left-lane vehicle hides the lane
+#: from there on), in the paper's 21 m cells ahead of the AV, stated: behind a vehicle in the next cell, two and five
+#: cells ahead (the middle of each), the same distances on every grid; none (the sensor's whole range) half the time.
+VIEW_CELLS = (1.5, 2.5, 5.5)
+
+
 @st.composite
 def drawn_sound(draw: st.DrawFn) -> Sound:
     """Bounds from the stated choices (shrinking towards the paper profile's)."""
@@ -105,6 +111,9 @@ def scenarios(grid: Grid, horizon: int | None, model: Sound | str | None = None)
         targets = draw(st.integers(0, min(ahead, 3)))
         h = horizon if horizon is not None else draw(st.integers(1, DEFAULT_HORIZON))
         sound = draw(drawn_sound()) if model == DRAWN else model if isinstance(model, Sound) else None
+        if sound is not None and sound.oncoming_view_m is None:
+            view = draw(st.sampled_from((None, None, None, *VIEW_CELLS)))
+            sound = sound if view is None else replace(sound, oncoming_view_m=view * float(PAPER_GRID.cell))
         try:
             scenario = replace(make_scenario(lane, left, right, targets, horizon=h, grid=grid), sound=sound)
         except ScenarioError:

@@ -20,6 +20,7 @@ from dataclasses import replace
 
 import pytest
 
+from ci.conformance.hypo import VIEW_CELLS
 from oracle import bmc, bmc_sound, planner, sound, z3_engine
 from spec.answers import Limits, Status, Strategy
 from spec.assumptions import Bounds, SpeedBounds, profile
@@ -117,6 +118,19 @@ def test_the_translation_without_the_prune_agrees_on_short_horizons(cell_m: floa
             _agree(scenario, strategy)
 
 
+def test_an_oncoming_view_ended_short_agrees_too() -> None:
+    """The oncoming phantom where a left-lane vehicle hid the lane (``Sound.oncoming_view_m``, the hypothesis source's
+    views): Z3's answers are the interpreter's, and the view changes some of them."""
+    rng, changed = random.Random("sound-z3-view"), 0
+    for _ in range(16):
+        seen = _draw(rng, PAPER_GRID, Sound(profile("default"), start_mps=rng.choice((None, 3.0, 9.5))))
+        assert seen.sound is not None
+        hidden = replace(seen, sound=replace(seen.sound, oncoming_view_m=rng.choice(VIEW_CELLS) * PAPER_GRID.cell))
+        _agree(hidden, Strategy.SHORTEST)
+        changed += planner.solve(hidden, Strategy.SHORTEST).actions != planner.solve(seen, Strategy.SHORTEST).actions
+    assert changed > 0
+
+
 def test_the_encodings_vehicles_are_the_sound_models() -> None:
     """The intervals the engine computes itself (extents widened by the sensing error; phantoms) are
     ``spec.sound.vehicles``, in its order."""
@@ -125,7 +139,8 @@ def test_the_encodings_vehicles_are_the_sound_models() -> None:
         grid = grid_for(cell_m)
         for name in ("default", "paper"):
             for _ in range(10):
-                scenario = _draw(rng, grid, Sound(profile(name)))
+                view = rng.choice((None, *(c * PAPER_GRID.cell for c in VIEW_CELLS)))
+                scenario = _draw(rng, grid, Sound(profile(name), oncoming_view_m=view))
                 problem = problem_for(scenario, ModelKind.FINAL)
                 enc = bmc_sound.encoding(problem)
                 values = dict(((p.get_id(), v) for p, v in enc.values(scenario)))

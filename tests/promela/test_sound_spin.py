@@ -19,6 +19,7 @@ from dataclasses import replace
 
 import pytest
 
+from ci.conformance.hypo import VIEW_CELLS
 from oracle import planner, sound
 from promela import runner
 from promela import sound as sound_model
@@ -96,6 +97,22 @@ def test_a_measured_start_speed_agrees_too() -> None:
         for _ in range(10):
             scenario = _draw(rng, PAPER_GRID, Sound(profile("default"), start_mps=start_mps))
             _agree(scenario, Strategy.SENSIBLE)
+
+
+def test_an_oncoming_view_ended_short_agrees_too_from_one_verifier() -> None:
+    """The oncoming phantom where a left-lane vehicle hid the lane (``Sound.oncoming_view_m``, the hypothesis source's
+    views), its edge read with the scenario so that one verifier serves every view: Spin's answers are the
+    interpreter's, and the view changes some of them."""
+    rng, changed = random.Random("sound-spin-view"), 0
+    for _ in range(16):
+        seen = _draw(rng, PAPER_GRID, Sound(profile("default")))
+        assert seen.sound is not None
+        hidden = replace(seen, sound=replace(seen.sound, oncoming_view_m=rng.choice(VIEW_CELLS) * PAPER_GRID.cell))
+        _agree(hidden, Strategy.SENSIBLE)
+        changed += planner.solve(hidden, Strategy.SENSIBLE).actions != planner.solve(seen, Strategy.SENSIBLE).actions
+        one, other = (sound_model.shape_of(problem_for(s, ModelKind.FINAL)) for s in (seen, hidden))
+        assert one.name == other.name
+    assert changed > 0
 
 
 #: Scenarios that told a faulty translation from the interpreter where the sample did not (cell length, profile,

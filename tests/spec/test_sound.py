@@ -15,7 +15,7 @@ from spec.errors import OptionError
 from spec.grid import PAPER_GRID
 from spec.lanes import Lane
 from spec.safety import Conflict
-from spec.sound import Sound, SoundRules, SoundState, sound_from, vehicles
+from spec.sound import Sound, SoundRules, SoundState, sound_from, sound_from_table, sound_to_table, vehicles
 
 DEFAULT = Sound(profile("default"))
 finite = st.floats(-50.0, 50.0)
@@ -128,3 +128,21 @@ def test_bad_bounds_are_one_line_naming_the_key(bounds: Bounds, key: str) -> Non
 def test_bad_start_speed_is_bad_input() -> None:
     with pytest.raises(OptionError, match="--av-speed-mps"):
         sound_from(None, "default", av_speed_mps=-3.0)
+
+
+@pytest.mark.parametrize("view", [0.0, -5.0, 400.0, math.nan, "far"])
+def test_a_bad_view_of_the_oncoming_lane_is_bad_input_naming_the_option_or_key(view: object) -> None:
+    with pytest.raises(OptionError, match="--oncoming-view-m"):
+        sound_from(None, "default", oncoming_view_m=view)
+    with pytest.raises(OptionError, match=r"bounds\.oncoming_view_m"):
+        sound_from_table({"oncoming_view_m": view})
+
+
+def test_a_view_of_the_oncoming_lane_moves_only_the_oncoming_phantom_and_reads_back_from_a_file() -> None:
+    full = Sound(profile("default"))
+    hidden = sound_from(None, "default", oncoming_view_m=23.5)
+    assert [p.dx_m for p in full.phantoms()] == [100.0, -100.0, 357.0]
+    assert [p.dx_m for p in hidden.phantoms()] == [100.0, -100.0, 23.5]
+    assert sound_from_table(sound_to_table(hidden)) == hidden
+    assert sound_from(None, "default", oncoming_view_m=357.0).phantoms() == full.phantoms()
+    assert sound_from(None, "default", phantoms=False, oncoming_view_m=23.5).phantoms() == ()

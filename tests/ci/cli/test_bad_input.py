@@ -138,8 +138,11 @@ def sound_options(command: str, *extra: str) -> list[Case]:
     numbers out of range (a sensing error beyond the window); ``extra`` arguments with each."""
     return [*(_case(command, *extra, f"--bounds={value}", named="--bounds") for value in ("nosuch", "")),
             *(_case(command, *extra, f"{option}={value}", named=option) for option in ("--sensing-error-m",
-                                                                                        "--av-speed-mps")
+                                                                                        "--av-speed-mps",
+                                                                                        "--oncoming-view-m")
               for value in NOT_NUMBERS),
+            *(_case(command, *extra, f"--oncoming-view-m={value}", named="--oncoming-view-m")
+              for value in ("0", "400")),  # the view starts past the AV's front and ends within the sensor's range
             *(_case(command, *extra, f"{option}={value}", named=option) for option in ("--same-mps", "--oncoming-mps")
               for value in BAD_SPEEDS),
             _case(command, *extra, "--sensing-error-m=1001", named="--sensing-error-m")]
@@ -148,7 +151,8 @@ def sound_options(command: str, *extra: str) -> list[Case]:
 #: Scenario files whose ``bounds`` table is wrong, and the key each one's line must name.
 BOUNDS_FILES = {"bounds_reversed.toml": "bounds.same_mps", "bounds_key.json": "bounds.speed",
                 "bounds_nan.json": "bounds.sensing_error_m", "bounds_profile.toml": "bounds.profile",
-                "bounds_list.json": "bounds", "bounds_phantoms.toml": "bounds.phantoms"}
+                "bounds_list.json": "bounds", "bounds_phantoms.toml": "bounds.phantoms",
+                "bounds_view.toml": "bounds.oncoming_view_m"}
 
 
 def out_dirs(command: str, option: str = "--out") -> list[Case]:
@@ -224,6 +228,7 @@ def _hostile_files(folder: Path) -> None:
         "bounds_profile.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nprofile = "psychic"\n',
         "bounds_list.json": "{" + good + ', "bounds": [1, 2]}',
         "bounds_phantoms.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nphantoms = "yes"\n',
+        "bounds_view.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\noncoming_view_m = 400\n',
     }
     for name, text in files.items():
         (folder / name).write_text(text)
