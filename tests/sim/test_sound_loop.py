@@ -168,21 +168,51 @@ def _fallback_view(follower: object, oncoming: object, react: bool, sweep: objec
     from types import SimpleNamespace
 
     return SimpleNamespace(follower=follower, oncoming=oncoming, sweep=sweep,
-                           watch=SimpleNamespace(bounds=SimpleNamespace(followers_react=react)))
+                           watch=SimpleNamespace(bounds=SimpleNamespace(followers_react=react,
+                                                                        oncoming_mps=SimpleNamespace(high_mps=9.0))))
 
 
 @pytest.mark.parametrize(("gap_m", "closing_mps", "react", "blocks"),
-                         [(30.0, 2.0, False, False), (5.0, 2.0, False, True), (5.0, 2.0, True, False),
-                          (30.0, None, False, True), (30.0, 12.0, False, True)])
+                         [(30.0, 1.0, False, False), (3.0, 1.0, False, True), (3.0, 1.0, True, False),
+                          (30.0, None, False, True), (30.0, 2.0, False, True), (30.0, 12.0, False, True)])
 def test_a_follower_that_keeps_its_speed_blocks_the_return_while_nearer_than_the_specification_allows(
         gap_m: float, closing_mps: float | None, react: bool, blocks: bool) -> None:
     """Seeds 6 and 8 of the faults evaluation (paper traffic, whose followers never brake): the fallback returned
-    from the right lane slower than the vehicle behind and was rear-ended."""
+    from the right lane slower than the vehicle behind and was rear-ended; seed 21 of the reliability campaign: 31 m
+    ahead of one closing at 6.8 m/s (the gap enough for the lane change's 3 s) it returned from a standstill, and the
+    sideways move took 5 s. A follower closing faster than the fit's error (``MinimalRisk.open_mps``) blocks."""
     from sim.simulator import Nearest, Simulator
     from spec.physical import CAR
 
     follower = Nearest(gap_m + CAR.length_m, closing_mps)
     assert Simulator._follower_blocks(_fallback_view(follower, None, react), 2.0) is blocks  # type: ignore[arg-type]
+
+
+def test_the_fallback_passing_a_vehicle_beside_it_is_held_back_only_by_a_gap_ahead_that_breaks_the_spec_now(
+        ) -> None:
+    """Seed 22 of the reliability campaign: in the right lane, 3.6 m ahead of a vehicle it was passing, the fallback
+    matched the speed of a "vehicle ahead" (a fake gap's copy) 20 m on, because a return would have left too small a
+    gap to it, and stayed beside the vehicle until the oncoming one left no time. Passing, the AV stays at least
+    ``open_mps`` faster than the vehicle beside it while the gap ahead meets the specification now."""
+    from types import SimpleNamespace
+
+    from sim.simulator import Nearest, Simulator
+    from spec.envelope import MINIMAL_RISK
+    from spec.physical import CAR
+    from spec.safety import SAFETY
+
+    beside = Nearest(3.6, -1.0)  # 3.6 m behind the AV's centre, the AV 1 m/s the faster
+
+    def target(lead: Nearest, follower: Nearest = beside) -> float | None:
+        view = SimpleNamespace(lead=lead, follower=follower)
+        return Simulator._waiting_mps(view, 8.0, True, True, False)  # type: ignore[arg-type]
+
+    closing = 2.0  # on the vehicle ahead, at 6 m/s
+    far = Nearest(SAFETY.required_gap_m(closing) + CAR.length_m + 5.0, closing)
+    assert target(far) == pytest.approx(7.0 + MINIMAL_RISK.open_mps)  # on past it
+    assert target(far, Nearest(3.6, 2.0)) == pytest.approx(6.0)  # the one beside the faster: not passing it
+    near = Nearest(SAFETY.required_gap_m(closing) + CAR.length_m - 0.5, closing)
+    assert target(near) == pytest.approx(6.0)  # the gap ahead too small now: its speed
 
 
 def test_the_fallback_waits_in_the_right_lane_only_while_the_oncoming_lane_leaves_time() -> None:
@@ -191,11 +221,15 @@ def test_the_fallback_waits_in_the_right_lane_only_while_the_oncoming_lane_leave
     from spec.safety import SAFETY
 
     def leaves(oncoming: object, sweep: object = ()) -> bool:
-        return Simulator._oncoming_leaves_time(_fallback_view(None, oncoming, False, sweep), 2.0)  # type: ignore[arg-type]
+        return Simulator._oncoming_leaves_time(_fallback_view(None, oncoming, False, sweep), 2.0,  # type: ignore[arg-type]
+                                               7.0)
 
     closing = 14.0
     need_m = SAFETY.required_gap_m(closing) + closing * 2.1 + CAR.length_m
     assert leaves(None)  # none sensed within the front-right sensor's range
     assert not leaves(None, sweep=None)  # a dropped sweep
     assert leaves(Nearest(need_m + 1.0, closing)) and not leaves(Nearest(need_m - 1.0, closing))
-    assert not leaves(Nearest(300.0, None))  # its speed not measured yet
+    # its speed not measured yet (its first two sweeps): the AV's 7 m/s and the bounds' fastest oncoming speed
+    unmeasured = 7.0 + 9.0
+    need_m = SAFETY.required_gap_m(unmeasured) + unmeasured * 2.1 + CAR.length_m
+    assert leaves(Nearest(need_m + 1.0, None)) and not leaves(Nearest(need_m - 1.0, None))
