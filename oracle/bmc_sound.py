@@ -242,8 +242,7 @@ class SoundEncoding:
                          for i in range(len(scenario.right_lane))]
         self.sensed_oncoming = len(self.oncoming)
         for p in sound.phantoms():
-            interval = Interval(p.dx_m, math.inf) if p.dx_m > 0 else Interval(-math.inf, p.dx_m)
-            (self.same if p.lane is Lane.LEFT else self.oncoming).append(interval)
+            (self.same if p.lane is Lane.LEFT else self.oncoming).append(Interval(*p.stretch_m))
         self.targets = scenario.target_indices
         self.prune = prune
         speeds = [table.speeds_mps[i] for i in table.action_speed.values()]

@@ -13,6 +13,7 @@ sensors see is inside the assumptions.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -37,6 +38,12 @@ class Phantom:
     lane: Lane
     dx_m: float
     why: str
+
+    @property
+    def stretch_m(self) -> tuple[float, float]:
+        """Where the phantom's vehicle may be: the whole unseen stretch, from ``dx_m`` outwards (every engine's
+        interval for it)."""
+        return (self.dx_m, math.inf) if self.dx_m > 0 else (-math.inf, self.dx_m)
 
 
 @dataclass(frozen=True, slots=True)

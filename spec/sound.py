@@ -216,8 +216,7 @@ def vehicles(lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Gr
     for i, (cell, (lo, hi)) in enumerate(zip(right, oncoming, strict=True)):
         out.append(Vehicle(Lane.RIGHT, i, lo - e, hi + e, f"right_lane[{i}] (cell {cell})"))
     for p in sound.phantoms():  # the whole unseen stretch: from the view's edge outwards
-        lo, hi = (p.dx_m, math.inf) if p.dx_m > 0 else (-math.inf, p.dx_m)
-        out.append(Vehicle(p.lane, None, lo, hi, f"phantom ({p.why}, {p.dx_m:+g} m)"))
+        out.append(Vehicle(p.lane, None, *p.stretch_m, f"phantom ({p.why}, {p.dx_m:+g} m)"))
     return tuple(out)
 
 

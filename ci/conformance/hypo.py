@@ -80,6 +80,7 @@ ERROR_CHOICES = (assumptions.PROFILES["paper"].sensing_error_m,
 #: from there on), in the paper's 21 m cells ahead of the AV, stated: behind a vehicle in the next cell, two and five
 #: cells ahead (the middle of each), the same distances on every grid; none (the sensor's whole range) half the time.
 VIEW_CELLS = (1.5, 2.5, 5.5)
+VIEWS_M = tuple(c * float(PAPER_GRID.cell) for c in VIEW_CELLS)  # the same, in metres
 
 
 @st.composite
@@ -112,8 +113,8 @@ def scenarios(grid: Grid, horizon: int | None, model: Sound | str | None = None)
         h = horizon if horizon is not None else draw(st.integers(1, DEFAULT_HORIZON))
         sound = draw(drawn_sound()) if model == DRAWN else model if isinstance(model, Sound) else None
         if sound is not None and sound.oncoming_view_m is None:
-            view = draw(st.sampled_from((None, None, None, *VIEW_CELLS)))
-            sound = sound if view is None else replace(sound, oncoming_view_m=view * float(PAPER_GRID.cell))
+            view = draw(st.sampled_from((None, None, None, *VIEWS_M)))
+            sound = sound if view is None else replace(sound, oncoming_view_m=view)
         try:
             scenario = replace(make_scenario(lane, left, right, targets, horizon=h, grid=grid), sound=sound)
         except ScenarioError:

@@ -20,7 +20,7 @@ from dataclasses import replace
 
 import pytest
 
-from ci.conformance.hypo import VIEW_CELLS
+from ci.conformance.hypo import VIEWS_M
 from oracle import bmc, bmc_sound, planner, sound, z3_engine
 from spec.answers import Limits, Status, Strategy
 from spec.assumptions import Bounds, SpeedBounds, profile
@@ -125,7 +125,7 @@ def test_an_oncoming_view_ended_short_agrees_too() -> None:
     for _ in range(16):
         seen = _draw(rng, PAPER_GRID, Sound(profile("default"), start_mps=rng.choice((None, 3.0, 9.5))))
         assert seen.sound is not None
-        hidden = replace(seen, sound=replace(seen.sound, oncoming_view_m=rng.choice(VIEW_CELLS) * PAPER_GRID.cell))
+        hidden = replace(seen, sound=replace(seen.sound, oncoming_view_m=rng.choice(VIEWS_M)))
         _agree(hidden, Strategy.SHORTEST)
         changed += planner.solve(hidden, Strategy.SHORTEST).actions != planner.solve(seen, Strategy.SHORTEST).actions
     assert changed > 0
@@ -139,7 +139,7 @@ def test_the_encodings_vehicles_are_the_sound_models() -> None:
         grid = grid_for(cell_m)
         for name in ("default", "paper"):
             for _ in range(10):
-                view = rng.choice((None, *(c * PAPER_GRID.cell for c in VIEW_CELLS)))
+                view = rng.choice((None, *VIEWS_M))
                 scenario = _draw(rng, grid, Sound(profile(name), oncoming_view_m=view))
                 problem = problem_for(scenario, ModelKind.FINAL)
                 enc = bmc_sound.encoding(problem)

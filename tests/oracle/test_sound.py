@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ci.conformance.hypo import VIEW_CELLS
+from ci.conformance.hypo import VIEWS_M
 from oracle import reach, sound
 from oracle.planner import plan, solve
 from oracle.sound import validate
@@ -50,7 +50,7 @@ def sound_scenarios(grid: Grid = PAPER_GRID) -> st.SearchStrategy[Scenario]:
     """Scenarios under drawn bounds, the oncoming lane seen to the sensor's range or, as the hypothesis source draws
     it, hidden from a nearer point on (``Sound.oncoming_view_m``)."""
     span = round(24 * PAPER_GRID.cell / grid.cell)
-    views = st.sampled_from((None, None, None, *(c * PAPER_GRID.cell for c in VIEW_CELLS)))
+    views = st.sampled_from((None, None, None, *VIEWS_M))
     return st.tuples(scenarios(span=span, grid=grid, max_left=4, max_right=2), bounds(), views).map(
         lambda drawn: replace(drawn[0], sound=Sound(drawn[1], oncoming_view_m=drawn[2])))
 

@@ -19,7 +19,7 @@ from dataclasses import replace
 
 import pytest
 
-from ci.conformance.hypo import VIEW_CELLS
+from ci.conformance.hypo import VIEWS_M
 from oracle import planner, sound
 from promela import runner
 from promela import sound as sound_model
@@ -107,7 +107,7 @@ def test_an_oncoming_view_ended_short_agrees_too_from_one_verifier() -> None:
     for _ in range(16):
         seen = _draw(rng, PAPER_GRID, Sound(profile("default")))
         assert seen.sound is not None
-        hidden = replace(seen, sound=replace(seen.sound, oncoming_view_m=rng.choice(VIEW_CELLS) * PAPER_GRID.cell))
+        hidden = replace(seen, sound=replace(seen.sound, oncoming_view_m=rng.choice(VIEWS_M)))
         _agree(hidden, Strategy.SENSIBLE)
         changed += planner.solve(hidden, Strategy.SENSIBLE).actions != planner.solve(seen, Strategy.SENSIBLE).actions
         one, other = (sound_model.shape_of(problem_for(s, ModelKind.FINAL)) for s in (seen, hidden))
