@@ -695,35 +695,25 @@ class Simulator:
         """The speed the fallback drives at while it waits in the right lane for room (None: the one it has): the
         vehicle ahead's while it is too near (a vehicle beside the AV: on past it if the AV is the faster, else
         ``open_mps`` slower, dropping back behind it; its speed not measured yet: the one it has); a vehicle
-        alongside behind: ``open_mps`` slower than it if it is the faster (it passes), else at least ``open_mps``
-        faster than it, and the vehicle ahead slows the AV only once its gap breaks the specification now, not the
-        gap a return would leave (matching its speed would hold the AV beside the vehicle it passes, measured: seed
-        12; and seed 22 of the reliability campaign, held beside it by a fake gap's copy ahead until the oncoming
-        vehicle left no time and the return cut into it); a follower
+        alongside behind: ``open_mps`` slower than it if it is the faster (it passes), else the speed the AV has
+        (the AV pulls ahead of it: matching its speed would hold the AV beside it, measured: seed 12); a follower
         too near (not alongside) that keeps its speed: its speed (the closing speed that makes its gap too small
         goes). Speeds from the fitted closing speeds (a vehicle ahead not measured yet: it may stand); the lowest
         target wins. Beside a moving vehicle a standstill is never the target (measured: seed 6 of the faults
         evaluation braked to 0 beside a vehicle at 7 m/s, stood 3 s in the oncoming lane, and was rear-ended when
         it returned at a crawl)."""
         mr, targets = MINIMAL_RISK, []
-        f = self.follower
-        # beside a vehicle the AV is passing (its centre behind the AV's, the AV the faster)
-        passing = (alongside and f is not None and f.measured_mps is not None and f.gap_m < SAFETY.min_gap_m
-                   and f.measured_mps < -CLOSING_EPS_MPS)
         if near and self.lead is not None:
             closing = self.lead.closing_mps(speed_mps)
             lead_mps = max(0.0, speed_mps - closing)
-            if passing and not SAFETY.violated(self.lead.gap_m, closing):
-                pass  # the gap ahead meets the specification now: on past the vehicle beside, not held beside it
-            elif self.lead.gap_m >= SAFETY.min_gap_m:
+            if self.lead.gap_m >= SAFETY.min_gap_m:
                 targets.append(lead_mps)
             elif self.lead.measured_mps is not None and self.lead.measured_mps <= CLOSING_EPS_MPS:
                 targets.append(max(0.0, lead_mps - mr.open_mps))  # beside it and not the faster: drop back
+        f = self.follower
         if f is not None and f.measured_mps is not None and (alongside or blocks):
             follower_mps = max(0.0, speed_mps + f.measured_mps)
-            if passing:  # at least ``open_mps`` faster than it, so that the pass ends
-                targets.append(max(speed_mps, follower_mps + mr.open_mps))
-            elif f.gap_m < SAFETY.min_gap_m:  # alongside: the faster one passes the other
+            if f.gap_m < SAFETY.min_gap_m:  # alongside: the faster one passes the other
                 if f.measured_mps > CLOSING_EPS_MPS:
                     targets.append(max(0.0, follower_mps - mr.open_mps))
             elif blocks:

@@ -97,9 +97,7 @@ class MinimalRisk:
     the follower, and seed 21 of the reliability campaign after a return begun at a standstill, whose sideways move
     took 5 s, not the lane change's 3), driving meanwhile in the right lane at the left lane's speed: the vehicle
     ahead's while it is too near, ``open_mps`` below it while beside it unless the AV is the faster (it drops back
-    behind it, or passes it), ``open_mps`` below a faster vehicle alongside behind, at least ``open_mps`` above a
-    slower one (it passes it, slowed by the vehicle ahead only once that gap breaks the specification now: matching
-    the vehicle ahead held the AV beside the vehicle it was passing, seed 22), a too-near or faster follower's own
+    behind it, or passes it), ``open_mps`` below a faster vehicle alongside behind, a too-near or faster follower's own
     where followers keep their speed (measured: braking to a standstill beside a vehicle left the AV standing in the
     oncoming lane, then returning at a crawl in front of a follower), for ``takeover_s`` and on, up to
     ``return_wait_s``, while the nearest oncoming vehicle sensed stays farther than the specification allows at its
