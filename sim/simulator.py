@@ -50,7 +50,7 @@ from spec.files import scenario_to_dict
 from spec.kinds import FailureKind
 from spec.lanes import Lane
 from spec.models import ModelKind
-from spec.motion import SpeedProfile, action_speed_mps, plan_profiles, ramp_gain_m, reference_offset_m
+from spec.motion import Ramp, SpeedProfile, action_speed_mps, plan_profiles, ramp_gain_m, reference_offset_m
 from spec.physical import CAR, LOOP, SENSORS
 from spec.safety import SAFETY
 from spec.scenario import Scenario, problem_for
@@ -647,8 +647,7 @@ class Simulator:
             if not self._await_room_to_return():
                 return False
             self.executor.reset_reference()
-            speed = self.car.pose().speed_mps
-            if not self.executor.run(Action.LEFT_LANE_CHANGE, self._tick, SpeedProfile(speed, ())):
+            if not self.executor.run(Action.LEFT_LANE_CHANGE, self._tick, self._return_profile()):
                 return False
         self.pending, self.proved = (), None
         return self._brake_in_lane(emergency=True)
@@ -691,29 +690,54 @@ class Simulator:
             if not self.executor.control(command, y_ref, 0.0, self._tick):
                 return False
 
+    def _return_profile(self) -> SpeedProfile:
+        """The return's speed reference: the speed it starts at, unless the vehicle ahead would then be nearer than
+        the specification allows at the return's end (only a return the oncoming lane forces starts so): then it
+        brakes from the start, at the car's limit, down to that vehicle's speed by the fitted closing speed (not
+        measured: a standstill, as ``_brake_in_lane``). Measured: seed 23 of the reliability campaign (the code of
+        4952935) returned at constant speed into the vehicle ahead, 5.1 m away closing at 3 m/s."""
+        speed = self.car.pose().speed_mps
+        change_s = float(ACTION_RULES[Action.LEFT_LANE_CHANGE].duration_s)
+        if self.lead is None:
+            return SpeedProfile(speed, ())
+        closing = min(speed, self.lead.closing_mps(speed))
+        if closing <= 0.0 or not SAFETY.violated(self.lead.gap_m - closing * change_s, closing):
+            return SpeedProfile(speed, ())
+        return SpeedProfile(speed, (Ramp(0.0, closing / MINIMAL_RISK.emergency_decel_mps2, -closing),))
+
     def _waiting_mps(self, speed_mps: float, near: bool, alongside: bool, blocks: bool) -> float | None:
         """The speed the fallback drives at while it waits in the right lane for room (None: the one it has): the
         vehicle ahead's while it is too near (a vehicle beside the AV: on past it if the AV is the faster, else
         ``open_mps`` slower, dropping back behind it; its speed not measured yet: the one it has); a vehicle
-        alongside behind: ``open_mps`` slower than it if it is the faster (it passes), else the speed the AV has
-        (the AV pulls ahead of it: matching its speed would hold the AV beside it, measured: seed 12); a follower
+        alongside behind: ``open_mps`` slower than it if it is the faster (it passes), else at least ``open_mps``
+        faster than it, and the vehicle ahead slows the AV only once its gap breaks the specification now, not the
+        gap a return would leave (matching its speed would hold the AV beside the vehicle it passes, measured: seed
+        12; and seed 22 of the reliability campaign, held beside it by a fake gap's copy ahead until the oncoming
+        vehicle left no time and the return cut into it); a follower
         too near (not alongside) that keeps its speed: its speed (the closing speed that makes its gap too small
         goes). Speeds from the fitted closing speeds (a vehicle ahead not measured yet: it may stand); the lowest
         target wins. Beside a moving vehicle a standstill is never the target (measured: seed 6 of the faults
         evaluation braked to 0 beside a vehicle at 7 m/s, stood 3 s in the oncoming lane, and was rear-ended when
         it returned at a crawl)."""
         mr, targets = MINIMAL_RISK, []
+        f = self.follower
+        # beside a vehicle the AV is passing (its centre behind the AV's, the AV the faster)
+        passing = (alongside and f is not None and f.measured_mps is not None and f.gap_m < SAFETY.min_gap_m
+                   and f.measured_mps < -CLOSING_EPS_MPS)
         if near and self.lead is not None:
             closing = self.lead.closing_mps(speed_mps)
             lead_mps = max(0.0, speed_mps - closing)
-            if self.lead.gap_m >= SAFETY.min_gap_m:
+            if passing and not SAFETY.violated(self.lead.gap_m, closing):
+                pass  # the gap ahead meets the specification now: on past the vehicle beside, not held beside it
+            elif self.lead.gap_m >= SAFETY.min_gap_m:
                 targets.append(lead_mps)
             elif self.lead.measured_mps is not None and self.lead.measured_mps <= CLOSING_EPS_MPS:
                 targets.append(max(0.0, lead_mps - mr.open_mps))  # beside it and not the faster: drop back
-        f = self.follower
         if f is not None and f.measured_mps is not None and (alongside or blocks):
             follower_mps = max(0.0, speed_mps + f.measured_mps)
-            if f.gap_m < SAFETY.min_gap_m:  # alongside: the faster one passes the other
+            if passing:  # at least ``open_mps`` faster than it, so that the pass ends
+                targets.append(max(speed_mps, follower_mps + mr.open_mps))
+            elif f.gap_m < SAFETY.min_gap_m:  # alongside: the faster one passes the other
                 if f.measured_mps > CLOSING_EPS_MPS:
                     targets.append(max(0.0, follower_mps - mr.open_mps))
             elif blocks:

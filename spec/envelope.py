@@ -97,14 +97,18 @@ class MinimalRisk:
     the follower, and seed 21 of the reliability campaign after a return begun at a standstill, whose sideways move
     took 5 s, not the lane change's 3), driving meanwhile in the right lane at the left lane's speed: the vehicle
     ahead's while it is too near, ``open_mps`` below it while beside it unless the AV is the faster (it drops back
-    behind it, or passes it), ``open_mps`` below a faster vehicle alongside behind, a too-near or faster follower's own
+    behind it, or passes it), ``open_mps`` below a faster vehicle alongside behind, at least ``open_mps`` above a
+    slower one (it passes it, slowed by the vehicle ahead only once that gap breaks the specification now: matching
+    the vehicle ahead held the AV beside the vehicle it was passing, seed 22), a too-near or faster follower's own
     where followers keep their speed (measured: braking to a standstill beside a vehicle left the AV standing in the
     oncoming lane, then returning at a crawl in front of a follower), for ``takeover_s`` and on, up to
     ``return_wait_s``, while the nearest oncoming vehicle sensed stays farther than the specification allows at its
     closing speed after one more sweep and the lane change (a return into a vehicle ahead at 13 m/s was measured:
     seed 2; before its speed is fitted, the AV's speed plus the fastest oncoming speed the bounds state, for the two
     sweeps a fit needs: a vehicle first sensed at any distance used to end the wait at once; a stated rule, no
-    failure measured); then it brakes in lane
+    failure measured); a return that would end nearer the vehicle ahead than the specification allows (one the
+    oncoming lane forces) brakes from its start at ``emergency_decel_mps2`` to that vehicle's speed (measured: seed
+    23 returned at constant speed into it, 5.1 m away closing at 3 m/s); then it brakes in lane
     at ``decel_mps2`` to the hold speed and, while the sensed vehicle ahead is nearer than the safety
     specification allows at the closing speed (``fallback_closing_mps``), at ``emergency_decel_mps2`` down to that
     vehicle's speed (a standstill when it is not known), and on below it while the measured gap still closes (the

@@ -188,6 +188,64 @@ def test_a_follower_that_keeps_its_speed_blocks_the_return_while_nearer_than_the
     assert Simulator._follower_blocks(_fallback_view(follower, None, react), 2.0) is blocks  # type: ignore[arg-type]
 
 
+def test_the_fallback_passing_a_vehicle_beside_it_is_held_back_only_by_a_gap_ahead_that_breaks_the_spec_now(
+        ) -> None:
+    """Seed 22 of the reliability campaign: in the right lane, 3.6 m ahead of a vehicle it was passing, the fallback
+    matched the speed of a "vehicle ahead" (a fake gap's copy) 20 m on, because a return would have left too small a
+    gap to it, and stayed beside the vehicle until the oncoming one left no time. Passing, the AV stays at least
+    ``open_mps`` faster than the vehicle beside it while the gap ahead meets the specification now."""
+    from types import SimpleNamespace
+
+    from sim.simulator import Nearest, Simulator
+    from spec.envelope import MINIMAL_RISK
+    from spec.physical import CAR
+    from spec.safety import SAFETY
+
+    beside = Nearest(3.6, -1.0)  # 3.6 m behind the AV's centre, the AV 1 m/s the faster
+
+    def target(lead: Nearest, follower: Nearest = beside) -> float | None:
+        view = SimpleNamespace(lead=lead, follower=follower)
+        return Simulator._waiting_mps(view, 8.0, True, True, False)  # type: ignore[arg-type]
+
+    closing = 2.0  # on the vehicle ahead, at 6 m/s
+    far = Nearest(SAFETY.required_gap_m(closing) + CAR.length_m + 5.0, closing)
+    assert target(far) == pytest.approx(7.0 + MINIMAL_RISK.open_mps)  # on past it
+    assert target(far, Nearest(3.6, 2.0)) == pytest.approx(6.0)  # the one beside the faster: not passing it
+    near = Nearest(SAFETY.required_gap_m(closing) + CAR.length_m - 0.5, closing)
+    assert target(near) == pytest.approx(6.0)  # the gap ahead too small now: its speed
+
+
+def test_a_return_that_would_end_too_near_the_vehicle_ahead_brakes_to_its_speed_from_its_start() -> None:
+    """Seed 23 (the code of 4952935): the oncoming lane forced the return while the vehicle ahead in the left lane was
+    5.1 m away closing at 3 m/s; the return ran at constant speed into it. A return that would end nearer the vehicle
+    ahead than the specification allows brakes from its start, at the car's limit, to that vehicle's speed."""
+    from types import SimpleNamespace
+
+    from sim.simulator import Nearest, Simulator
+    from spec.actions import ACTION_RULES, Action
+    from spec.envelope import MINIMAL_RISK
+    from spec.physical import CAR
+    from spec.safety import SAFETY
+
+    change_s = float(ACTION_RULES[Action.LEFT_LANE_CHANGE].duration_s)
+
+    def profile(lead: Nearest | None, speed_mps: float = 10.0):  # type: ignore[no-untyped-def]
+        car = SimpleNamespace(pose=lambda: SimpleNamespace(speed_mps=speed_mps))
+        return Simulator._return_profile(SimpleNamespace(lead=lead, car=car))  # type: ignore[arg-type]
+
+    assert profile(None).at(change_s) == pytest.approx(10.0)  # nothing ahead: the speed it starts at
+    closing = 3.0
+    room = Nearest(SAFETY.required_gap_m(closing) + closing * change_s + CAR.length_m + 0.5, closing)
+    assert profile(room).at(change_s) == pytest.approx(10.0)  # room at its end: as before
+    near = Nearest(5.1 + CAR.length_m, closing)
+    braking = profile(near)
+    assert braking.at(0.0) == pytest.approx(10.0)
+    assert braking.at(change_s) == pytest.approx(7.0)  # the vehicle ahead's speed
+    assert braking.at(closing / MINIMAL_RISK.emergency_decel_mps2) == pytest.approx(7.0)  # at the car's limit
+    assert profile(Nearest(5.1 + CAR.length_m, None)).at(change_s) == pytest.approx(0.0)  # not measured: it may stand
+    assert profile(Nearest(5.1 + CAR.length_m, -1.0)).at(change_s) == pytest.approx(10.0)  # moving away: no brake
+
+
 def test_the_fallback_waits_in_the_right_lane_only_while_the_oncoming_lane_leaves_time() -> None:
     from sim.simulator import Nearest, Simulator
     from spec.physical import CAR
