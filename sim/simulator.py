@@ -694,13 +694,18 @@ class Simulator:
         """The return's speed reference: the speed it starts at, unless the vehicle ahead would then be nearer than
         the specification allows at the return's end (only a return the oncoming lane forces starts so): then it
         brakes from the start, at the car's limit, down to that vehicle's speed by the fitted closing speed (not
-        measured: a standstill, as ``_brake_in_lane``). Measured: seed 23 of the reliability campaign (the code of
-        4952935) returned at constant speed into the vehicle ahead, 5.1 m away closing at 3 m/s."""
+        fitted yet: the slowest the drive's bounds let a vehicle ahead be, not a standstill). Measured: seed 23 of the
+        reliability campaign (the code of 4952935) returned at constant speed into the vehicle ahead, 5.1 m away
+        closing at 3 m/s; braking to a standstill for a vehicle ahead just sensed (seeds 13 and 16 at 6994c0a) left
+        the AV standing across the lanes, and the vehicle it had passed ran into it."""
         speed = self.car.pose().speed_mps
         change_s = float(ACTION_RULES[Action.LEFT_LANE_CHANGE].duration_s)
         if self.lead is None:
             return SpeedProfile(speed, ())
-        closing = min(speed, self.lead.closing_mps(speed))
+        if self.lead.measured_mps is not None:
+            closing = min(speed, self.lead.closing_mps(speed))
+        else:
+            closing = max(0.0, speed - (self.watch.bounds.same_mps.low_mps if self.watch is not None else 0.0))
         if closing <= 0.0 or not SAFETY.violated(self.lead.gap_m - closing * change_s, closing):
             return SpeedProfile(speed, ())
         return SpeedProfile(speed, (Ramp(0.0, closing / MINIMAL_RISK.emergency_decel_mps2, -closing),))

@@ -107,8 +107,10 @@ class MinimalRisk:
     seed 2; before its speed is fitted, the AV's speed plus the fastest oncoming speed the bounds state, for the two
     sweeps a fit needs: a vehicle first sensed at any distance used to end the wait at once; a stated rule, no
     failure measured); a return that would end nearer the vehicle ahead than the specification allows (one the
-    oncoming lane forces) brakes from its start at ``emergency_decel_mps2`` to that vehicle's speed (measured: seed
-    23 returned at constant speed into it, 5.1 m away closing at 3 m/s); then it brakes in lane
+    oncoming lane forces) brakes from its start at ``emergency_decel_mps2`` to that vehicle's fitted speed, or, not
+    fitted yet, the slowest the bounds let it be (measured: seed 23 returned at constant speed into it, 5.1 m away
+    closing at 3 m/s; braking to a standstill for a vehicle just sensed left the AV standing across the lanes in
+    front of the vehicle it had passed, seeds 13 and 16); then it brakes in lane
     at ``decel_mps2`` to the hold speed and, while the sensed vehicle ahead is nearer than the safety
     specification allows at the closing speed (``fallback_closing_mps``), at ``emergency_decel_mps2`` down to that
     vehicle's speed (a standstill when it is not known), and on below it while the measured gap still closes (the
