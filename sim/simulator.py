@@ -299,6 +299,10 @@ class Simulator:
             self.manoeuvre_faults = []
             self.steered = [] if self.steering.active is None else [self.steering.active]
             self.flagged = False
+        self._remember_faults()
+
+    def _remember_faults(self) -> None:
+        """The sensing faults that changed the last sweep join the manoeuvre's, with whether the tracker flagged it."""
         self.flagged = self.flagged or bool(self.unresolved)
         for event in self.faulty.in_sweep() if self.faulty else ():
             if event not in self.manoeuvre_faults:
@@ -368,6 +372,8 @@ class Simulator:
                                for t in told)
             self.unresolved = view.unresolved
         self._sense_breach(pose)
+        if self.takeover is not None:
+            self._remember_faults()  # the fallback acts on every sweep, not only on a decision's
         self.lead = Nearest.after(self.lead, self.sweep, SENSORS.sweep_hz)
         self.follower = Nearest.after(self.follower, self.sweep, SENSORS.sweep_hz, behind=True)
         self.oncoming = Nearest.after(self.oncoming, self.sweep, SENSORS.sweep_hz, Lane.RIGHT)
@@ -657,9 +663,9 @@ class Simulator:
         (``MinimalRisk``: nothing alongside within the specification's least gap, the vehicle ahead not nearer than
         it allows at the fitted closing speed once the return, at the speed it starts at, is over, and where
         followers keep their speed the vehicle behind not nearer than it allows then either), meanwhile driving at
-        the left lane's speed (``_waiting_mps``); for ``takeover_s``, and on while the oncoming lane leaves time
-        (``_oncoming_leaves_time``) up to ``return_wait_s``, then back regardless (the oncoming lane is the greater
-        danger). False on a collision."""
+        the left lane's speed (``_waiting_mps``), until ``MinimalRisk.ends_wait`` (the oncoming lane leaves no time,
+        ``_oncoming_leaves_time``, or ``return_wait_s`` is over), then back regardless (the oncoming lane is the
+        greater danger). False on a collision."""
         mr = MINIMAL_RISK
         y_ref = self.scene.lane_y(Lane.RIGHT)
         command = self.car.pose().speed_mps
@@ -671,15 +677,16 @@ class Simulator:
                             for r in self._sense())
             closing = 0.0 if self.lead is None else self.lead.closing_mps(speed)
             # the return runs at the speed it starts at: the gap it will leave at its end must still do
-            left_m = 0.0 if self.lead is None else self.lead.gap_m - closing * change_s
-            near = self.lead is not None and SAFETY.violated(left_m, closing)
+            near = self.lead is not None and self.lead.too_near_after(closing, change_s)
             blocks = self._follower_blocks(change_s)
             if not alongside and not near and not blocks:
                 return True
             held += 1
             waited_s = held * self.executor.dt_s
-            if waited_s > mr.return_wait_s or (waited_s > mr.takeover_s
-                                               and not self._oncoming_leaves_time(change_s, speed)):
+            # an oncoming vehicle sensed that leaves no time ends the wait whenever it comes (measured: seed 25 of the
+            # reliability campaign at 1153285 held the lane for a least wait of ``takeover_s`` while one closed from
+            # 49 m, and the return began 8.6 m from it)
+            if mr.ends_wait(waited_s, self.sweep is not None, self._oncoming_leaves_time(change_s, speed)):
                 return True
             target = self._waiting_mps(speed, near, alongside, blocks)
             if target is not None and command > target:
@@ -706,7 +713,7 @@ class Simulator:
             closing = min(speed, self.lead.closing_mps(speed))
         else:
             closing = max(0.0, speed - (self.watch.bounds.same_mps.low_mps if self.watch is not None else 0.0))
-        if closing <= 0.0 or not SAFETY.violated(self.lead.gap_m - closing * change_s, closing):
+        if closing <= 0.0 or not self.lead.too_near_after(closing, change_s):
             return SpeedProfile(speed, ())
         return SpeedProfile(speed, (Ramp(0.0, closing / MINIMAL_RISK.emergency_decel_mps2, -closing),))
 
@@ -732,7 +739,7 @@ class Simulator:
         if near and self.lead is not None:
             closing = self.lead.closing_mps(speed_mps)
             lead_mps = max(0.0, speed_mps - closing)
-            if passing and not SAFETY.violated(self.lead.gap_m, closing):
+            if passing and not self.lead.too_near_after(closing, 0.0):
                 pass  # the gap ahead meets the specification now: on past the vehicle beside, not held beside it
             elif self.lead.gap_m >= SAFETY.min_gap_m:
                 targets.append(lead_mps)
@@ -759,7 +766,7 @@ class Simulator:
         if f.measured_mps is None or f.measured_mps > MINIMAL_RISK.open_mps:
             return True  # not measured yet, or the AV slower than it by more than the fit's error: speed up first
         closing = max(0.0, f.measured_mps)
-        return SAFETY.violated(f.gap_m - closing * change_s, closing)
+        return f.too_near_after(closing, change_s)
 
     def _oncoming_leaves_time(self, change_s: float, speed_mps: float) -> bool:
         """Whether the fallback may wait one more sweep in the right lane: the nearest oncoming vehicle sensed would
@@ -778,7 +785,7 @@ class Simulator:
             closing = speed_mps + self.watch.bounds.oncoming_mps.high_mps
         else:
             return False
-        return not SAFETY.violated(o.gap_m - closing * (change_s + 1 / SENSORS.sweep_hz), closing)
+        return not o.too_near_after(closing, change_s + 1 / SENSORS.sweep_hz)
 
     def _brake_in_lane(self, emergency: bool) -> bool:
         """The minimal-risk manoeuvre for ``MINIMAL_RISK.takeover_s``: brake in lane to the hold speed; with
@@ -800,7 +807,7 @@ class Simulator:
             if emergency and self.lead is not None:
                 speed = self.car.pose().speed_mps
                 closing = self.lead.closing_mps(speed)
-                if SAFETY.violated(self.lead.gap_m, closing):
+                if self.lead.too_near_after(closing, 0.0):
                     target, decel = max(0.0, speed - closing), mr.emergency_decel_mps2
                     if self.lead.measured_mps is not None and self.lead.measured_mps > CLOSING_EPS_MPS:
                         target = min(target, max(0.0, command - decel * self.executor.dt_s))  # it still closes
@@ -1010,6 +1017,11 @@ class Nearest:
     def closing_mps(self, speed_mps: float) -> float:
         """The closing speed the fallback brakes for (``MinimalRisk.fallback_closing_mps``)."""
         return MINIMAL_RISK.fallback_closing_mps(speed_mps, self.measured_mps)
+
+    def too_near_after(self, closing_mps: float, seconds: float) -> bool:
+        """Whether the gap, closing at ``closing_mps`` for ``seconds``, is then nearer than the safety specification
+        allows at that closing speed."""
+        return SAFETY.violated(self.gap_m - closing_mps * seconds, closing_mps)
 
 
 def run_drive(seed: int, config: DriveConfig, out_dir: str | None = None, report: Report | None = None) -> RunSummary:

@@ -101,9 +101,11 @@ class MinimalRisk:
     slower one (it passes it, slowed by the vehicle ahead only once that gap breaks the specification now: matching
     the vehicle ahead held the AV beside the vehicle it was passing, seed 22), a too-near or faster follower's own
     where followers keep their speed (measured: braking to a standstill beside a vehicle left the AV standing in the
-    oncoming lane, then returning at a crawl in front of a follower), for ``takeover_s`` and on, up to
-    ``return_wait_s``, while the nearest oncoming vehicle sensed stays farther than the specification allows at its
-    closing speed after one more sweep and the lane change (a return into a vehicle ahead at 13 m/s was measured:
+    oncoming lane, then returning at a crawl in front of a follower), up to ``return_wait_s``, while the nearest
+    oncoming vehicle sensed stays farther than the specification allows at its closing speed after one more sweep
+    and the lane change, from the wait's start (a least wait of ``takeover_s`` first was measured: seed 25 of the
+    reliability campaign held the lane while an oncoming vehicle closed from 49 m; a dropped sweep, which shows
+    nothing, ends the wait only after ``takeover_s``) (a return into a vehicle ahead at 13 m/s was measured:
     seed 2; before its speed is fitted, the AV's speed plus the fastest oncoming speed the bounds state, for the two
     sweeps a fit needs: a vehicle first sensed at any distance used to end the wait at once; a stated rule, no
     failure measured); a return that would end nearer the vehicle ahead than the specification allows (one the
@@ -139,6 +141,13 @@ class MinimalRisk:
     #: (25.5 s); a bound, so that a left lane that never leaves room (a vehicle stopped beside the AV) cannot hold
     #: the drive for ever.
     return_wait_s: float = SENSORS.right_range_m / float(2 * COMMON_SPEED_MPS)
+
+    def ends_wait(self, waited_s: float, swept: bool, oncoming_leaves_time: bool) -> bool:
+        """Whether the fallback's wait in the right lane ends now, with or without room in the left lane: after
+        ``return_wait_s``; or once the oncoming lane leaves no time, from the wait's start when the last sweep was
+        read (``swept``), only after ``takeover_s`` when it was dropped (it shows nothing)."""
+        return waited_s > self.return_wait_s or (
+            (swept or waited_s > self.takeover_s) and not oncoming_leaves_time)
 
     def hold_mps(self, speed_mps: float, slowest_ahead_mps: float) -> float:
         """The speed the manoeuvre brakes to: at most the slowest speed a vehicle ahead may keep (so the reference

@@ -277,7 +277,8 @@ def test_a_failure_is_attributed_by_the_stated_rule() -> None:
     assert attribute(5, [gap, ghost, split], [steer]) is steer  # steering moves the AV whatever the plan
     assert attribute(5, [gap, ghost, split], []) is gap  # the last that touched the vehicle in the collision
     assert attribute(7, [gap, ghost, split], []) is ghost  # else the last that touched no vehicle
-    assert attribute(7, [gap, split], []) is None
+    assert attribute(7, [gap, split], []) is split  # else the last sensing fault: what it added may hold the AV
+    assert attribute(7, [], []) is None
     assert attribute(None, [gap, split, ghost], []) is ghost  # no vehicle (a stop): the last sensing fault
     assert attribute(None, [], []) is None
 

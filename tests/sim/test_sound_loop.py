@@ -272,3 +272,19 @@ def test_the_fallback_waits_in_the_right_lane_only_while_the_oncoming_lane_leave
     unmeasured = 7.0 + 9.0
     need_m = SAFETY.required_gap_m(unmeasured) + unmeasured * 2.1 + CAR.length_m
     assert leaves(Nearest(need_m + 1.0, None)) and not leaves(Nearest(need_m - 1.0, None))
+
+
+def test_the_fallbacks_wait_in_the_right_lane_ends_as_soon_as_a_sensed_oncoming_vehicle_leaves_no_time() -> None:
+    """Seed 25 of the reliability campaign (1153285): a fake gap's copy beside the AV held the fallback in the right
+    lane for a least wait of ``takeover_s`` while an oncoming vehicle closed from 49 m; the return began 8.6 m from
+    it. A sensed oncoming vehicle now ends the wait from its start; a dropped sweep (nothing seen) only after
+    ``takeover_s``; nothing holds it past ``return_wait_s``."""
+    from spec.envelope import MINIMAL_RISK as mr
+
+    early = 0.1
+    assert mr.ends_wait(early, swept=True, oncoming_leaves_time=False)
+    assert not mr.ends_wait(early, swept=True, oncoming_leaves_time=True)
+    assert not mr.ends_wait(early, swept=False, oncoming_leaves_time=False)
+    assert mr.ends_wait(mr.takeover_s + early, swept=False, oncoming_leaves_time=False)
+    assert not mr.ends_wait(mr.return_wait_s, swept=True, oncoming_leaves_time=True)
+    assert mr.ends_wait(mr.return_wait_s + early, swept=True, oncoming_leaves_time=True)
