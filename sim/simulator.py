@@ -744,7 +744,10 @@ class Simulator:
             elif self.lead.gap_m >= SAFETY.min_gap_m:
                 targets.append(lead_mps)
             elif self.lead.measured_mps is not None and self.lead.measured_mps <= CLOSING_EPS_MPS:
-                targets.append(max(0.0, lead_mps - mr.open_mps))  # beside it and not the faster: drop back
+                # beside it and not the faster: drop back, ``open_mps`` below its own speed (not below the AV's: the
+                # closing speed braked for stops at 0, and a target under the AV's own speed every step ratcheted it
+                # to a standstill beside a reading moving away, seed 38 of the reliability campaign at 48254f9)
+                targets.append(max(0.0, speed_mps - self.lead.measured_mps - mr.open_mps))
         if f is not None and f.measured_mps is not None and (alongside or blocks):
             follower_mps = max(0.0, speed_mps + f.measured_mps)
             if passing:  # at least ``open_mps`` faster than it, so that the pass ends

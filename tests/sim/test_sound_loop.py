@@ -215,6 +215,25 @@ def test_the_fallback_passing_a_vehicle_beside_it_is_held_back_only_by_a_gap_ahe
     assert target(near) == pytest.approx(6.0)  # the gap ahead too small now: its speed
 
 
+def test_the_fallback_drops_back_behind_a_vehicle_beside_it_at_that_vehicles_speed_not_to_a_standstill() -> None:
+    """Seed 38 of the reliability campaign (48254f9): a reading beside the AV in the left lane, 0.9 m ahead of its
+    centre and moving away at 2.7 m/s, became the vehicle ahead; the fallback's target was ``open_mps`` below the
+    AV's own speed, every control step, so it braked from 4.4 m/s to a standstill in the right lane while an oncoming
+    vehicle closed, and the forced return later cut in front of a follower. Beside a vehicle it is not faster than,
+    it now drives ``open_mps`` below that vehicle's speed."""
+    from types import SimpleNamespace
+
+    from sim.simulator import Nearest, Simulator
+    from spec.envelope import MINIMAL_RISK
+
+    view = SimpleNamespace(lead=Nearest(0.9, -2.7), follower=None)
+    target = Simulator._waiting_mps(view, 4.0, True, False, False)  # type: ignore[arg-type]
+    assert target == pytest.approx(4.0 + 2.7 - MINIMAL_RISK.open_mps)
+    view = SimpleNamespace(lead=Nearest(0.9, 0.0), follower=None)  # at the AV's speed: below it
+    assert Simulator._waiting_mps(view, 4.0, True, False, False) == pytest.approx(  # type: ignore[arg-type]
+        4.0 - MINIMAL_RISK.open_mps)
+
+
 def test_a_return_that_would_end_too_near_the_vehicle_ahead_brakes_to_its_speed_from_its_start() -> None:
     """Seed 23 (the code of 4952935): the oncoming lane forced the return while the vehicle ahead in the left lane was
     5.1 m away closing at 3 m/s; the return ran at constant speed into it. A return that would end nearer the vehicle
