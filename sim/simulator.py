@@ -43,7 +43,7 @@ from sim.vehicle import KinematicCar, Pose, first_contact
 from spec.actions import ACTION_RULES, Action
 from spec.answers import Answer, Status
 from spec.assumptions import PROFILES
-from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING, fitted_closing_mps
+from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING, fitted_closing_mps, own_motion_closing_mps
 from spec.errors import ScenarioError
 from spec.faults import lost_control
 from spec.files import scenario_to_dict
@@ -374,9 +374,12 @@ class Simulator:
         self._sense_breach(pose)
         if self.takeover is not None:
             self._remember_faults()  # the fallback acts on every sweep, not only on a decision's
-        self.lead = Nearest.after(self.lead, self.sweep, SENSORS.sweep_hz)
-        self.follower = Nearest.after(self.follower, self.sweep, SENSORS.sweep_hz, behind=True)
-        self.oncoming = Nearest.after(self.oncoming, self.sweep, SENSORS.sweep_hz, Lane.RIGHT)
+        odometer_m, hz = self.origin_km * 1000 + pose.x_m, SENSORS.sweep_hz  # the AV's own travel, and speed
+        self.lead = Nearest.after(self.lead, self.sweep, hz, travelled_m=odometer_m, av_mps=pose.speed_mps)
+        self.follower = Nearest.after(self.follower, self.sweep, hz, behind=True, travelled_m=odometer_m,
+                                      av_mps=pose.speed_mps)
+        self.oncoming = Nearest.after(self.oncoming, self.sweep, hz, Lane.RIGHT, travelled_m=odometer_m,
+                                      av_mps=pose.speed_mps)
         self.executor.steer_offset_rad = self.steering.on_sweep()
         if self.steering.active is not None and self.steering.active not in self.steered:
             self.steered.append(self.steering.active)
@@ -678,7 +681,7 @@ class Simulator:
             closing = 0.0 if self.lead is None else self.lead.closing_mps(speed)
             # the return runs at the speed it starts at: the gap it will leave at its end must still do
             near = self.lead is not None and self.lead.too_near_after(closing, change_s)
-            blocks = self._follower_blocks(change_s)
+            blocks = self._follower_blocks(change_s, speed)
             if not alongside and not near and not blocks:
                 return True
             held += 1
@@ -733,9 +736,10 @@ class Simulator:
         it returned at a crawl)."""
         mr, targets = MINIMAL_RISK, []
         f = self.follower
+        f_closing = None if f is None else f.closing_now_mps(speed_mps)
         # beside a vehicle the AV is passing (its centre behind the AV's, the AV the faster)
-        passing = (alongside and f is not None and f.measured_mps is not None and f.gap_m < SAFETY.min_gap_m
-                   and f.measured_mps < -CLOSING_EPS_MPS)
+        passing = (alongside and f is not None and f_closing is not None and f.gap_m < SAFETY.min_gap_m
+                   and f_closing < -CLOSING_EPS_MPS)
         if near and self.lead is not None:
             closing = self.lead.closing_mps(speed_mps)
             lead_mps = max(0.0, speed_mps - closing)
@@ -743,33 +747,33 @@ class Simulator:
                 pass  # the gap ahead meets the specification now: on past the vehicle beside, not held beside it
             elif self.lead.gap_m >= SAFETY.min_gap_m:
                 targets.append(lead_mps)
-            elif self.lead.measured_mps is not None and self.lead.measured_mps <= CLOSING_EPS_MPS:
+            elif (lead_own := self.lead.own_mps(speed_mps)) is not None and lead_own >= speed_mps - CLOSING_EPS_MPS:
                 # beside it and not the faster: drop back, ``open_mps`` below its own speed (not below the AV's: the
                 # closing speed braked for stops at 0, and a target under the AV's own speed every step ratcheted it
                 # to a standstill beside a reading moving away, seed 38 of the reliability campaign at 48254f9)
-                targets.append(max(0.0, speed_mps - self.lead.measured_mps - mr.open_mps))
-        if f is not None and f.measured_mps is not None and (alongside or blocks):
-            follower_mps = max(0.0, speed_mps + f.measured_mps)
+                targets.append(max(0.0, lead_own - mr.open_mps))
+        if f is not None and f_closing is not None and (alongside or blocks):
+            follower_mps = max(0.0, speed_mps + f_closing)
             if passing:  # at least ``open_mps`` faster than it, so that the pass ends
                 targets.append(max(speed_mps, follower_mps + mr.open_mps))
             elif f.gap_m < SAFETY.min_gap_m:  # alongside: the faster one passes the other
-                if f.measured_mps > CLOSING_EPS_MPS:
+                if f_closing > CLOSING_EPS_MPS:
                     targets.append(max(0.0, follower_mps - mr.open_mps))
             elif blocks:
                 targets.append(follower_mps)
         return min(targets) if targets else None
 
-    def _follower_blocks(self, change_s: float) -> bool:
+    def _follower_blocks(self, change_s: float, speed_mps: float) -> bool:
         """Where followers keep their speed (the drive's bounds: ``Bounds.followers_react`` False), whether the
         vehicle sensed behind in the left lane would be nearer than the specification allows at its fitted closing
         speed once a return of ``change_s`` is over (not measured yet: it blocks, for the two sweeps a fit needs)."""
         f = self.follower
         if f is None or self.watch is None or self.watch.bounds.followers_react:
             return False
-        if f.measured_mps is None or f.measured_mps > MINIMAL_RISK.open_mps:
+        f_closing = f.closing_now_mps(speed_mps)
+        if f_closing is None or f_closing > MINIMAL_RISK.open_mps:
             return True  # not measured yet, or the AV slower than it by more than the fit's error: speed up first
-        closing = max(0.0, f.measured_mps)
-        return f.too_near_after(closing, change_s)
+        return f.too_near_after(max(0.0, f_closing), change_s)
 
     def _oncoming_leaves_time(self, change_s: float, speed_mps: float) -> bool:
         """Whether the fallback may wait one more sweep in the right lane: the nearest oncoming vehicle sensed would
@@ -782,8 +786,9 @@ class Simulator:
         o = self.oncoming
         if o is None:
             return True
-        if o.measured_mps is not None:
-            closing = max(0.0, o.measured_mps)
+        o_closing = o.closing_now_mps(speed_mps)
+        if o_closing is not None:
+            closing = max(0.0, o_closing)
         elif self.watch is not None:
             closing = speed_mps + self.watch.bounds.oncoming_mps.high_mps
         else:
@@ -812,10 +817,11 @@ class Simulator:
                 closing = self.lead.closing_mps(speed)
                 if self.lead.too_near_after(closing, 0.0):
                     target, decel = max(0.0, speed - closing), mr.emergency_decel_mps2
-                    if self.lead.measured_mps is not None and self.lead.measured_mps > CLOSING_EPS_MPS:
+                    if (now := self.lead.closing_now_mps(speed)) is not None and now > CLOSING_EPS_MPS:
                         target = min(target, max(0.0, command - decel * self.executor.dt_s))  # it still closes
-                elif self.lead.measured_mps is not None and self._room_needed(mr.handback_mps(speed, hold)):
-                    target = min(hold, max(0.0, speed - self.lead.measured_mps - mr.open_mps))
+                elif (lead_own := self.lead.own_mps(speed)) is not None and \
+                        self._room_needed(mr.handback_mps(speed, hold)):
+                    target = min(hold, max(0.0, lead_own - mr.open_mps))
             if command > target:
                 command = max(target, command - decel * self.executor.dt_s)
             elif emergency:
@@ -993,24 +999,51 @@ class Nearest:
     """The nearest vehicle sensed in one lane on one side of the AV (ahead, or behind) at the last sweep: its
     distance (centre to centre, positive either side), its distances at the last sweeps while it was the same vehicle
     (the distance changed by at most a car length from one sweep to the next; at most ``MinimalRisk.fit_sweeps``,
-    oldest first), and the closing speed fitted through them (None: fewer than three)."""
+    oldest first) with the AV's odometer at each, and the closing speed at the last sweep fitted through them, the
+    AV's own motion taken out (``spec.envelope.own_motion_closing_mps``; None: fewer than three). Without the AV's
+    odometer and speed (``av_mps`` None), the distances' own fit, at the speed asked about."""
 
     dx_m: float
     measured_mps: float | None
     distances_m: tuple[float, ...] = ()
+    travelled_m: tuple[float, ...] = ()
+    av_mps: float | None = None  # the AV's speed at the last sweep
+    behind: bool = False
 
     @staticmethod
     def after(before: Nearest | None, sweep: tuple[Reading, ...] | None, sweep_hz: float, lane: Lane = Lane.LEFT,
-              behind: bool = False) -> Nearest | None:
+              behind: bool = False, travelled_m: float | None = None, av_mps: float | None = None) -> Nearest | None:
+        """The nearest vehicle in ``sweep``; ``travelled_m`` and ``av_mps``: the AV's odometer and speed at it."""
         found = [(-r.dx_m if behind else r.dx_m) for r in sweep or ()
                  if r.lane is lane and (r.dx_m <= 0 if behind else r.dx_m > 0)]
         if not found:
             return None
         dx = min(found)
-        if before is None or abs(before.dx_m - dx) > CAR.length_m:
-            return Nearest(dx, None, (dx,))
-        distances = (*before.distances_m, dx)[-MINIMAL_RISK.fit_sweeps:]
-        return Nearest(dx, fitted_closing_mps(distances, sweep_hz), distances)
+        odometer = () if travelled_m is None or av_mps is None else (travelled_m,)
+        if before is None or abs(before.dx_m - dx) > CAR.length_m or bool(before.travelled_m) != bool(odometer):
+            return Nearest(dx, None, (dx,), odometer, av_mps, behind)
+        keep = MINIMAL_RISK.fit_sweeps
+        distances = (*before.distances_m, dx)[-keep:]
+        if travelled_m is None or av_mps is None:
+            return Nearest(dx, fitted_closing_mps(distances, sweep_hz), distances, (), None, behind)
+        travelled = (*before.travelled_m, travelled_m)[-keep:]
+        return Nearest(dx, own_motion_closing_mps(distances, travelled, av_mps, behind, sweep_hz), distances,
+                       travelled, av_mps, behind)
+
+    def closing_now_mps(self, speed_mps: float) -> float | None:
+        """The closing speed at the AV's speed now: the one measured at the last sweep, moved by the AV's own change
+        of speed since (None: not measured)."""
+        if self.measured_mps is None or self.av_mps is None:
+            return self.measured_mps
+        change = speed_mps - self.av_mps
+        return self.measured_mps + (-change if self.behind else change)
+
+    def own_mps(self, speed_mps: float) -> float | None:
+        """The vehicle's own speed along the road (None: not measured), from the AV's speed now."""
+        closing = self.closing_now_mps(speed_mps)
+        if closing is None:
+            return None
+        return speed_mps + closing if self.behind else speed_mps - closing
 
     @property
     def gap_m(self) -> float:
@@ -1018,8 +1051,8 @@ class Nearest:
         return self.dx_m - CAR.length_m
 
     def closing_mps(self, speed_mps: float) -> float:
-        """The closing speed the fallback brakes for (``MinimalRisk.fallback_closing_mps``)."""
-        return MINIMAL_RISK.fallback_closing_mps(speed_mps, self.measured_mps)
+        """The closing speed the fallback brakes for at the AV's speed now (``MinimalRisk.fallback_closing_mps``)."""
+        return MINIMAL_RISK.fallback_closing_mps(speed_mps, self.closing_now_mps(speed_mps))
 
     def too_near_after(self, closing_mps: float, seconds: float) -> bool:
         """Whether the gap, closing at ``closing_mps`` for ``seconds``, is then nearer than the safety specification
