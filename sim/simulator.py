@@ -703,8 +703,9 @@ class Simulator:
     def _return_profile(self) -> SpeedProfile:
         """The return's speed reference: the speed it starts at, unless the vehicle ahead would then be nearer than
         the specification allows at the return's end (only a return the oncoming lane forces starts so): then it
-        brakes from the start, at the car's limit, down to that vehicle's speed by the fitted closing speed (not
-        fitted yet: the slowest the drive's bounds let a vehicle ahead be, not a standstill). Measured: seed 23 of the
+        brakes, at the car's limit, down to that vehicle's speed by the fitted closing speed (not fitted yet: the
+        slowest the drive's bounds let a vehicle ahead be, not a standstill), from the start, or once it is clear of
+        a vehicle alongside it is passing (``_pass_first_s``). Measured: seed 23 of the
         reliability campaign (the code of 4952935) returned at constant speed into the vehicle ahead, 5.1 m away
         closing at 3 m/s; braking to a standstill for a vehicle ahead just sensed (seeds 13 and 16 at 6994c0a) left
         the AV standing across the lanes, and the vehicle it had passed ran into it."""
@@ -718,7 +719,8 @@ class Simulator:
             closing = max(0.0, speed - (self.watch.bounds.same_mps.low_mps if self.watch is not None else 0.0))
         if closing <= 0.0 or not self.lead.too_near_after(closing, change_s):
             return SpeedProfile(speed, ())
-        return SpeedProfile(speed, (Ramp(0.0, closing / MINIMAL_RISK.emergency_decel_mps2, -closing),))
+        brake_s = closing / MINIMAL_RISK.emergency_decel_mps2
+        return SpeedProfile(speed, (Ramp(_pass_first_s(self.follower, self.lead, speed, closing), brake_s, -closing),))
 
     def _waiting_mps(self, speed_mps: float, near: bool, alongside: bool, blocks: bool) -> float | None:
         """The speed the fallback drives at while it waits in the right lane for room (None: the one it has): the
@@ -1058,6 +1060,23 @@ class Nearest:
         """Whether the gap, closing at ``closing_mps`` for ``seconds``, is then nearer than the safety specification
         allows at that closing speed."""
         return SAFETY.violated(self.gap_m - closing_mps * seconds, closing_mps)
+
+
+def _pass_first_s(beside: Nearest | None, lead: Nearest, speed_mps: float, closing_mps: float) -> float:
+    """How long a return that brakes for the vehicle ahead (closing at ``closing_mps``) holds its speed first: until
+    a vehicle alongside behind that the AV pulls away from is ``SAFETY.min_gap_m`` behind it, but no longer than
+    braking at ``emergency_decel_mps2`` then still ends the closing ``min_gap_m`` short of the vehicle ahead; 0 with
+    nothing alongside, or the AV not the faster. Braking at once beside the vehicle it was passing held the AV beside
+    it through the sideways move (measured: seed 49 of the 1,000 km campaign at c2c5ab8, 976.1 km: forced back by an
+    oncoming vehicle 1.3 m ahead of the vehicle it passed at 6.1 m/s more, it braked to that vehicle's speed for the
+    one ahead and the two collided)."""
+    pulling = None if beside is None else beside.closing_now_mps(speed_mps)  # negative: the AV pulls away
+    if beside is None or pulling is None or pulling >= -CLOSING_EPS_MPS or beside.gap_m >= SAFETY.min_gap_m:
+        return 0.0
+    clear_s = (SAFETY.min_gap_m - beside.gap_m) / -pulling
+    braking_m = closing_mps * closing_mps / (2 * MINIMAL_RISK.emergency_decel_mps2)
+    latest_s = max(0.0, (lead.gap_m - SAFETY.min_gap_m - braking_m) / closing_mps)
+    return min(clear_s, latest_s)
 
 
 def run_drive(seed: int, config: DriveConfig, out_dir: str | None = None, report: Report | None = None) -> RunSummary:

@@ -286,7 +286,8 @@ def test_a_return_that_would_end_too_near_the_vehicle_ahead_brakes_to_its_speed_
 
     def profile(lead: Nearest | None, speed_mps: float = 10.0):  # type: ignore[no-untyped-def]
         car = SimpleNamespace(pose=lambda: SimpleNamespace(speed_mps=speed_mps))
-        return Simulator._return_profile(SimpleNamespace(lead=lead, car=car, watch=watch))  # type: ignore[arg-type]
+        return Simulator._return_profile(SimpleNamespace(lead=lead, car=car, watch=watch,  # type: ignore[arg-type]
+                                                         follower=None))
 
     assert profile(None).at(change_s) == pytest.approx(10.0)  # nothing ahead: the speed it starts at
     closing = 3.0
@@ -303,6 +304,45 @@ def test_a_return_that_would_end_too_near_the_vehicle_ahead_brakes_to_its_speed_
     unfitted_room = SAFETY.required_gap_m(10.0 - slowest_mps) + (10.0 - slowest_mps) * change_s + CAR.length_m + 0.5
     assert profile(Nearest(unfitted_room, None)).at(change_s) == pytest.approx(10.0)
     assert profile(Nearest(5.1 + CAR.length_m, -1.0)).at(change_s) == pytest.approx(10.0)  # moving away: no brake
+
+
+def test_a_forced_return_passing_a_vehicle_alongside_brakes_for_the_one_ahead_only_once_clear_of_it() -> None:
+    """Seed 49 of the 1,000 km campaign at c2c5ab8 (976.1 km): forced back by an oncoming vehicle while 1.3 m ahead
+    of the vehicle it was passing at 6.1 m/s more, the return braked at once to the speed of the vehicle ahead, held
+    the AV beside the one it passed through the sideways move, and the two collided. Now it holds its speed until
+    that vehicle is the specification's least gap behind, unless braking then would no longer stop short of the
+    vehicle ahead."""
+    from types import SimpleNamespace
+
+    from sim.simulator import Nearest, Simulator
+    from spec.envelope import MINIMAL_RISK
+    from spec.physical import CAR
+    from spec.safety import SAFETY
+
+    watch = SimpleNamespace(bounds=SimpleNamespace(same_mps=SimpleNamespace(low_mps=4.9)))
+    speed, closing = 12.56, 6.1
+    car = SimpleNamespace(pose=lambda: SimpleNamespace(speed_mps=speed))
+    lead = Nearest(19.74, closing)
+    beside = Nearest(1.26, -closing)  # its centre 1.26 m behind the AV's, the AV 6.1 m/s the faster
+
+    def profile(follower: Nearest | None, ahead: Nearest = lead):  # type: ignore[no-untyped-def]
+        view = SimpleNamespace(lead=ahead, car=car, watch=watch, follower=follower)
+        return Simulator._return_profile(view)  # type: ignore[arg-type]
+
+    clear_s = (SAFETY.min_gap_m - (1.26 - CAR.length_m)) / closing
+    brake_s = closing / MINIMAL_RISK.emergency_decel_mps2
+    held = profile(beside)
+    assert held.at(clear_s) == pytest.approx(speed)  # the speed it starts at until clear of the vehicle beside
+    assert held.at(clear_s + brake_s) == pytest.approx(speed - closing)  # then the vehicle ahead's speed
+    assert held.distance_m(clear_s + brake_s) - (speed - closing) * (clear_s + brake_s) \
+        <= lead.gap_m - SAFETY.min_gap_m + 1e-9  # still short of the vehicle ahead by the least gap
+    assert profile(None).at(brake_s) == pytest.approx(speed - closing)  # nothing beside: at once, as before
+    assert profile(Nearest(1.26, closing)).at(brake_s) == pytest.approx(speed - closing)  # it is the faster: at once
+    # the vehicle ahead too near to wait until clear: braking starts when it must
+    tight = Nearest(CAR.length_m + SAFETY.min_gap_m + closing * brake_s / 2 + 1.0, closing)
+    waited = profile(beside, tight)
+    assert waited.at(1.0 / closing) == pytest.approx(speed) and waited.at(1.0 / closing + brake_s) == pytest.approx(
+        speed - closing)
 
 
 def test_the_fallback_waits_in_the_right_lane_only_while_the_oncoming_lane_leaves_time() -> None:
