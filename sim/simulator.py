@@ -374,12 +374,13 @@ class Simulator:
         self._sense_breach(pose)
         if self.takeover is not None:
             self._remember_faults()  # the fallback acts on every sweep, not only on a decision's
-        odometer_m, hz = self.origin_km * 1000 + pose.x_m, SENSORS.sweep_hz  # the AV's own travel, and speed
-        self.lead = Nearest.after(self.lead, self.sweep, hz, travelled_m=odometer_m, av_mps=pose.speed_mps)
-        self.follower = Nearest.after(self.follower, self.sweep, hz, behind=True, travelled_m=odometer_m,
-                                      av_mps=pose.speed_mps)
-        self.oncoming = Nearest.after(self.oncoming, self.sweep, hz, Lane.RIGHT, travelled_m=odometer_m,
-                                      av_mps=pose.speed_mps)
+        # the AV's own travel along the road, its speed along the road (the fit's) and along its heading (the speed
+        # the fallback's rules are asked at: what changes after the sweep)
+        own = (self.origin_km * 1000 + pose.x_m, pose.speed_mps, pose.speed_mps * math.cos(pose.yaw_rad))
+        hz = SENSORS.sweep_hz
+        self.lead = Nearest.after(self.lead, self.sweep, hz, Lane.LEFT, False, *own)
+        self.follower = Nearest.after(self.follower, self.sweep, hz, Lane.LEFT, True, *own)
+        self.oncoming = Nearest.after(self.oncoming, self.sweep, hz, Lane.RIGHT, False, *own)
         self.executor.steer_offset_rad = self.steering.on_sweep()
         if self.steering.active is not None and self.steering.active not in self.steered:
             self.steered.append(self.steering.active)
@@ -705,10 +706,10 @@ class Simulator:
         the specification allows at the return's end (only a return the oncoming lane forces starts so): then it
         brakes, at the car's limit, down to that vehicle's speed by the fitted closing speed (not fitted yet: the
         slowest the drive's bounds let a vehicle ahead be, not a standstill), from the start, or once it is clear of
-        a vehicle alongside it is passing (``_pass_first_s``). Measured: seed 23 of the
-        reliability campaign (the code of 4952935) returned at constant speed into the vehicle ahead, 5.1 m away
-        closing at 3 m/s; braking to a standstill for a vehicle ahead just sensed (seeds 13 and 16 at 6994c0a) left
-        the AV standing across the lanes, and the vehicle it had passed ran into it."""
+        a vehicle alongside it is passing (``_pass_first_s``). Measured: seed 23 of the reliability campaign (the
+        code of 4952935) returned at constant speed into the vehicle ahead, 5.1 m away closing at 3 m/s; braking to
+        a standstill for a vehicle ahead just sensed (seeds 13 and 16 at 6994c0a) left the AV standing across the
+        lanes, and the vehicle it had passed ran into it."""
         speed = self.car.pose().speed_mps
         change_s = float(ACTION_RULES[Action.LEFT_LANE_CHANGE].duration_s)
         if self.lead is None:
@@ -738,10 +739,10 @@ class Simulator:
         it returned at a crawl)."""
         mr, targets = MINIMAL_RISK, []
         f = self.follower
-        f_closing = None if f is None else f.closing_now_mps(speed_mps)
+        f_closing_mps = None if f is None else f.closing_now_mps(speed_mps)
         # beside a vehicle the AV is passing (its centre behind the AV's, the AV the faster)
-        passing = (alongside and f is not None and f_closing is not None and f.gap_m < SAFETY.min_gap_m
-                   and f_closing < -CLOSING_EPS_MPS)
+        passing = (alongside and f is not None and f_closing_mps is not None and f.gap_m < SAFETY.min_gap_m
+                   and f_closing_mps < -CLOSING_EPS_MPS)
         if near and self.lead is not None:
             closing = self.lead.closing_mps(speed_mps)
             lead_mps = max(0.0, speed_mps - closing)
@@ -749,17 +750,18 @@ class Simulator:
                 pass  # the gap ahead meets the specification now: on past the vehicle beside, not held beside it
             elif self.lead.gap_m >= SAFETY.min_gap_m:
                 targets.append(lead_mps)
-            elif (lead_own := self.lead.own_mps(speed_mps)) is not None and lead_own >= speed_mps - CLOSING_EPS_MPS:
+            elif (lead_own_mps := self.lead.own_mps(speed_mps)) is not None and \
+                    lead_own_mps >= speed_mps - CLOSING_EPS_MPS:
                 # beside it and not the faster: drop back, ``open_mps`` below its own speed (not below the AV's: the
                 # closing speed braked for stops at 0, and a target under the AV's own speed every step ratcheted it
                 # to a standstill beside a reading moving away, seed 38 of the reliability campaign at 48254f9)
-                targets.append(max(0.0, lead_own - mr.open_mps))
-        if f is not None and f_closing is not None and (alongside or blocks):
-            follower_mps = max(0.0, speed_mps + f_closing)
+                targets.append(max(0.0, lead_own_mps - mr.open_mps))
+        if f is not None and f_closing_mps is not None and (alongside or blocks):
+            follower_mps = max(0.0, speed_mps + f_closing_mps)
             if passing:  # at least ``open_mps`` faster than it, so that the pass ends
                 targets.append(max(speed_mps, follower_mps + mr.open_mps))
             elif f.gap_m < SAFETY.min_gap_m:  # alongside: the faster one passes the other
-                if f_closing > CLOSING_EPS_MPS:
+                if f_closing_mps > CLOSING_EPS_MPS:
                     targets.append(max(0.0, follower_mps - mr.open_mps))
             elif blocks:
                 targets.append(follower_mps)
@@ -772,10 +774,10 @@ class Simulator:
         f = self.follower
         if f is None or self.watch is None or self.watch.bounds.followers_react:
             return False
-        f_closing = f.closing_now_mps(speed_mps)
-        if f_closing is None or f_closing > MINIMAL_RISK.open_mps:
+        f_closing_mps = f.closing_now_mps(speed_mps)
+        if f_closing_mps is None or f_closing_mps > MINIMAL_RISK.open_mps:
             return True  # not measured yet, or the AV slower than it by more than the fit's error: speed up first
-        return f.too_near_after(max(0.0, f_closing), change_s)
+        return f.too_near_after(max(0.0, f_closing_mps), change_s)
 
     def _oncoming_leaves_time(self, change_s: float, speed_mps: float) -> bool:
         """Whether the fallback may wait one more sweep in the right lane: the nearest oncoming vehicle sensed would
@@ -788,9 +790,9 @@ class Simulator:
         o = self.oncoming
         if o is None:
             return True
-        o_closing = o.closing_now_mps(speed_mps)
-        if o_closing is not None:
-            closing = max(0.0, o_closing)
+        o_closing_mps = o.closing_now_mps(speed_mps)
+        if o_closing_mps is not None:
+            closing = max(0.0, o_closing_mps)
         elif self.watch is not None:
             closing = speed_mps + self.watch.bounds.oncoming_mps.high_mps
         else:
@@ -819,11 +821,11 @@ class Simulator:
                 closing = self.lead.closing_mps(speed)
                 if self.lead.too_near_after(closing, 0.0):
                     target, decel = max(0.0, speed - closing), mr.emergency_decel_mps2
-                    if (now := self.lead.closing_now_mps(speed)) is not None and now > CLOSING_EPS_MPS:
+                    if (now_mps := self.lead.closing_now_mps(speed)) is not None and now_mps > CLOSING_EPS_MPS:
                         target = min(target, max(0.0, command - decel * self.executor.dt_s))  # it still closes
-                elif (lead_own := self.lead.own_mps(speed)) is not None and \
+                elif (lead_own_mps := self.lead.own_mps(speed)) is not None and \
                         self._room_needed(mr.handback_mps(speed, hold)):
-                    target = min(hold, max(0.0, lead_own - mr.open_mps))
+                    target = min(hold, max(0.0, lead_own_mps - mr.open_mps))
             if command > target:
                 command = max(target, command - decel * self.executor.dt_s)
             elif emergency:
@@ -1014,8 +1016,10 @@ class Nearest:
 
     @staticmethod
     def after(before: Nearest | None, sweep: tuple[Reading, ...] | None, sweep_hz: float, lane: Lane = Lane.LEFT,
-              behind: bool = False, travelled_m: float | None = None, av_mps: float | None = None) -> Nearest | None:
-        """The nearest vehicle in ``sweep``; ``travelled_m`` and ``av_mps``: the AV's odometer and speed at it."""
+              behind: bool = False, travelled_m: float | None = None, av_mps: float | None = None,
+              along_mps: float | None = None) -> Nearest | None:
+        """The nearest vehicle in ``sweep``; ``travelled_m``, ``av_mps`` and ``along_mps``: the AV's odometer, its
+        speed along its heading and along the road (the fit's; default ``av_mps``) at it."""
         found = [(-r.dx_m if behind else r.dx_m) for r in sweep or ()
                  if r.lane is lane and (r.dx_m <= 0 if behind else r.dx_m > 0)]
         if not found:
@@ -1024,13 +1028,15 @@ class Nearest:
         odometer = () if travelled_m is None or av_mps is None else (travelled_m,)
         if before is None or abs(before.dx_m - dx) > CAR.length_m or bool(before.travelled_m) != bool(odometer):
             return Nearest(dx, None, (dx,), odometer, av_mps, behind)
-        keep = MINIMAL_RISK.fit_sweeps
-        distances = (*before.distances_m, dx)[-keep:]
+        keep_sweeps = MINIMAL_RISK.fit_sweeps
+        distances = (*before.distances_m, dx)[-keep_sweeps:]
         if travelled_m is None or av_mps is None:
             return Nearest(dx, fitted_closing_mps(distances, sweep_hz), distances, (), None, behind)
-        travelled = (*before.travelled_m, travelled_m)[-keep:]
-        return Nearest(dx, own_motion_closing_mps(distances, travelled, av_mps, behind, sweep_hz), distances,
-                       travelled, av_mps, behind)
+        travelled = (*before.travelled_m, travelled_m)[-keep_sweeps:]
+        along = av_mps if along_mps is None else along_mps
+        # the closing speed along the road at the sweep; the heading speed then, for the change after it
+        closing = own_motion_closing_mps(distances, travelled, along, behind, sweep_hz)
+        return Nearest(dx, closing, distances, travelled, av_mps, behind)
 
     def closing_now_mps(self, speed_mps: float) -> float | None:
         """The closing speed at the AV's speed now: the one measured at the last sweep, moved by the AV's own change
@@ -1064,19 +1070,22 @@ class Nearest:
 
 def _pass_first_s(beside: Nearest | None, lead: Nearest, speed_mps: float, closing_mps: float) -> float:
     """How long a return that brakes for the vehicle ahead (closing at ``closing_mps``) holds its speed first: until
-    a vehicle alongside behind that the AV pulls away from is ``SAFETY.min_gap_m`` behind it, but no longer than
-    braking at ``emergency_decel_mps2`` then still ends the closing ``min_gap_m`` short of the vehicle ahead; 0 with
-    nothing alongside, or the AV not the faster. Braking at once beside the vehicle it was passing held the AV beside
-    it through the sideways move (measured: seed 49 of the 1,000 km campaign at c2c5ab8, 976.1 km: forced back by an
-    oncoming vehicle 1.3 m ahead of the vehicle it passed at 6.1 m/s more, it braked to that vehicle's speed for the
-    one ahead and the two collided)."""
-    pulling = None if beside is None else beside.closing_now_mps(speed_mps)  # negative: the AV pulls away
-    if beside is None or pulling is None or pulling >= -CLOSING_EPS_MPS or beside.gap_m >= SAFETY.min_gap_m:
+    a vehicle alongside behind that the AV pulls away from is ``SAFETY.min_gap_m`` behind it, when that comes by the
+    middle of the sideways move (``TRACKING.lateral_s``: the AV's centre then crosses the lane line; a vehicle not
+    clear by then is beside it in the lane) and while braking then, at ``emergency_decel_mps2``, still ends the
+    closing ``min_gap_m`` plus the executor's stated position error (``TRACKING.position_m``: the car lags its
+    reference) short of the vehicle ahead; else 0, as with nothing alongside or the AV not the faster. Holding
+    accepts a gap ahead below the specification's time gap for a moment (a fallback acts where the assumptions
+    broke) to avoid a side collision that braking at once makes certain: measured, seed 49 of the 1,000 km campaign
+    at c2c5ab8 (976.1 km), forced back by an oncoming vehicle 1.3 m ahead of the vehicle it passed at 6.1 m/s more,
+    braked at once to the speed of the vehicle ahead, and the two collided."""
+    pulling_mps = None if beside is None else beside.closing_now_mps(speed_mps)  # negative: the AV pulls away
+    if beside is None or pulling_mps is None or pulling_mps >= -CLOSING_EPS_MPS or beside.gap_m >= SAFETY.min_gap_m:
         return 0.0
-    clear_s = (SAFETY.min_gap_m - beside.gap_m) / -pulling
+    clear_s = (SAFETY.min_gap_m - beside.gap_m) / -pulling_mps
     braking_m = closing_mps * closing_mps / (2 * MINIMAL_RISK.emergency_decel_mps2)
-    latest_s = max(0.0, (lead.gap_m - SAFETY.min_gap_m - braking_m) / closing_mps)
-    return min(clear_s, latest_s)
+    latest_s = (lead.gap_m - SAFETY.min_gap_m - TRACKING.position_m - braking_m) / closing_mps
+    return clear_s if clear_s <= min(TRACKING.lateral_s / 2, latest_s) else 0.0
 
 
 def run_drive(seed: int, config: DriveConfig, out_dir: str | None = None, report: Report | None = None) -> RunSummary:

@@ -147,6 +147,13 @@ def test_the_fallbacks_closing_speeds_take_the_avs_own_speed_changes_out_and_fol
     assert follower.closing_now_mps(later_mps) == pytest.approx(7.0 - later_mps, abs=1e-6)
     assert lead.own_mps(later_mps) == pytest.approx(7.0) and follower.own_mps(later_mps) == pytest.approx(7.0)
     assert lead.closing_mps(later_mps) == pytest.approx(later_mps - 7.0, abs=1e-6)
+    # in a sideways move the fit takes the AV's speed along the road; a change after the sweep, along its heading
+    yawed = None
+    for k in range(4):
+        yawed = Nearest.after(yawed, (Reading(Lane.LEFT, 1, 20.0 + (7.0 - 9.9) * k / 10.0),), 10.0,
+                              travelled_m=9.9 * k / 10.0, av_mps=10.0, along_mps=9.9)
+    assert yawed is not None and yawed.measured_mps == pytest.approx(9.9 - 7.0, abs=1e-6)
+    assert yawed.closing_now_mps(10.5) == pytest.approx(9.9 - 7.0 + 0.5, abs=1e-6)
     # without the AV's odometer (the tests' views): the distances' own fit, at the speed asked about
     plain = Nearest(12.0, 2.0)
     assert plain.closing_now_mps(9.0) == 2.0 and plain.own_mps(9.0) == 7.0
@@ -310,12 +317,12 @@ def test_a_forced_return_passing_a_vehicle_alongside_brakes_for_the_one_ahead_on
     """Seed 49 of the 1,000 km campaign at c2c5ab8 (976.1 km): forced back by an oncoming vehicle while 1.3 m ahead
     of the vehicle it was passing at 6.1 m/s more, the return braked at once to the speed of the vehicle ahead, held
     the AV beside the one it passed through the sideways move, and the two collided. Now it holds its speed until
-    that vehicle is the specification's least gap behind, unless braking then would no longer stop short of the
-    vehicle ahead."""
+    that vehicle is the specification's least gap behind, if that comes by the middle of the sideways move and
+    braking then still stops short of the vehicle ahead; otherwise it brakes at once, as before."""
     from types import SimpleNamespace
 
     from sim.simulator import Nearest, Simulator
-    from spec.envelope import MINIMAL_RISK
+    from spec.envelope import MINIMAL_RISK, TRACKING
     from spec.physical import CAR
     from spec.safety import SAFETY
 
@@ -323,26 +330,31 @@ def test_a_forced_return_passing_a_vehicle_alongside_brakes_for_the_one_ahead_on
     speed, closing = 12.56, 6.1
     car = SimpleNamespace(pose=lambda: SimpleNamespace(speed_mps=speed))
     lead = Nearest(19.74, closing)
-    beside = Nearest(1.26, -closing)  # its centre 1.26 m behind the AV's, the AV 6.1 m/s the faster
+    beside = Nearest(1.26, -closing, behind=True)  # its centre 1.26 m behind the AV's, the AV 6.1 m/s the faster
 
     def profile(follower: Nearest | None, ahead: Nearest = lead):  # type: ignore[no-untyped-def]
         view = SimpleNamespace(lead=ahead, car=car, watch=watch, follower=follower)
         return Simulator._return_profile(view)  # type: ignore[arg-type]
 
     clear_s = (SAFETY.min_gap_m - (1.26 - CAR.length_m)) / closing
+    assert clear_s <= TRACKING.lateral_s / 2
     brake_s = closing / MINIMAL_RISK.emergency_decel_mps2
     held = profile(beside)
     assert held.at(clear_s) == pytest.approx(speed)  # the speed it starts at until clear of the vehicle beside
     assert held.at(clear_s + brake_s) == pytest.approx(speed - closing)  # then the vehicle ahead's speed
-    assert held.distance_m(clear_s + brake_s) - (speed - closing) * (clear_s + brake_s) \
-        <= lead.gap_m - SAFETY.min_gap_m + 1e-9  # still short of the vehicle ahead by the least gap
+    closed_m = held.distance_m(clear_s + brake_s) - (speed - closing) * (clear_s + brake_s)
+    assert closed_m <= lead.gap_m - SAFETY.min_gap_m - TRACKING.position_m + 1e-9  # still short of it, with margin
     assert profile(None).at(brake_s) == pytest.approx(speed - closing)  # nothing beside: at once, as before
-    assert profile(Nearest(1.26, closing)).at(brake_s) == pytest.approx(speed - closing)  # it is the faster: at once
-    # the vehicle ahead too near to wait until clear: braking starts when it must
-    tight = Nearest(CAR.length_m + SAFETY.min_gap_m + closing * brake_s / 2 + 1.0, closing)
-    waited = profile(beside, tight)
-    assert waited.at(1.0 / closing) == pytest.approx(speed) and waited.at(1.0 / closing + brake_s) == pytest.approx(
-        speed - closing)
+    slower = Nearest(1.26, closing, behind=True)  # the vehicle beside the faster: it passes, the AV brakes at once
+    assert profile(slower).at(brake_s) == pytest.approx(speed - closing)
+    # not clear by the middle of the sideways move (level with it, 0.5 m/s the faster): braking at once drops the AV
+    # behind it, holding would keep it beside it in the lane
+    level = Nearest(0.0, -0.5, behind=True)
+    assert profile(level).at(brake_s) == pytest.approx(speed - closing)
+    # the vehicle ahead too near to wait until clear: at once
+    tight = Nearest(CAR.length_m + SAFETY.min_gap_m + TRACKING.position_m + closing * brake_s / 2 + closing * clear_s
+                    - 0.1, closing)
+    assert profile(beside, tight).at(brake_s) == pytest.approx(speed - closing)
 
 
 def test_the_fallback_waits_in_the_right_lane_only_while_the_oncoming_lane_leaves_time() -> None:
