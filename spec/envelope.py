@@ -113,14 +113,15 @@ class MinimalRisk:
     than ``open_mps``: measured, seeds 6 and 8 of the faults evaluation were rear-ended after returning slower than
     the follower, and seed 21 of the reliability campaign after a return begun at a standstill, whose sideways move
     took 5 s, not the lane change's 3), driving meanwhile in the right lane at the left lane's speed: the vehicle
-    ahead's while it is too near, ``open_mps`` below it while beside it unless the AV is the faster (it drops back
-    behind it, or passes it), ``open_mps`` below a faster vehicle alongside behind, at least ``open_mps`` above a
-    slower one (it passes it, slowed by the vehicle ahead only once that gap breaks the specification now: matching
-    the vehicle ahead held the AV beside the vehicle it was passing, seed 22), a too-near or faster follower's own
-    where followers keep their speed (measured: braking to a standstill beside a vehicle left the AV standing in the
+    ahead's while it is too near, ``open_mps`` below it while beside it (its centre ahead of the AV's; it drops back
+    behind it, the AV the faster or not: keeping its speed, seed 51 of the 1,000 km campaign crept past one until the
+    oncoming lane forced a return into it), ``open_mps`` below a faster vehicle alongside behind, at least ``open_mps``
+    above a slower one (it passes it, slowed by the vehicle ahead only once that gap breaks the specification now:
+    matching the vehicle ahead held the AV beside the vehicle it was passing, seed 22), a too-near or faster follower's
+    own where followers keep their speed (measured: braking to a standstill beside a vehicle left the AV standing in the
     oncoming lane, then returning at a crawl in front of a follower), up to ``return_wait_s``, while the nearest
-    oncoming vehicle sensed stays farther than the specification allows at its closing speed after one more sweep
-    and the lane change, from the wait's start (a least wait of ``takeover_s`` first was measured: seed 25 of the
+    oncoming vehicle sensed stays farther than the specification allows at its closing speed after one more sweep and
+    the lane change, from the wait's start (a least wait of ``takeover_s`` first was measured: seed 25 of the
     reliability campaign held the lane while an oncoming vehicle closed from 49 m; a dropped sweep, which shows
     nothing, ends the wait only after ``takeover_s``) (a return into a vehicle ahead at 13 m/s was measured:
     seed 2; before its speed is fitted, the AV's speed plus the fastest oncoming speed the bounds state, for the two

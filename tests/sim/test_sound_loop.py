@@ -273,6 +273,27 @@ def test_the_fallback_drops_back_behind_a_vehicle_beside_it_at_that_vehicles_spe
         4.0 - MINIMAL_RISK.open_mps)
 
 
+def test_the_fallback_drops_back_behind_a_vehicle_beside_it_that_it_is_faster_than_not_creeping_past_it() -> None:
+    """Seed 51 of the 1,000 km campaign (8a81810): waiting in the right lane at 8.19 m/s behind a left-lane vehicle
+    at 7.0 m/s whose gap had fallen to 1.25 m (below the least gap), the fallback had no rule for a vehicle ahead it
+    is the faster of, kept its speed and crept alongside at 1.2 m/s until the oncoming vehicle (73 m, closing at
+    15.2 m/s) forced a return into it. It now drops back, ``open_mps`` below that vehicle's speed; with its speed not
+    measured, it keeps its own."""
+    from types import SimpleNamespace
+
+    from sim.simulator import Nearest, Simulator
+    from spec.envelope import MINIMAL_RISK
+    from spec.physical import CAR
+
+    def target(lead: Nearest) -> float | None:
+        return Simulator._waiting_mps(SimpleNamespace(lead=lead, follower=None),  # type: ignore[arg-type]
+                                      8.19, True, False, False)
+
+    assert target(Nearest(1.25 + CAR.length_m, 8.19 - 7.0)) == pytest.approx(7.0 - MINIMAL_RISK.open_mps)
+    assert target(Nearest(-0.5 + CAR.length_m, 8.19 - 7.0)) == pytest.approx(7.0 - MINIMAL_RISK.open_mps)
+    assert target(Nearest(1.25 + CAR.length_m, None)) is None  # not measured: the speed it has
+
+
 def test_a_return_that_would_end_too_near_the_vehicle_ahead_brakes_to_its_speed_from_its_start() -> None:
     """Seed 23 (the code of 4952935): the oncoming lane forced the return while the vehicle ahead in the left lane was
     5.1 m away closing at 3 m/s; the return ran at constant speed into it. A return that would end nearer the vehicle
