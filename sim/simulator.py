@@ -726,7 +726,8 @@ class Simulator:
     def _waiting_mps(self, speed_mps: float, near: bool, alongside: bool, blocks: bool) -> float | None:
         """The speed the fallback drives at while it waits in the right lane for room (None: the one it has): the
         vehicle ahead's while it is too near (a vehicle beside the AV, its centre ahead of the AV's: ``open_mps``
-        slower, dropping back behind it, the AV the faster or not; its speed not measured yet: the one it has); a
+        slower, dropping back behind it, unless passing it ends sooner, ``MinimalRisk.drops_back``: the speed it has;
+        its speed not measured yet: the one it has); a
         vehicle alongside behind: ``open_mps`` slower than it if it is the faster (it passes), else at least
         ``open_mps`` faster than it, and the vehicle ahead slows the AV only once its gap breaks the specification now,
         not the gap a return would leave (matching its speed would hold the AV beside the vehicle it passes, measured:
@@ -749,13 +750,12 @@ class Simulator:
                 pass  # the gap ahead meets the specification now: on past the vehicle beside, not held beside it
             elif self.lead.gap_m >= SAFETY.min_gap_m:
                 targets.append(lead_mps)
-            elif (lead_own_mps := self.lead.own_mps(speed_mps)) is not None:
-                # beside it (its centre ahead of the AV's): drop back, ``open_mps`` below its own speed, the faster or
-                # not: behind it is nearer than ahead of it by the two cars' lengths and both least gaps, and the lane
-                # ahead of it may have no room (keeping its speed, seed 51 of the 1,000 km campaign crept past one at
-                # 1.2 m/s until the oncoming lane forced a return into it). Below its speed, not the AV's: the closing
-                # speed braked for stops at 0, and a target under the AV's own speed every step ratcheted it to a
-                # standstill beside a reading moving away, seed 38 of the reliability campaign at 48254f9.
+            elif (lead_own_mps := self.lead.own_mps(speed_mps)) is not None and \
+                    mr.drops_back(speed_mps - lead_own_mps, self.lead.dx_m):
+                # beside it (its centre ahead of the AV's) and dropping back ends sooner than passing it: ``open_mps``
+                # below its own speed, not the AV's (the closing speed braked for stops at 0, and a target under the
+                # AV's own speed every step ratcheted it to a standstill beside a reading moving away, seed 38 of the
+                # reliability campaign at 48254f9); passing it: the speed the AV has
                 targets.append(max(0.0, lead_own_mps - mr.open_mps))
         if f is not None and f_closing_mps is not None and (alongside or blocks):
             follower_mps = max(0.0, speed_mps + f_closing_mps)

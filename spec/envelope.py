@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from spec.grid import COMMON_SPEED_MPS
 from spec.motion import RAMP_SHARE, Ramp, ramp_s
 from spec.physical import CAR, LOOP, NOISE, SENSORS
+from spec.safety import SAFETY
 
 
 @dataclass(frozen=True, slots=True)
@@ -113,36 +114,33 @@ class MinimalRisk:
     than ``open_mps``: measured, seeds 6 and 8 of the faults evaluation were rear-ended after returning slower than
     the follower, and seed 21 of the reliability campaign after a return begun at a standstill, whose sideways move
     took 5 s, not the lane change's 3), driving meanwhile in the right lane at the left lane's speed: the vehicle
-    ahead's while it is too near, ``open_mps`` below it while beside it (its centre ahead of the AV's; it drops back
-    behind it, the AV the faster or not: keeping its speed, seed 51 of the 1,000 km campaign crept past one until the
-    oncoming lane forced a return into it), ``open_mps`` below a faster vehicle alongside behind, at least ``open_mps``
-    above a slower one (it passes it, slowed by the vehicle ahead only once that gap breaks the specification now:
-    matching the vehicle ahead held the AV beside the vehicle it was passing, seed 22), a too-near or faster follower's
-    own where followers keep their speed (measured: braking to a standstill beside a vehicle left the AV standing in the
-    oncoming lane, then returning at a crawl in front of a follower), up to ``return_wait_s``, while the nearest
-    oncoming vehicle sensed stays farther than the specification allows at its closing speed after one more sweep and
-    the lane change, from the wait's start (a least wait of ``takeover_s`` first was measured: seed 25 of the
-    reliability campaign held the lane while an oncoming vehicle closed from 49 m; a dropped sweep, which shows
-    nothing, ends the wait only after ``takeover_s``) (a return into a vehicle ahead at 13 m/s was measured:
-    seed 2; before its speed is fitted, the AV's speed plus the fastest oncoming speed the bounds state, for the two
-    sweeps a fit needs: a vehicle first sensed at any distance used to end the wait at once; a stated rule, no
-    failure measured); a return that would end nearer the vehicle ahead than the specification allows (one the
-    oncoming lane forces) brakes at ``emergency_decel_mps2`` to that vehicle's fitted speed, or, not fitted yet, the
-    slowest the bounds let it be, from its start or once clear of a vehicle it is passing (``sim.simulator``'s
-    ``_pass_first_s``) (measured: seed 23 returned at constant speed into it, 5.1 m away
-    closing at 3 m/s; braking to a standstill for a vehicle just sensed left the AV standing across the lanes in
-    front of the vehicle it had passed, seeds 13 and 16); then it brakes in lane
-    at ``decel_mps2`` to the hold speed and, while the sensed vehicle ahead is nearer than the safety
-    specification allows at the closing speed (``fallback_closing_mps``), at ``emergency_decel_mps2`` down to that
-    vehicle's speed (a standstill when it is not known), and on below it while the measured gap still closes (the
-    car may run above its speed command: measured, 0.17 m/s at 7 m/s, and the gap closed until contact). Where the
-    gap ahead is within the specification but a decision from the last sweep would still find no safe step in lane
-    (the planner's own check, with its margins for the car's envelope and the sensing error), and the gap ahead is
-    the smaller of the two in the lane, it drives ``open_mps`` slower than the vehicle ahead, at ``decel_mps2``,
-    while the vehicle behind stays farther than the specification allows at that closing speed: the AV moves
-    towards the middle of its slot instead of holding a gap no decision accepts (measured: 1,648 take-overs in a
-    row, seed 12, 35 km at a 2 m gap). It holds for ``takeover_s``, then hands back to a new decision (which may
-    take over again).
+    ahead's while it is too near, ``open_mps`` below it while beside it (its centre ahead of the AV's) unless the AV is
+    the faster and passing it ends sooner (``drops_back``), ``open_mps`` below a faster vehicle alongside behind, at
+    least ``open_mps`` above a slower one (it passes it, slowed by the vehicle ahead only once that gap breaks the
+    specification now: matching the vehicle ahead held the AV beside the vehicle it was passing, seed 22), a too-near or
+    faster follower's own where followers keep their speed (measured: braking to a standstill beside a vehicle left the
+    AV standing in the oncoming lane, then returning at a crawl in front of a follower), up to ``return_wait_s``, while
+    the nearest oncoming vehicle sensed stays farther than the specification allows at its closing speed after one more
+    sweep and the lane change, from the wait's start (a least wait of ``takeover_s`` first was measured: seed 25 of the
+    reliability campaign held the lane while an oncoming vehicle closed from 49 m; a dropped sweep, which shows nothing,
+    ends the wait only after ``takeover_s``) (a return into a vehicle ahead at 13 m/s was measured: seed 2; before its
+    speed is fitted, the AV's speed plus the fastest oncoming speed the bounds state, for the two sweeps a fit needs: a
+    vehicle first sensed at any distance used to end the wait at once; a stated rule, no failure measured); a return
+    that would end nearer the vehicle ahead than the specification allows (one the oncoming lane forces) brakes at
+    ``emergency_decel_mps2`` to that vehicle's fitted speed, or, not fitted yet, the slowest the bounds let it be, from
+    its start or once clear of a vehicle it is passing (``sim.simulator``'s ``_pass_first_s``) (measured: seed 23
+    returned at constant speed into it, 5.1 m away closing at 3 m/s; braking to a standstill for a vehicle just sensed
+    left the AV standing across the lanes in front of the vehicle it had passed, seeds 13 and 16); then it brakes in
+    lane at ``decel_mps2`` to the hold speed and, while the sensed vehicle ahead is nearer than the safety specification
+    allows at the closing speed (``fallback_closing_mps``), at ``emergency_decel_mps2`` down to that vehicle's speed (a
+    standstill when it is not known), and on below it while the measured gap still closes (the car may run above its
+    speed command: measured, 0.17 m/s at 7 m/s, and the gap closed until contact). Where the gap ahead is within the
+    specification but a decision from the last sweep would still find no safe step in lane (the planner's own check,
+    with its margins for the car's envelope and the sensing error), and the gap ahead is the smaller of the two in the
+    lane, it drives ``open_mps`` slower than the vehicle ahead, at ``decel_mps2``, while the vehicle behind stays
+    farther than the specification allows at that closing speed: the AV moves towards the middle of its slot instead of
+    holding a gap no decision accepts (measured: 1,648 take-overs in a row, seed 12, 35 km at a 2 m gap). It holds for
+    ``takeover_s``, then hands back to a new decision (which may take over again).
     """
 
     decel_mps2: float = RAMP_SHARE * CAR.max_brake_mps2
@@ -167,6 +165,26 @@ class MinimalRisk:
         read (``swept``), only after ``takeover_s`` when it was dropped (it shows nothing)."""
         return waited_s > self.return_wait_s or (
             (swept or waited_s > self.takeover_s) and not oncoming_leaves_time)
+
+    def drops_back(self, closing_mps: float, ahead_m: float) -> bool:
+        """Whether the fallback waiting in the right lane beside a left-lane vehicle whose centre is ``ahead_m``
+        ahead of its own, closing on it at ``closing_mps`` (positive: the AV the faster), drops back behind it rather
+        than passing it: whichever ends sooner, a pass keeping the closing speed until the AV's centre is a car
+        length and the least gap ahead of the vehicle's, or a drop back braking at ``emergency_decel_mps2`` (the
+        wait's rate) to ``open_mps`` slower than it and opening at that until the vehicle's centre is as far ahead of
+        the AV's. Not the faster: it drops back. Measured: keeping its speed 1.2 m/s faster than a vehicle whose rear
+        was 1.25 m ahead (a 10 s pass; a drop back takes 1 s), seed 51 of the 1,000 km campaign crept alongside it
+        until the oncoming lane forced a return into it; always dropping back would hold a car 5 m/s faster and
+        level with a vehicle in the oncoming lane for 6 s, not the pass's 1.4 s."""
+        if closing_mps <= 0.0:
+            return True
+        clear_m = CAR.length_m + SAFETY.min_gap_m
+        pass_s = (ahead_m + clear_m) / closing_mps
+        rate = self.emergency_decel_mps2
+        brake_s = (closing_mps + self.open_mps) / rate
+        on_while_braking_m = (closing_mps ** 2 - self.open_mps ** 2) / (2.0 * rate)
+        drop_s = brake_s + max(0.0, clear_m - ahead_m + on_while_braking_m) / self.open_mps
+        return drop_s <= pass_s
 
     def hold_mps(self, speed_mps: float, slowest_ahead_mps: float) -> float:
         """The speed the manoeuvre brakes to: at most the slowest speed a vehicle ahead may keep (so the reference

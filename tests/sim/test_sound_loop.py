@@ -273,25 +273,29 @@ def test_the_fallback_drops_back_behind_a_vehicle_beside_it_at_that_vehicles_spe
         4.0 - MINIMAL_RISK.open_mps)
 
 
-def test_the_fallback_drops_back_behind_a_vehicle_beside_it_that_it_is_faster_than_not_creeping_past_it() -> None:
+def test_the_fallback_beside_a_vehicle_it_is_faster_than_drops_back_or_passes_whichever_ends_sooner() -> None:
     """Seed 51 of the 1,000 km campaign (8a81810): waiting in the right lane at 8.19 m/s behind a left-lane vehicle
     at 7.0 m/s whose gap had fallen to 1.25 m (below the least gap), the fallback had no rule for a vehicle ahead it
-    is the faster of, kept its speed and crept alongside at 1.2 m/s until the oncoming vehicle (73 m, closing at
-    15.2 m/s) forced a return into it. It now drops back, ``open_mps`` below that vehicle's speed; with its speed not
-    measured, it keeps its own."""
+    is the faster of, kept its speed and crept alongside at 1.2 m/s (a 10 s pass) until the oncoming vehicle (73 m,
+    closing at 15.2 m/s) forced a return into it. It now drops back, ``open_mps`` below that vehicle's speed, when
+    that ends sooner than the pass (about 1 s here); 5 m/s the faster and nearly level, it passes on (1.4 s against
+    6 s); with the vehicle's speed not measured, it keeps its own."""
     from types import SimpleNamespace
 
     from sim.simulator import Nearest, Simulator
     from spec.envelope import MINIMAL_RISK
     from spec.physical import CAR
 
-    def target(lead: Nearest) -> float | None:
+    def target(lead: Nearest, speed_mps: float = 8.19) -> float | None:
         return Simulator._waiting_mps(SimpleNamespace(lead=lead, follower=None),  # type: ignore[arg-type]
-                                      8.19, True, False, False)
+                                      speed_mps, True, False, False)
 
     assert target(Nearest(1.25 + CAR.length_m, 8.19 - 7.0)) == pytest.approx(7.0 - MINIMAL_RISK.open_mps)
     assert target(Nearest(-0.5 + CAR.length_m, 8.19 - 7.0)) == pytest.approx(7.0 - MINIMAL_RISK.open_mps)
     assert target(Nearest(1.25 + CAR.length_m, None)) is None  # not measured: the speed it has
+    assert target(Nearest(0.5, 5.0), speed_mps=12.0) is None  # passing ends sooner: the speed it has
+    assert MINIMAL_RISK.drops_back(1.19, 1.25 + CAR.length_m) and not MINIMAL_RISK.drops_back(5.0, 0.5)
+    assert MINIMAL_RISK.drops_back(0.0, 0.5) and MINIMAL_RISK.drops_back(-2.0, 0.5)  # not the faster: drops back
 
 
 def test_a_return_that_would_end_too_near_the_vehicle_ahead_brakes_to_its_speed_from_its_start() -> None:
