@@ -726,17 +726,18 @@ class Simulator:
     def _waiting_mps(self, speed_mps: float, near: bool, alongside: bool, blocks: bool) -> float | None:
         """The speed the fallback drives at while it waits in the right lane for room (None: the one it has): the
         vehicle ahead's while it is too near (a vehicle beside the AV, its centre ahead of the AV's: ``open_mps``
-        slower, dropping back behind it, unless passing it ends sooner, ``MinimalRisk.drops_back``: the speed it has;
-        its speed not measured yet: the one it has); a
+        slower than the vehicle it drops back behind, ``_drop_back_to``, unless the AV is the faster and passing it
+        ends sooner, ``MinimalRisk.pass_s`` and ``drop_back_s``: the speed it has; its speed not measured yet: the one
+        it has); a
         vehicle alongside behind: ``open_mps`` slower than it if it is the faster (it passes), else at least
         ``open_mps`` faster than it, and the vehicle ahead slows the AV only once its gap breaks the specification now,
         not the gap a return would leave (matching its speed would hold the AV beside the vehicle it passes, measured:
         seed 12; and seed 22 of the reliability campaign, held beside it by a fake gap's copy ahead until the oncoming
         vehicle left no time and the return cut into it); a follower too near (not alongside) that keeps its speed: its
         speed (the closing speed that makes its gap too small goes). Speeds from the fitted closing speeds (a vehicle
-        ahead not measured yet: it may stand); the lowest target wins. Beside a moving vehicle a standstill is never the
-        target (measured: seed 6 of the faults evaluation braked to 0 beside a vehicle at 7 m/s, stood 3 s in the
-        oncoming lane, and was rear-ended when it returned at a crawl)."""
+        ahead not measured yet: it may stand); the lowest target wins. Beside a vehicle faster than ``open_mps`` a
+        standstill is never the target (measured: seed 6 of the faults evaluation braked to 0 beside a vehicle at 7 m/s,
+        stood 3 s in the oncoming lane, and was rear-ended when it returned at a crawl)."""
         mr, targets = MINIMAL_RISK, []
         f = self.follower
         f_closing_mps = None if f is None else f.closing_now_mps(speed_mps)
@@ -750,13 +751,16 @@ class Simulator:
                 pass  # the gap ahead meets the specification now: on past the vehicle beside, not held beside it
             elif self.lead.gap_m >= SAFETY.min_gap_m:
                 targets.append(lead_mps)
-            elif (lead_own_mps := self.lead.own_mps(speed_mps)) is not None and \
-                    mr.drops_back(speed_mps - lead_own_mps, self.lead.dx_m):
-                # beside it (its centre ahead of the AV's) and dropping back ends sooner than passing it: ``open_mps``
-                # below its own speed, not the AV's (the closing speed braked for stops at 0, and a target under the
-                # AV's own speed every step ratcheted it to a standstill beside a reading moving away, seed 38 of the
-                # reliability campaign at 48254f9); passing it: the speed the AV has
-                targets.append(max(0.0, lead_own_mps - mr.open_mps))
+            elif (lead_own_mps := self.lead.own_mps(speed_mps)) is not None:
+                # beside it (its centre ahead of the AV's): drop back unless the AV is the faster and passing it ends
+                # sooner (then the speed the AV has), ``open_mps`` below the speed of the vehicle it drops behind, not
+                # the AV's (the closing speed braked for stops at 0, and a target under the AV's own speed every step
+                # ratcheted it to a standstill beside a reading moving away, seed 38 of the reliability campaign)
+                behind_m, behind_mps = _drop_back_to(self.lead, f, speed_mps, lead_own_mps)
+                if lead_own_mps >= speed_mps - CLOSING_EPS_MPS or mr.drop_back_s(
+                        speed_mps - behind_mps, behind_m, behind_mps) <= mr.pass_s(speed_mps - lead_own_mps,
+                                                                                  self.lead.dx_m):
+                    targets.append(max(0.0, behind_mps - mr.open_mps))
         if f is not None and f_closing_mps is not None and (alongside or blocks):
             follower_mps = max(0.0, speed_mps + f_closing_mps)
             if passing:  # at least ``open_mps`` faster than it, so that the pass ends
@@ -1067,6 +1071,19 @@ class Nearest:
         """Whether the gap, closing at ``closing_mps`` for ``seconds``, is then nearer than the safety specification
         allows at that closing speed."""
         return SAFETY.violated(self.gap_m - closing_mps * seconds, closing_mps)
+
+
+def _drop_back_to(lead: Nearest, follower: Nearest | None, speed_mps: float,
+                  lead_own_mps: float) -> tuple[float, float]:
+    """Where the waiting fallback's drop back behind the vehicle ahead ends, as (the centre of the vehicle it ends
+    behind, ahead of the AV's; that vehicle's speed): behind the vehicle ahead, or, when the vehicle behind it in the
+    left lane (the AV's follower, its speed measured) leaves no slot for the AV between them (their centres nearer
+    than two car lengths and two least gaps), behind that one too (its centre behind the AV's: a negative distance)."""
+    f_own_mps = None if follower is None else follower.own_mps(speed_mps)
+    if follower is not None and f_own_mps is not None and \
+            lead.dx_m + follower.dx_m < 2.0 * (CAR.length_m + SAFETY.min_gap_m):
+        return -follower.dx_m, f_own_mps
+    return lead.dx_m, lead_own_mps
 
 
 def _pass_first_s(beside: Nearest | None, lead: Nearest, speed_mps: float, closing_mps: float) -> float:

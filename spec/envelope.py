@@ -115,13 +115,16 @@ class MinimalRisk:
     the follower, and seed 21 of the reliability campaign after a return begun at a standstill, whose sideways move
     took 5 s, not the lane change's 3), driving meanwhile in the right lane at the left lane's speed: the vehicle
     ahead's while it is too near, ``open_mps`` below it while beside it (its centre ahead of the AV's) unless the AV is
-    the faster and passing it ends sooner (``drops_back``), ``open_mps`` below a faster vehicle alongside behind, at
-    least ``open_mps`` above a slower one (it passes it, slowed by the vehicle ahead only once that gap breaks the
-    specification now: matching the vehicle ahead held the AV beside the vehicle it was passing, seed 22), a too-near or
-    faster follower's own where followers keep their speed (measured: braking to a standstill beside a vehicle left the
-    AV standing in the oncoming lane, then returning at a crawl in front of a follower), up to ``return_wait_s``, while
-    the nearest oncoming vehicle sensed stays farther than the specification allows at its closing speed after one more
-    sweep and the lane change, from the wait's start (a least wait of ``takeover_s`` first was measured: seed 25 of the
+    the faster and passing it ends sooner (``pass_s``, ``drop_back_s``: measured, seed 51 of the 1,000 km campaign kept
+    its speed 1.2 m/s faster than a vehicle whose rear was 1.25 m ahead, a 10 s pass where a drop back takes 1 s, until
+    the oncoming lane forced a return into it; dropping back every time would hold a car 5 m/s faster and level with a
+    vehicle for 6 s, not a pass's 1.4), ``open_mps`` below a faster vehicle alongside behind, at least ``open_mps``
+    above a slower one (it passes it, slowed by the vehicle ahead only once that gap breaks the specification now:
+    matching the vehicle ahead held the AV beside the vehicle it was passing, seed 22), a too-near or faster follower's
+    own where followers keep their speed (measured: braking to a standstill beside a vehicle left the AV standing in the
+    oncoming lane, then returning at a crawl in front of a follower), up to ``return_wait_s``, while the nearest
+    oncoming vehicle sensed stays farther than the specification allows at its closing speed after one more sweep and
+    the lane change, from the wait's start (a least wait of ``takeover_s`` first was measured: seed 25 of the
     reliability campaign held the lane while an oncoming vehicle closed from 49 m; a dropped sweep, which shows nothing,
     ends the wait only after ``takeover_s``) (a return into a vehicle ahead at 13 m/s was measured: seed 2; before its
     speed is fitted, the AV's speed plus the fastest oncoming speed the bounds state, for the two sweeps a fit needs: a
@@ -166,25 +169,29 @@ class MinimalRisk:
         return waited_s > self.return_wait_s or (
             (swept or waited_s > self.takeover_s) and not oncoming_leaves_time)
 
-    def drops_back(self, closing_mps: float, ahead_m: float) -> bool:
-        """Whether the fallback waiting in the right lane beside a left-lane vehicle whose centre is ``ahead_m``
-        ahead of its own, closing on it at ``closing_mps`` (positive: the AV the faster), drops back behind it rather
-        than passing it: whichever ends sooner, a pass keeping the closing speed until the AV's centre is a car
-        length and the least gap ahead of the vehicle's, or a drop back braking at ``emergency_decel_mps2`` (the
-        wait's rate) to ``open_mps`` slower than it and opening at that until the vehicle's centre is as far ahead of
-        the AV's. Not the faster: it drops back. Measured: keeping its speed 1.2 m/s faster than a vehicle whose rear
-        was 1.25 m ahead (a 10 s pass; a drop back takes 1 s), seed 51 of the 1,000 km campaign crept alongside it
-        until the oncoming lane forced a return into it; always dropping back would hold a car 5 m/s faster and
-        level with a vehicle in the oncoming lane for 6 s, not the pass's 1.4 s."""
+    @staticmethod
+    def pass_s(closing_mps: float, ahead_m: float) -> float:
+        """How long the fallback waiting in the right lane takes to pass a left-lane vehicle whose centre is
+        ``ahead_m`` ahead of its own, closing on it at ``closing_mps`` (positive: the AV the faster) and keeping
+        that: until the AV's centre is a car length and the least gap ahead of the vehicle's (infinite when the AV is
+        not the faster). Room ahead of that vehicle is not known; the next vehicle ahead is waited for as it comes."""
         if closing_mps <= 0.0:
-            return True
-        clear_m = CAR.length_m + SAFETY.min_gap_m
-        pass_s = (ahead_m + clear_m) / closing_mps
+            return math.inf
+        return (ahead_m + CAR.length_m + SAFETY.min_gap_m) / closing_mps
+
+    def drop_back_s(self, closing_mps: float, ahead_m: float, own_mps: float) -> float:
+        """How long the fallback waiting in the right lane takes to drop back behind a left-lane vehicle whose centre
+        is ``ahead_m`` ahead of its own (negative: behind it), closing on it at ``closing_mps``, at ``own_mps``:
+        braking at ``emergency_decel_mps2`` (the wait's rate) to ``open_mps`` below the vehicle's speed (a standstill
+        at the least), then opening at that until the vehicle's centre is a car length and the least gap ahead of the
+        AV's (infinite when the vehicle stands: the AV cannot open on it)."""
+        opening_mps = min(self.open_mps, max(0.0, own_mps))
+        if opening_mps <= 0.0:
+            return math.inf
         rate = self.emergency_decel_mps2
-        brake_s = (closing_mps + self.open_mps) / rate
-        on_while_braking_m = (closing_mps ** 2 - self.open_mps ** 2) / (2.0 * rate)
-        drop_s = brake_s + max(0.0, clear_m - ahead_m + on_while_braking_m) / self.open_mps
-        return drop_s <= pass_s
+        brake_s = max(0.0, closing_mps + opening_mps) / rate
+        on_while_braking_m = (closing_mps ** 2 - opening_mps ** 2) / (2.0 * rate) if closing_mps > -opening_mps else 0.0
+        return brake_s + max(0.0, CAR.length_m + SAFETY.min_gap_m - ahead_m + on_while_braking_m) / opening_mps
 
     def hold_mps(self, speed_mps: float, slowest_ahead_mps: float) -> float:
         """The speed the manoeuvre brakes to: at most the slowest speed a vehicle ahead may keep (so the reference

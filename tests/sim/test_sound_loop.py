@@ -4,6 +4,7 @@ attributed."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import pytest
@@ -279,23 +280,34 @@ def test_the_fallback_beside_a_vehicle_it_is_faster_than_drops_back_or_passes_wh
     is the faster of, kept its speed and crept alongside at 1.2 m/s (a 10 s pass) until the oncoming vehicle (73 m,
     closing at 15.2 m/s) forced a return into it. It now drops back, ``open_mps`` below that vehicle's speed, when
     that ends sooner than the pass (about 1 s here); 5 m/s the faster and nearly level, it passes on (1.4 s against
-    6 s); with the vehicle's speed not measured, it keeps its own."""
+    6 s); beside a vehicle standing it cannot drop back and passes; with the vehicle's speed not measured, it keeps
+    its own."""
     from types import SimpleNamespace
 
     from sim.simulator import Nearest, Simulator
-    from spec.envelope import MINIMAL_RISK
+    from spec.envelope import MINIMAL_RISK as mr
     from spec.physical import CAR
 
-    def target(lead: Nearest, speed_mps: float = 8.19) -> float | None:
-        return Simulator._waiting_mps(SimpleNamespace(lead=lead, follower=None),  # type: ignore[arg-type]
-                                      speed_mps, True, False, False)
+    def target(lead: Nearest, speed_mps: float = 8.19, follower: Nearest | None = None) -> float | None:
+        return Simulator._waiting_mps(SimpleNamespace(lead=lead, follower=follower),  # type: ignore[arg-type]
+                                      speed_mps, True, follower is not None and follower.gap_m < 2.0, False)
 
-    assert target(Nearest(1.25 + CAR.length_m, 8.19 - 7.0)) == pytest.approx(7.0 - MINIMAL_RISK.open_mps)
-    assert target(Nearest(-0.5 + CAR.length_m, 8.19 - 7.0)) == pytest.approx(7.0 - MINIMAL_RISK.open_mps)
+    assert target(Nearest(1.25 + CAR.length_m, 8.19 - 7.0)) == pytest.approx(7.0 - mr.open_mps)
+    assert target(Nearest(-0.5 + CAR.length_m, 8.19 - 7.0)) == pytest.approx(7.0 - mr.open_mps)
     assert target(Nearest(1.25 + CAR.length_m, None)) is None  # not measured: the speed it has
     assert target(Nearest(0.5, 5.0), speed_mps=12.0) is None  # passing ends sooner: the speed it has
-    assert MINIMAL_RISK.drops_back(1.19, 1.25 + CAR.length_m) and not MINIMAL_RISK.drops_back(5.0, 0.5)
-    assert MINIMAL_RISK.drops_back(0.0, 0.5) and MINIMAL_RISK.drops_back(-2.0, 0.5)  # not the faster: drops back
+    assert target(Nearest(5.0, 1.0), speed_mps=1.0) is None  # beside a vehicle standing: it passes
+    assert mr.pass_s(1.19, 1.25 + CAR.length_m) == pytest.approx(10.3, abs=0.1)
+    assert mr.drop_back_s(1.19, 1.25 + CAR.length_m, 7.0) == pytest.approx(0.9, abs=0.1)
+    assert mr.pass_s(5.0, 0.5) == pytest.approx(1.4) and mr.drop_back_s(5.0, 0.5, 7.0) == pytest.approx(6.35, abs=0.05)
+    assert mr.pass_s(0.0, 0.5) == math.inf and mr.drop_back_s(1.0, 5.0, 0.0) == math.inf
+    # a vehicle alongside behind, 2.5 m behind the AV's centre and 4 m behind the one ahead's: no slot between them;
+    # a drop back ends behind it too (6.7 s), longer than passing the one ahead (5.25 s)
+    behind = Nearest(2.5, -2.0, behind=True)  # at 7 m/s
+    assert target(Nearest(4.0, 2.0), speed_mps=9.0, follower=behind) == pytest.approx(9.0)  # on past both
+    # a vehicle 9.5 m behind the AV, 13.5 m behind the one ahead: room for the AV between them, it drops back into it
+    assert target(Nearest(4.0, 0.5), speed_mps=7.5, follower=Nearest(9.5, -0.5, behind=True)) == pytest.approx(
+        7.0 - mr.open_mps)
 
 
 def test_a_return_that_would_end_too_near_the_vehicle_ahead_brakes_to_its_speed_from_its_start() -> None:
