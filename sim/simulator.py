@@ -725,11 +725,10 @@ class Simulator:
 
     def _waiting_mps(self, speed_mps: float, near: bool, alongside: bool, blocks: bool) -> float | None:
         """The speed the fallback drives at while it waits in the right lane for room (None: the one it has): the
-        vehicle ahead's while it is too near (a vehicle beside the AV, its centre ahead of the AV's: ``open_mps``
-        slower than the vehicle it drops back behind, ``_drop_back_to``, unless the AV is the faster and passing it
-        ends sooner, ``MinimalRisk.pass_s`` and ``drop_back_s``: the speed it has; its speed not measured yet: the one
-        it has); a
-        vehicle alongside behind: ``open_mps`` slower than it if it is the faster (it passes), else at least
+        vehicle ahead's while it is too near (a vehicle beside the AV, its centre ahead of the AV's: ``open_mps`` slower
+        than the vehicle it drops back behind, ``_drop_back_to``, unless the AV is the faster and passing it ends
+        sooner, ``MinimalRisk.pass_s`` and ``drop_back_s``: the speed it has; its speed not measured yet: the one it
+        has); a vehicle alongside behind: ``open_mps`` slower than it if it is the faster (it passes), else at least
         ``open_mps`` faster than it, and the vehicle ahead slows the AV only once its gap breaks the specification now,
         not the gap a return would leave (matching its speed would hold the AV beside the vehicle it passes, measured:
         seed 12; and seed 22 of the reliability campaign, held beside it by a fake gap's copy ahead until the oncoming
