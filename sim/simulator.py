@@ -677,7 +677,7 @@ class Simulator:
         held = 0
         while True:
             speed = self.car.pose().speed_mps
-            alongside = any(r.lane is Lane.LEFT and -CAR.length_m - SAFETY.min_gap_m < r.dx_m <= 0
+            alongside = any(r.lane is Lane.LEFT and -mr.beside_m < r.dx_m <= 0
                             for r in self._sense())
             closing = 0.0 if self.lead is None else self.lead.closing_mps(speed)
             # the return runs at the speed it starts at: the gap it will leave at its end must still do
@@ -727,22 +727,30 @@ class Simulator:
         """The speed the fallback drives at while it waits in the right lane for room (None: the one it has): the
         vehicle ahead's while it is too near (a vehicle beside the AV, its centre ahead of the AV's: ``open_mps`` slower
         than the vehicle it drops back behind, ``_drop_back_to``, unless the AV is the faster and passing it ends
-        sooner, ``MinimalRisk.pass_s`` and ``drop_back_s``: the speed it has; its speed not measured yet: the one it
-        has); a vehicle alongside behind: ``open_mps`` slower than it if it is the faster (it passes), else at least
-        ``open_mps`` faster than it, and the vehicle ahead slows the AV only once its gap breaks the specification now,
-        not the gap a return would leave (matching its speed would hold the AV beside the vehicle it passes, measured:
-        seed 12; and seed 22 of the reliability campaign, held beside it by a fake gap's copy ahead until the oncoming
-        vehicle left no time and the return cut into it); a follower too near (not alongside) that keeps its speed: its
-        speed (the closing speed that makes its gap too small goes). Speeds from the fitted closing speeds (a vehicle
-        ahead not measured yet: it may stand); the lowest target wins. Beside a vehicle faster than ``open_mps`` a
-        standstill is never the target (measured: seed 6 of the faults evaluation braked to 0 beside a vehicle at 7 m/s,
-        stood 3 s in the oncoming lane, and was rear-ended when it returned at a crawl)."""
+        sooner, ``MinimalRisk.pass_s`` and ``drop_back_s``: ``open_mps`` faster than it, or the speed it has when that
+        is more; its speed not measured yet: the one it has); a vehicle alongside behind: at least ``open_mps`` faster
+        than it if the AV is the faster, or if passing it ends sooner than dropping back behind it and the left lane
+        has room for the AV ahead of it then (``_room_ahead_of``), else ``open_mps`` slower than it (it drops back),
+        and the vehicle ahead slows a passing AV only once its gap breaks the specification now, not the gap a return
+        would leave (matching its speed would hold the AV beside the vehicle it passes, measured: seed 12; and seed 22
+        of the reliability campaign, held beside it by a fake gap's copy ahead until the oncoming vehicle left no time
+        and the return cut into it; dropping back behind a vehicle 0.04 m/s the faster whose centre was 6.0 m behind
+        the AV's, 0.5 m short of clear, took 12.5 m at the fitted speeds, and the oncoming lane forced the return
+        into it: seed 69 of the 1,000 km campaign at 94bbc05); a follower too near (not alongside) that keeps its
+        speed: its speed (the closing speed that makes its gap too small goes). Speeds from the fitted closing speeds
+        (a vehicle ahead not measured yet: it may stand); the lowest target wins. Beside a vehicle faster than
+        ``open_mps`` a standstill is never the target (measured: seed 6 of the faults evaluation braked to 0 beside a
+        vehicle at 7 m/s, stood 3 s in the oncoming lane, and was rear-ended when it returned at a crawl)."""
         mr, targets = MINIMAL_RISK, []
         f = self.follower
-        f_closing_mps = None if f is None else f.closing_now_mps(speed_mps)
-        # beside a vehicle the AV is passing (its centre behind the AV's, the AV the faster)
-        passing = (alongside and f is not None and f_closing_mps is not None and f.gap_m < SAFETY.min_gap_m
-                   and f_closing_mps < -CLOSING_EPS_MPS)
+        f_own_mps = None if f is None else f.own_mps(speed_mps)
+        passing = False  # beside a vehicle the AV passes (its centre behind the AV's)
+        if alongside and f is not None and f_own_mps is not None and f.gap_m < SAFETY.min_gap_m:
+            f_closing_mps = f_own_mps - speed_mps
+            pass_s = mr.pass_s(-f_closing_mps, -f.dx_m)
+            passing = f_closing_mps < -CLOSING_EPS_MPS or (
+                pass_s < mr.drop_back_s(-f_closing_mps, -f.dx_m, f_own_mps)
+                and _room_ahead_of(f, f_own_mps, self.lead, speed_mps, pass_s))
         if near and self.lead is not None:
             closing = self.lead.closing_mps(speed_mps)
             lead_mps = max(0.0, speed_mps - closing)
@@ -752,23 +760,23 @@ class Simulator:
                 targets.append(lead_mps)
             elif (lead_own_mps := self.lead.own_mps(speed_mps)) is not None:
                 # beside it (its centre ahead of the AV's): drop back unless the AV is the faster and passing it ends
-                # sooner (then the speed the AV has), ``open_mps`` below the speed of the vehicle it drops behind, not
-                # the AV's (the closing speed braked for stops at 0, and a target under the AV's own speed every step
-                # ratcheted it to a standstill beside a reading moving away, seed 38 of the reliability campaign)
+                # sooner, ``open_mps`` below the speed of the vehicle it drops behind, not the AV's (the closing speed
+                # braked for stops at 0, and a target under the AV's own speed every step ratcheted it to a
+                # standstill beside a reading moving away, seed 38 of the reliability campaign)
                 behind_m, behind_mps = _drop_back_to(self.lead, f, speed_mps, lead_own_mps)
                 if lead_own_mps >= speed_mps - CLOSING_EPS_MPS or mr.drop_back_s(
                         speed_mps - behind_mps, behind_m, behind_mps) <= mr.pass_s(speed_mps - lead_own_mps,
                                                                                   self.lead.dx_m):
                     targets.append(max(0.0, behind_mps - mr.open_mps))
-        if f is not None and f_closing_mps is not None and (alongside or blocks):
-            follower_mps = max(0.0, speed_mps + f_closing_mps)
+                else:
+                    targets.append(max(speed_mps, lead_own_mps + mr.open_mps))
+        if f is not None and f_own_mps is not None and (alongside or blocks):
             if passing:  # at least ``open_mps`` faster than it, so that the pass ends
-                targets.append(max(speed_mps, follower_mps + mr.open_mps))
-            elif f.gap_m < SAFETY.min_gap_m:  # alongside: the faster one passes the other
-                if f_closing_mps > CLOSING_EPS_MPS:
-                    targets.append(max(0.0, follower_mps - mr.open_mps))
+                targets.append(max(speed_mps, f_own_mps + mr.open_mps))
+            elif f.gap_m < SAFETY.min_gap_m and f_own_mps >= speed_mps - CLOSING_EPS_MPS:  # not passing: drop back
+                targets.append(max(0.0, f_own_mps - mr.open_mps))
             elif blocks:
-                targets.append(follower_mps)
+                targets.append(f_own_mps)
         return min(targets) if targets else None
 
     def _follower_blocks(self, change_s: float, speed_mps: float) -> bool:
@@ -1080,9 +1088,21 @@ def _drop_back_to(lead: Nearest, follower: Nearest | None, speed_mps: float,
     than two car lengths and two least gaps), behind that one too (its centre behind the AV's: a negative distance)."""
     f_own_mps = None if follower is None else follower.own_mps(speed_mps)
     if follower is not None and f_own_mps is not None and \
-            lead.dx_m + follower.dx_m < 2.0 * (CAR.length_m + SAFETY.min_gap_m):
+            lead.dx_m + follower.dx_m < 2.0 * MINIMAL_RISK.beside_m:
         return -follower.dx_m, f_own_mps
     return lead.dx_m, lead_own_mps
+
+
+def _room_ahead_of(follower: Nearest, follower_mps: float, lead: Nearest | None, speed_mps: float,
+                   seconds: float) -> bool:
+    """Whether the left lane has a slot for the AV between the vehicle alongside behind it (at ``follower_mps``) and
+    the vehicle ahead once a pass of ``seconds`` is over: their centres then at least two car lengths and two least
+    gaps apart, at the vehicle ahead's fitted speed (not measured yet: it may stand; none sensed: room)."""
+    if lead is None:
+        return True
+    lead_mps = lead.own_mps(speed_mps)
+    closing_mps = max(0.0, follower_mps - (0.0 if lead_mps is None else lead_mps))
+    return lead.dx_m + follower.dx_m - closing_mps * seconds >= 2.0 * MINIMAL_RISK.beside_m
 
 
 def _pass_first_s(beside: Nearest | None, lead: Nearest, speed_mps: float, closing_mps: float) -> float:

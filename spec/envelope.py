@@ -21,7 +21,7 @@ import math
 from dataclasses import dataclass, field
 
 from spec.grid import COMMON_SPEED_MPS
-from spec.motion import RAMP_SHARE, Ramp, ramp_s
+from spec.motion import RAMP_SHARE, Ramp, covered_s, ramp_s
 from spec.physical import CAR, LOOP, NOISE, SENSORS
 from spec.safety import SAFETY
 
@@ -101,30 +101,33 @@ def own_motion_closing_mps(distances_m: tuple[float, ...], travelled_m: tuple[fl
 
 @dataclass(frozen=True, slots=True)
 class MinimalRisk:
-    """The minimal-risk manoeuvre after a plan (and the fallback's): stay in lane and brake, at the share of the
-    car's braking limit the executor's ramps use, down to a hold speed no vehicle ahead can be slower than.
+    """The minimal-risk manoeuvre after a plan (and the fallback's): stay in lane and brake, at the share of the car's
+    braking limit the executor's ramps use, down to a hold speed no vehicle ahead can be slower than.
 
-    The fallback (the simplex pattern; RSS's proper response) takes over in the closed loop when a decision from a
-    fresh snapshot has neither a plan nor a safe step in lane (``oracle.sound.keep_lane``), when the snapshot makes
-    no scenario, or when a vehicle that broke the assumptions under one decision breaks them again under the next.
-    It returns to the left lane when the AV is in the right one (a lane change at its speed), once the sensed left
-    lane leaves room (nothing alongside within the specification's least gap, the vehicle ahead not nearer than the
-    specification allows at the closing speed when the lane change is over, and, where followers keep their speed,
-    the vehicle behind not nearer than it allows at its closing speed then either, nor faster than the AV by more
-    than ``open_mps``: measured, seeds 6 and 8 of the faults evaluation were rear-ended after returning slower than
-    the follower, and seed 21 of the reliability campaign after a return begun at a standstill, whose sideways move
-    took 5 s, not the lane change's 3), driving meanwhile in the right lane at the left lane's speed: the vehicle
-    ahead's while it is too near, ``open_mps`` below it while beside it (its centre ahead of the AV's) unless the AV is
-    the faster and passing it ends sooner (``pass_s``, ``drop_back_s``: measured, seed 51 of the 1,000 km campaign kept
-    its speed 1.2 m/s faster than a vehicle whose rear was 1.25 m ahead, a 10 s pass where a drop back takes 1 s, until
-    the oncoming lane forced a return into it; dropping back every time would hold a car 5 m/s faster and level with a
-    vehicle for 6 s, not a pass's 1.4), ``open_mps`` below a faster vehicle alongside behind, at least ``open_mps``
-    above a slower one (it passes it, slowed by the vehicle ahead only once that gap breaks the specification now:
-    matching the vehicle ahead held the AV beside the vehicle it was passing, seed 22), a too-near or faster follower's
-    own where followers keep their speed (measured: braking to a standstill beside a vehicle left the AV standing in the
-    oncoming lane, then returning at a crawl in front of a follower), up to ``return_wait_s``, while the nearest
-    oncoming vehicle sensed stays farther than the specification allows at its closing speed after one more sweep and
-    the lane change, from the wait's start (a least wait of ``takeover_s`` first was measured: seed 25 of the
+    The fallback (the simplex pattern; RSS's proper response) takes over in the closed loop when a decision from a fresh
+    snapshot has neither a plan nor a safe step in lane (``oracle.sound.keep_lane``), when the snapshot makes no
+    scenario, or when a vehicle that broke the assumptions under one decision breaks them again under the next. It
+    returns to the left lane when the AV is in the right one (a lane change at its speed), once the sensed left lane
+    leaves room (nothing alongside within the specification's least gap, the vehicle ahead not nearer than the
+    specification allows at the closing speed when the lane change is over, and, where followers keep their speed, the
+    vehicle behind not nearer than it allows at its closing speed then either, nor faster than the AV by more than
+    ``open_mps``: measured, seeds 6 and 8 of the faults evaluation were rear-ended after returning slower than the
+    follower, and seed 21 of the reliability campaign after a return begun at a standstill, whose sideways move took 5
+    s, not the lane change's 3), driving meanwhile in the right lane at the left lane's speed: the vehicle ahead's while
+    it is too near, ``open_mps`` below it while beside it (its centre ahead of the AV's) unless the AV is the faster and
+    passing it ends sooner (``pass_s``, ``drop_back_s``: measured, seed 51 of the 1,000 km campaign kept its speed 1.2
+    m/s faster than a vehicle whose rear was 1.25 m ahead, a 10 s pass where a drop back takes 1 s, until the oncoming
+    lane forced a return into it; dropping back every time would hold a car 5 m/s faster and level with a vehicle for 6
+    s, not a pass's 1.4; passing, at least ``open_mps`` above it), beside a vehicle alongside behind at least
+    ``open_mps`` above it when the AV is the faster, or when passing it ends sooner than dropping back behind it and the
+    left lane has a slot for the AV ahead of it (measured: seed 69 of the 1,000 km campaign at 94bbc05 dropped back 12.5
+    m behind a vehicle 0.04 m/s the faster where 0.5 m more ahead cleared it, and the oncoming lane forced the return
+    into it), else ``open_mps`` below it (passing, slowed by the vehicle ahead only once that gap breaks the
+    specification now: matching the vehicle ahead held the AV beside the vehicle it was passing, seed 22), a too-near or
+    faster follower's own where followers keep their speed (measured: braking to a standstill beside a vehicle left the
+    AV standing in the oncoming lane, then returning at a crawl in front of a follower), up to ``return_wait_s``, while
+    the nearest oncoming vehicle sensed stays farther than the specification allows at its closing speed after one more
+    sweep and the lane change, from the wait's start (a least wait of ``takeover_s`` first was measured: seed 25 of the
     reliability campaign held the lane while an oncoming vehicle closed from 49 m; a dropped sweep, which shows nothing,
     ends the wait only after ``takeover_s``) (a return into a vehicle ahead at 13 m/s was measured: seed 2; before its
     speed is fitted, the AV's speed plus the fastest oncoming speed the bounds state, for the two sweeps a fit needs: a
@@ -161,6 +164,9 @@ class MinimalRisk:
     #: (25.5 s); a bound, so that a left lane that never leaves room (a vehicle stopped beside the AV) cannot hold
     #: the drive for ever.
     return_wait_s: float = SENSORS.right_range_m / float(2 * COMMON_SPEED_MPS)
+    #: Two vehicles in neighbouring lanes whose centres are nearer than this along the road are beside each other:
+    #: a car length and the specification's least gap (the gap either would have to the other in one lane).
+    beside_m: float = CAR.length_m + SAFETY.min_gap_m
 
     def ends_wait(self, waited_s: float, swept: bool, oncoming_leaves_time: bool) -> bool:
         """Whether the fallback's wait in the right lane ends now, with or without room in the left lane: after
@@ -169,29 +175,26 @@ class MinimalRisk:
         return waited_s > self.return_wait_s or (
             (swept or waited_s > self.takeover_s) and not oncoming_leaves_time)
 
-    @staticmethod
-    def pass_s(closing_mps: float, ahead_m: float) -> float:
+    def pass_s(self, closing_mps: float, ahead_m: float) -> float:
         """How long the fallback waiting in the right lane takes to pass a left-lane vehicle whose centre is
-        ``ahead_m`` ahead of its own, closing on it at ``closing_mps`` (positive: the AV the faster) and keeping
-        that: until the AV's centre is a car length and the least gap ahead of the vehicle's (infinite when the AV is
-        not the faster). Room ahead of that vehicle is not known; the next vehicle ahead is waited for as it comes."""
-        if closing_mps <= 0.0:
-            return math.inf
-        return (ahead_m + CAR.length_m + SAFETY.min_gap_m) / closing_mps
+        ``ahead_m`` ahead of its own (negative: behind it), closing on it at ``closing_mps`` (negative: the vehicle
+        the faster): speeding up at ``accel_mps2`` until it is ``open_mps`` the faster (its speed when it already is),
+        then keeping that, until the AV's centre is ``beside_m`` ahead of the vehicle's. Whether there is room ahead
+        of the vehicle is the caller's to know."""
+        return covered_s(ahead_m + self.beside_m, closing_mps, max(closing_mps, self.open_mps), self.accel_mps2)
 
     def drop_back_s(self, closing_mps: float, ahead_m: float, own_mps: float) -> float:
         """How long the fallback waiting in the right lane takes to drop back behind a left-lane vehicle whose centre
-        is ``ahead_m`` ahead of its own (negative: behind it), closing on it at ``closing_mps``, at ``own_mps``:
-        braking at ``emergency_decel_mps2`` (the wait's rate) to ``open_mps`` below the vehicle's speed (a standstill
-        at the least), then opening at that until the vehicle's centre is a car length and the least gap ahead of the
-        AV's (infinite when the vehicle stands: the AV cannot open on it)."""
+        is ``ahead_m`` ahead of its own (negative: behind it), closing on it at ``closing_mps``, at ``own_mps``: its
+        speed moving to ``open_mps`` below the vehicle's (a standstill at the least), braking at
+        ``emergency_decel_mps2`` (the wait's rate) or speeding up at ``accel_mps2``, then keeping that, until the
+        vehicle's centre is ``beside_m`` ahead of the AV's (infinite when the vehicle stands: the AV cannot open on
+        it)."""
         opening_mps = min(self.open_mps, max(0.0, own_mps))
         if opening_mps <= 0.0:
             return math.inf
-        rate = self.emergency_decel_mps2
-        brake_s = max(0.0, closing_mps + opening_mps) / rate
-        on_while_braking_m = (closing_mps ** 2 - opening_mps ** 2) / (2.0 * rate) if closing_mps > -opening_mps else 0.0
-        return brake_s + max(0.0, CAR.length_m + SAFETY.min_gap_m - ahead_m + on_while_braking_m) / opening_mps
+        rate = self.emergency_decel_mps2 if opening_mps > -closing_mps else self.accel_mps2
+        return covered_s(self.beside_m - ahead_m, -closing_mps, opening_mps, rate)
 
     def hold_mps(self, speed_mps: float, slowest_ahead_mps: float) -> float:
         """The speed the manoeuvre brakes to: at most the slowest speed a vehicle ahead may keep (so the reference

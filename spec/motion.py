@@ -10,6 +10,7 @@ Positions are the reference's exact integral (``SpeedProfile.distance_m``).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from spec.actions import ACTION_RULES, Action
@@ -33,6 +34,25 @@ def ramp_s(v_from_mps: float, v_to_mps: float, spec: CarSpec = CAR) -> float:
 def ramp_gain_m(v_from_mps: float, v_to_mps: float) -> float:
     """How far a car ramping from one speed to another gets ahead (negative: behind) of one at the second all along."""
     return (v_from_mps - v_to_mps) * ramp_s(v_from_mps, v_to_mps) / 2
+
+
+def covered_s(distance_m: float, from_mps: float, to_mps: float, rate_mps2: float) -> float:
+    """How long a relative motion takes to cover ``distance_m``: its speed moving linearly from ``from_mps`` to
+    ``to_mps`` at ``rate_mps2``, then kept (0 for no distance; infinite when it never covers it)."""
+    if distance_m <= 0.0:
+        return 0.0
+    if to_mps == from_mps:
+        return distance_m / to_mps if to_mps > 0.0 else math.inf
+    rate = rate_mps2 if to_mps > from_mps else -rate_mps2
+    change_s = (to_mps - from_mps) / rate
+    change_m = (to_mps * to_mps - from_mps * from_mps) / (2.0 * rate)
+    # the farthest the change reaches: where it ends, or where its speed passes 0 when it turns round on the way
+    reach_m = from_mps * from_mps / (-2.0 * rate) if rate < 0.0 < from_mps and to_mps < 0.0 else change_m
+    if distance_m <= reach_m:  # on the way: the first time the displacement reaches it
+        return (-from_mps + math.sqrt(from_mps * from_mps + 2.0 * rate * distance_m)) / rate
+    if to_mps <= 0.0:
+        return math.inf
+    return change_s + (distance_m - change_m) / to_mps
 
 
 @dataclass(frozen=True, slots=True)

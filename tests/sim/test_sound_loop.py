@@ -169,15 +169,20 @@ def test_the_fallback_neither_brakes_below_traffic_that_keeps_its_speed_nor_retu
     15.5 km): it now brakes on while the gap still closes. Then it held that gap, 2 m behind the vehicle ahead and
     10 m before the one behind, where no decision found a safe step: 1,648 take-overs in a row from 15.4 km. It now
     opens the gap towards the middle of its slot, for the speed it hands back at, and no decision is left without
-    a safe step in lane for long: a few such take-overs, each handed back (seed 4's two, since the AV's own monitor
-    decides on what it senses: one found no plan where a fault showed what the truth did not)."""
+    a safe step in lane for long: a few such take-overs, each handed back, never three within a kilometre (seed 4's
+    four in the right lane, since the AV's own monitor decides on what it senses: one found no plan where a fault
+    showed what the truth did not)."""
     takeovers = 0
     for seed, km in ((6, 3.0), (4, 22.0), (12, 17.0)):
         summary = run_drive_summary(seed, km)
         assert summary.failure is None, (seed, summary.failure)
         takeovers += len(summary.takeovers)
         stuck = [t for t in summary.takeovers if t.cause.endswith("no safe step in lane")]
-        assert len(stuck) <= 3, (seed, len(stuck), stuck[:3])  # a loop: 75 to 1,648 (2 on seed 4 now: sensed)
+        assert all(t.outcome == "handed back" for t in stuck), (seed, stuck)
+        # a loop takes over again at once, one take-over (``takeover_s``) after the other: 1,648 in 35 km; here
+        # (seed 4) 4 in 22 km, the nearest two 1.4 km apart
+        crowded = [kms for kms in zip(*(tuple(t.km for t in stuck[k:]) for k in range(3))) if kms[2] - kms[0] < 1.0]
+        assert not crowded, (seed, crowded[:1])
     assert takeovers  # the fallback did act (seed 6 no longer needs it by 3 km: the shadowed oncoming lane)
 
 
@@ -241,7 +246,7 @@ def test_the_fallback_passing_a_vehicle_beside_it_is_held_back_only_by_a_gap_ahe
     from spec.physical import CAR
     from spec.safety import SAFETY
 
-    beside = Nearest(3.6, -1.0)  # 3.6 m behind the AV's centre, the AV 1 m/s the faster
+    beside = Nearest(3.6, -1.0, behind=True)  # 3.6 m behind the AV's centre, the AV 1 m/s the faster
 
     def target(lead: Nearest, follower: Nearest = beside) -> float | None:
         view = SimpleNamespace(lead=lead, follower=follower)
@@ -250,7 +255,7 @@ def test_the_fallback_passing_a_vehicle_beside_it_is_held_back_only_by_a_gap_ahe
     closing = 2.0  # on the vehicle ahead, at 6 m/s
     far = Nearest(SAFETY.required_gap_m(closing) + CAR.length_m + 5.0, closing)
     assert target(far) == pytest.approx(7.0 + MINIMAL_RISK.open_mps)  # on past it
-    assert target(far, Nearest(3.6, 2.0)) == pytest.approx(6.0)  # the one beside the faster: not passing it
+    assert target(far, Nearest(3.6, 2.0, behind=True)) == pytest.approx(6.0)  # the one beside the faster: no pass
     near = Nearest(SAFETY.required_gap_m(closing) + CAR.length_m - 0.5, closing)
     assert target(near) == pytest.approx(6.0)  # the gap ahead too small now: its speed
 
@@ -295,12 +300,12 @@ def test_the_fallback_beside_a_vehicle_it_is_faster_than_drops_back_or_passes_wh
     assert target(Nearest(1.25 + CAR.length_m, 8.19 - 7.0)) == pytest.approx(7.0 - mr.open_mps)
     assert target(Nearest(-0.5 + CAR.length_m, 8.19 - 7.0)) == pytest.approx(7.0 - mr.open_mps)
     assert target(Nearest(1.25 + CAR.length_m, None)) is None  # not measured: the speed it has
-    assert target(Nearest(0.5, 5.0), speed_mps=12.0) is None  # passing ends sooner: the speed it has
-    assert target(Nearest(5.0, 1.0), speed_mps=1.0) is None  # beside a vehicle standing: it passes
-    assert mr.pass_s(1.19, 1.25 + CAR.length_m) == pytest.approx(10.3, abs=0.1)
+    assert target(Nearest(0.5, 5.0), speed_mps=12.0) == 12.0  # passing ends sooner: the speed it has, 5 m/s faster
+    assert target(Nearest(5.0, 1.0), speed_mps=1.0) == mr.open_mps  # beside a vehicle standing: it passes
+    assert mr.pass_s(1.19, 1.25 + CAR.length_m) == pytest.approx(8.2, abs=0.1)  # up to 1.5 m/s the faster
     assert mr.drop_back_s(1.19, 1.25 + CAR.length_m, 7.0) == pytest.approx(0.9, abs=0.1)
     assert mr.pass_s(5.0, 0.5) == pytest.approx(1.4) and mr.drop_back_s(5.0, 0.5, 7.0) == pytest.approx(6.35, abs=0.05)
-    assert mr.pass_s(0.0, 0.5) == math.inf and mr.drop_back_s(1.0, 5.0, 0.0) == math.inf
+    assert mr.pass_s(0.0, 0.5) == pytest.approx(4.94, abs=0.01) and mr.drop_back_s(1.0, 5.0, 0.0) == math.inf
     # a vehicle alongside behind, 2.5 m behind the AV's centre and 4 m behind the one ahead's: no slot between them;
     # a drop back ends behind it too (6.7 s), longer than passing the one ahead (5.25 s)
     behind = Nearest(2.5, -2.0, behind=True)  # at 7 m/s
@@ -308,6 +313,41 @@ def test_the_fallback_beside_a_vehicle_it_is_faster_than_drops_back_or_passes_wh
     # a vehicle 9.5 m behind the AV, 13.5 m behind the one ahead: room for the AV between them, it drops back into it
     assert target(Nearest(4.0, 0.5), speed_mps=7.5, follower=Nearest(9.5, -0.5, behind=True)) == pytest.approx(
         7.0 - mr.open_mps)
+
+
+def test_the_fallback_beside_a_vehicle_alongside_behind_passes_it_when_that_ends_sooner_and_leaves_it_room() -> None:
+    """Seed 69 of the 1,000 km campaign (94bbc05): waiting in the right lane at 6.96 m/s beside a left-lane vehicle
+    whose centre was 6.0 m behind the AV's (0.5 m short of clear) and 0.04 m/s the faster, with the vehicle ahead
+    15 m on, the fallback dropped back behind it (``open_mps`` below its speed), 12.5 m at the speeds it ran; 6 s
+    later the oncoming lane forced the return while that vehicle was still beside it, and the two touched. Passing
+    it, speeding up to ``open_mps`` the faster, ends in 0.6 s against 8.5 s, and the slot ahead of it takes the AV:
+    it passes. With no slot (the vehicle ahead 6.9 m on, or 11 m on and not measured: it may stand), or level with
+    the vehicle, it drops back; the faster of the two, it passes whatever comes."""
+    from types import SimpleNamespace
+
+    from sim.simulator import Nearest, Simulator
+    from spec.envelope import MINIMAL_RISK as mr
+
+    ahead = Nearest(14.99, -0.04)  # at 7.0 m/s
+
+    def target(follower: Nearest, lead: Nearest | None = ahead) -> float | None:
+        view = SimpleNamespace(lead=lead, follower=follower)
+        return Simulator._waiting_mps(view, 6.96, False, True, True)  # type: ignore[arg-type]
+
+    beside = Nearest(6.01, 0.04, behind=True)  # at 7.0 m/s
+    assert mr.pass_s(-0.04, -6.01) == pytest.approx(0.62, abs=0.01)
+    assert mr.drop_back_s(-0.04, -6.01, 7.0) == pytest.approx(8.46, abs=0.01)
+    assert target(beside) == pytest.approx(7.0 + mr.open_mps)  # on past it
+    assert target(beside, lead=None) == pytest.approx(7.0 + mr.open_mps)  # nothing ahead: room
+    assert target(beside, lead=Nearest(6.9, -0.04)) == pytest.approx(7.0 - mr.open_mps)  # no slot: drops back
+    assert target(beside, lead=Nearest(11.0, -0.04)) == pytest.approx(7.0 + mr.open_mps)  # 11 m on at 7 m/s: room
+    assert target(beside, lead=Nearest(11.0, None)) == pytest.approx(7.0 - mr.open_mps)  # it may stand: none
+    level = Nearest(0.0, 0.04, behind=True)  # level with the AV: passing takes 4.63 s, dropping back 4.45 s
+    assert target(level) == pytest.approx(7.0 - mr.open_mps)
+    assert target(Nearest(0.3, 0.04, behind=True)) == pytest.approx(7.0 + mr.open_mps)  # 4.43 s against 4.65 s
+    # the AV the faster, it passes at least ``open_mps`` the faster
+    assert target(Nearest(6.01, -1.0, behind=True)) == pytest.approx(5.96 + mr.open_mps)
+    assert target(Nearest(6.01, -2.0, behind=True), lead=Nearest(6.9, -0.04)) == pytest.approx(6.96)
 
 
 def test_a_return_that_would_end_too_near_the_vehicle_ahead_brakes_to_its_speed_from_its_start() -> None:
