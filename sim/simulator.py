@@ -1087,8 +1087,7 @@ def _drop_back_to(lead: Nearest, follower: Nearest | None, speed_mps: float,
     left lane (the AV's follower, its speed measured) leaves no slot for the AV between them (their centres nearer
     than two car lengths and two least gaps), behind that one too (its centre behind the AV's: a negative distance)."""
     f_own_mps = None if follower is None else follower.own_mps(speed_mps)
-    if follower is not None and f_own_mps is not None and \
-            lead.dx_m + follower.dx_m < 2.0 * MINIMAL_RISK.beside_m:
+    if follower is not None and f_own_mps is not None and not MINIMAL_RISK.leaves_slot(lead.dx_m + follower.dx_m):
         return -follower.dx_m, f_own_mps
     return lead.dx_m, lead_own_mps
 
@@ -1102,7 +1101,7 @@ def _room_ahead_of(follower: Nearest, follower_mps: float, lead: Nearest | None,
         return True
     lead_mps = lead.own_mps(speed_mps)
     closing_mps = max(0.0, follower_mps - (0.0 if lead_mps is None else lead_mps))
-    return lead.dx_m + follower.dx_m - closing_mps * seconds >= 2.0 * MINIMAL_RISK.beside_m
+    return MINIMAL_RISK.leaves_slot(lead.dx_m + follower.dx_m - closing_mps * seconds)
 
 
 def _pass_first_s(beside: Nearest | None, lead: Nearest, speed_mps: float, closing_mps: float) -> float:

@@ -168,6 +168,11 @@ class MinimalRisk:
     #: a car length and the specification's least gap (the gap either would have to the other in one lane).
     beside_m: float = CAR.length_m + SAFETY.min_gap_m
 
+    def leaves_slot(self, apart_m: float) -> bool:
+        """Whether two vehicles in one lane whose centres are ``apart_m`` apart leave a slot for the AV between them:
+        ``beside_m`` from its centre to either one's (a car length and the least gap each side)."""
+        return apart_m >= 2.0 * self.beside_m
+
     def ends_wait(self, waited_s: float, swept: bool, oncoming_leaves_time: bool) -> bool:
         """Whether the fallback's wait in the right lane ends now, with or without room in the left lane: after
         ``return_wait_s``; or once the oncoming lane leaves no time, from the wait's start when the last sweep was

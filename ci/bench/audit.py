@@ -2,7 +2,7 @@
 
 Usage: python -m ci.bench.audit [--km 4] [--workers 1,2] [--default-km KM]
 
-Runs ``overtake audit`` on the default grid (every cell size, traffic and sensing model) with
+Runs ``overtake audit`` on the default grid (every cell size, traffic, sensing and planning model) with
 ``--km KM --runs 1 --engines interpreter --snapshots 0`` once per worker count, each as a whole
 process into a fresh folder, and prints km driven, wall time, km per wall minute (in all and per
 worker) and the speed-up over the first count; then what the default audit (``--default-km`` per
@@ -52,7 +52,8 @@ def main() -> None:
                         help="km per combination of the default audit (its --km x --runs)")
     args = parser.parse_args()
     counts = [int(w) for w in args.workers.split(",")]
-    combinations = len(AuditPlan().configs())
+    models = tuple(m.strip() for m in str(defaults["model_text"]).split(",") if m.strip())
+    combinations = len(AuditPlan(models=models).configs())  # the command's defaults: every model it compares
     console = Console(width=140)
     console.print(f"overtake audit --km {args.km} --runs 1 --engines interpreter --snapshots 0 --workers N: "
                   f"{combinations} combinations; {machine()}")

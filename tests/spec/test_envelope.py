@@ -14,6 +14,8 @@ from spec.envelope import MINIMAL_RISK, TRACKING, Reference
 from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
 from spec.motion import action_speed_mps, plan_profiles, ramp_s
+from spec.physical import CAR
+from spec.safety import SAFETY
 from spec.sound import Sound, SoundRules, SoundState
 
 SPEEDS = sorted({action_speed_mps(a, PAPER_GRID) for a in Action})
@@ -89,6 +91,13 @@ def test_minimal_risk_brakes_to_the_slowest_vehicle_ahead() -> None:
     assert ramp is not None and ramp.start_s == 10.0
     assert ramp.dv_mps / ramp.duration_s == pytest.approx(-MINIMAL_RISK.decel_mps2)
     assert MINIMAL_RISK.ramp(0.0, 3.0, 3.0) is None
+
+
+def test_a_slot_between_two_vehicles_is_a_car_and_a_least_gap_each_side_of_the_av() -> None:
+    """Centres ``beside_m`` from the AV's on both sides leave a slot; a millimetre less does not."""
+    both = 2 * (CAR.length_m + SAFETY.min_gap_m)
+    assert MINIMAL_RISK.leaves_slot(both) and MINIMAL_RISK.leaves_slot(both + 30.0)
+    assert not MINIMAL_RISK.leaves_slot(both - 0.001) and not MINIMAL_RISK.leaves_slot(-both)
 
 
 def test_the_fallback_brakes_for_the_closing_speed_it_measured_and_comes_back_up_to_the_hold_speed() -> None:
