@@ -28,6 +28,7 @@ from rich.table import Table
 from ci.audit.campaign import AuditPlan
 from ci.cli.audit import audit as audit_command
 from ci.shared.machine import machine
+from ci.shared.options import names
 
 
 def audit(km: float, workers: int, out: Path) -> tuple[float, float, tuple[int, int]]:
@@ -52,8 +53,8 @@ def main() -> None:
                         help="km per combination of the default audit (its --km x --runs)")
     args = parser.parse_args()
     counts = [int(w) for w in args.workers.split(",")]
-    models = tuple(m.strip() for m in str(defaults["model_text"]).split(",") if m.strip())
-    combinations = len(AuditPlan(models=models).configs())  # the command's defaults: every model it compares
+    # the command's default models (every one it compares), split as the command splits them
+    combinations = len(AuditPlan(models=names("--model", str(defaults["model_text"]))).configs())
     console = Console(width=140)
     console.print(f"overtake audit --km {args.km} --runs 1 --engines interpreter --snapshots 0 --workers N: "
                   f"{combinations} combinations; {machine()}")
