@@ -368,7 +368,18 @@ class SoundRules:
         self.gain_per_action_m = max((grid.units(a) - grid.left_shift(a)) * self.cell_m
                                      - high * grid.units(a) * self.unit_s for a in Action)
         self.first_ramp_m = {v: abs(ramp_gain_m(self.start_mps, v)) for v in self.speeds.values()}
+        self.most_first_ramp_m = max(self.first_ramp_m.values())
+        #: The oncoming phantoms (the unseen stretch beyond the range), the nearest one's near end, the least
+        #: oncoming gap and the AV's fastest speed (``hopeless``).
+        self.oncoming_phantoms = tuple(v for v in self.oncoming if math.isinf(v.hi_m))
+        self.same_phantoms_ahead = tuple(v for v in self.same if math.isinf(v.hi_m))
+        self.nearest_phantom_m = max((v.lo_m for v in self.oncoming_phantoms), default=math.inf)
+        self.least_oncoming_gap_m = sound.safety.required_gap_m(sound.tracking.speed_mps
+                                                                + sound.bounds.oncoming_mps.high_mps)
+        self.fastest_mps = max(max(self.speeds.values()), self.start_mps)
+        self._goal_m: tuple[GoalRule | None, float | None] = (None, None)
         self._steps: dict[tuple[tuple[object, ...], Action], Violation | None] = {}
+        self._at_boundary: dict[tuple[int, int, float | None, float | None], float] = {}
         self._relative = _shapes(sound, grid)
         self._start_followers: frozenset[int] | None = None
 
@@ -377,6 +388,24 @@ class SoundRules:
         return state.key()
 
     # -- the AV's reference over a window ---------------------------------------------------------------------
+    def boundary_m(self, state: SoundState) -> float:
+        """Where the AV's reference is at ``state``'s boundary (``reference(state, None)`` there; it depends on the
+        time, the nominal advance and the speeds alone: the goal and the prunes ask it of every state, once each)."""
+        asked = (state.t_units, state.d_cells, state.first_mps, state.last_mps)
+        found = self._at_boundary.get(asked)
+        if found is None:
+            if len(self._at_boundary) >= MEMO_ENTRIES:
+                self._at_boundary.clear()
+            found = self._at_boundary[asked] = self.reference(state, None).position_m(state.t_units * self.unit_s)
+        return found
+
+    def nearest_target_m(self, goal: GoalRule) -> float | None:
+        """``goal.nearest_target_m`` as a float (converted once per goal a search asks: the prunes ask it of every
+        state)."""
+        if self._goal_m[0] is not goal:
+            self._goal_m = (goal, None if goal.nearest_target_m is None else float(goal.nearest_target_m))
+        return self._goal_m[1]
+
     def reference(self, state: SoundState, action: Action | None) -> Reference:
         """The reference from ``state``'s boundary on, into ``action`` (None: the minimal-risk manoeuvre)."""
         return self._reference(state.t_units * self.unit_s, state.d_cells * self.cell_m, state.first_mps,
@@ -661,18 +690,19 @@ class SoundRules:
         if goal.av_lane is not None and state.lane is not goal.av_lane:
             return False
         t_s = state.t_units * self.unit_s
-        x_m = self.reference(state, None).position_m(t_s)
+        x_m = self.boundary_m(state)
         ex, length = self.sound.tracking.position_m, self.sound.safety.vehicle_length_m
         if goal.targets_behind and any(self.same_high(self.sensed_same[i], t_s) > x_m - ex - length
                                        for i in self.targets):
             return False
-        if goal.nearest_target_m is not None:
+        most_m = self.nearest_target_m(goal)
+        if most_m is not None:
             if not self.targets:
                 return False
             v = self.sensed_same[self.targets[0]]
             gap_low = self.same_low(v, t_s) - (x_m + ex) - length
             gap_high = self.same_high(v, t_s) - (x_m - ex) - length
-            if gap_low < 0 or gap_high > float(goal.nearest_target_m):
+            if gap_low < 0 or gap_high > most_m:
                 return False
         return not (goal.oncoming_passed and any(
             not self.passed(v, x_m, t_s) for v in self.oncoming if v.index is not None))
@@ -688,16 +718,16 @@ class SoundRules:
         if not self.targets or not (goal.targets_behind or goal.nearest_target_m is not None):
             return False
         t_s = state.t_units * self.unit_s
-        x_m = self.reference(state, None).position_m(t_s)
-        ramp = max(self.first_ramp_m.values()) if state.first_mps is None else self.first_ramp_m[state.first_mps]
+        x_m = self.boundary_m(state)
+        ramp = self.most_first_ramp_m if state.first_mps is None else self.first_ramp_m[state.first_mps]
         most = max(0.0, self.gain_per_action_m) * actions_left + ramp
         ex, length = self.sound.tracking.position_m, self.sound.safety.vehicle_length_m
         if goal.targets_behind and any(self.same_high(self.sensed_same[i], t_s) + length + ex - x_m > most + EPS_M
                                        for i in self.targets):
             return True  # a target's fastest position still ahead of where it must be behind the AV
         nearest = self.sensed_same[self.targets[0]]
-        return goal.nearest_target_m is not None and \
-            self.same_high(nearest, t_s) - (x_m - ex) - length - float(goal.nearest_target_m) > most + EPS_M
+        most_m = self.nearest_target_m(goal)
+        return most_m is not None and self.same_high(nearest, t_s) - (x_m - ex) - length - most_m > most + EPS_M
 
     def hopeless(self, state: SoundState, goal: GoalRule) -> bool:
         """Whether ``goal`` can hold neither in ``state`` nor in any state after it, so a search need not go on.
@@ -716,24 +746,21 @@ class SoundRules:
           with the most a ramp centred on it may add or take (``dip_m``)."""
         t_s = state.t_units * self.unit_s
         ex, length = self.sound.tracking.position_m, self.sound.safety.vehicle_length_m
-        if goal.nearest_target_m is not None and self.targets:
+        most_m = self.nearest_target_m(goal)
+        if most_m is not None and self.targets:
             v = self.sensed_same[self.targets[0]]
-            if self.same_high(v, t_s) - self.same_low(v, t_s) + 2 * ex > float(goal.nearest_target_m) + EPS_M:
+            if self.same_high(v, t_s) - self.same_low(v, t_s) + 2 * ex > most_m + EPS_M:
                 return True
             # A plan ends in the left lane (the right one is never safe for ever with phantoms), where the phantom
             # ahead is held ahead by at least the least gap: the AV cannot be near enough the target's far end.
-            room = float(goal.nearest_target_m) - self.sound.safety.min_gap_m - 2 * ex
-            if any(math.isinf(p.hi_m) and self.same_high(v, t_s) - self.same_low(p, t_s) > room + EPS_M
-                   for p in self.same):
+            room = most_m - self.sound.safety.min_gap_m - 2 * ex
+            if any(self.same_high(v, t_s) - self.same_low(p, t_s) > room + EPS_M for p in self.same_phantoms_ahead):
                 return True
-        phantoms = [v for v in self.oncoming if math.isinf(v.hi_m)]
-        if not (goal.targets_behind and self.targets and phantoms):
+        if not (goal.targets_behind and self.targets and self.oncoming_phantoms):
             return False
-        x_m = self.reference(state, None).position_m(t_s)
+        x_m = self.boundary_m(state)
         b, g_min = self.sound.bounds, self.sound.safety.min_gap_m
-        least_m = self.sound.safety.required_gap_m(self.sound.tracking.speed_mps + b.oncoming_mps.high_mps)
-        nearest = max(v.lo_m for v in phantoms)
-        fastest = max(max(self.speeds.values()), self.start_mps)
+        least_m, nearest, fastest = self.least_oncoming_gap_m, self.nearest_phantom_m, self.fastest_mps
         followers = self.followers(state, None) if state.lane is Lane.LEFT else frozenset()
         for i in self.targets:
             v = self.sensed_same[i]
