@@ -22,11 +22,12 @@ import json
 import sys
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from ci.conformance.crossval import VERDICTS_FILE
 from ci.conformance.properties import Verdict
 from ci.shared.records import read_records
+from spec.answers import Status
 from spec.errors import ExitCode, OptionError, SuiteError
 
 
@@ -40,25 +41,38 @@ def open_runs(text: str) -> frozenset[str]:
     return runs
 
 
-def undecided(records: Iterable[dict[str, Any]]) -> list[tuple[str, str, str, dict[str, Any], list[str]]]:
-    """(property, verdict, detail, scenario, incomplete runs) of every verdict that did not hold."""
+class Undecided(NamedTuple):
+    """A verdict that did not hold: the property, its verdict and detail, the scenario, the runs that were
+    incomplete."""
+
+    name: str
+    verdict: str
+    detail: str
+    scenario: dict[str, Any]
+    runs: list[str]
+
+    def within(self, known: frozenset[str]) -> bool:
+        """Whether it is undecided only because runs ``known`` as open hit their limit."""
+        return self.verdict == Verdict.INCOMPLETE.value and bool(self.runs) and set(self.runs) <= known
+
+
+def undecided(records: Iterable[dict[str, Any]]) -> list[Undecided]:
+    """Every verdict that did not hold."""
     out = []
     for record in records:
         result = record.get("result", {})
-        runs = sorted(run for run, status in result.get("statuses", {}).items() if status == "incomplete")
+        runs = sorted(run for run, status in result.get("statuses", {}).items() if status == Status.INCOMPLETE.value)
         for name, (verdict, detail) in result.get("verdicts", {}).items():
             if verdict != Verdict.HELD.value:
-                out.append((name, verdict, detail, result.get("scenario", {}), runs))
+                out.append(Undecided(name, verdict, detail, result.get("scenario", {}), runs))
     return out
 
 
-def judge(found: Sequence[tuple[str, str, str, dict[str, Any], list[str]]], known: frozenset[str]) -> ExitCode:
+def judge(found: Sequence[Undecided], known: frozenset[str]) -> ExitCode:
     """The exit code (module docstring) for these undecided verdicts."""
-    if any(verdict != Verdict.INCOMPLETE.value for _, verdict, _, _, _ in found):
+    if any(u.verdict != Verdict.INCOMPLETE.value for u in found):
         return ExitCode.DISAGREE
-    if any(not runs or not set(runs) <= known for _, _, _, _, runs in found):
-        return ExitCode.INCOMPLETE
-    return ExitCode.OK
+    return ExitCode.OK if all(u.within(known) for u in found) else ExitCode.INCOMPLETE
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -75,9 +89,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SuiteError as err:
         print(f"inconclusive: {err}", file=sys.stderr)
         return int(err.exit_code)
-    for name, verdict, detail, scenario, runs in found:
-        tag = "open limit" if verdict == Verdict.INCOMPLETE.value and runs and set(runs) <= known else verdict
-        print(f"{tag}: {name} ({detail}; incomplete: {', '.join(runs) or 'none'}) on {json.dumps(scenario)}")
+    for u in found:
+        tag = "open limit" if u.within(known) else u.verdict
+        print(f"{tag}: {u.name} ({u.detail}; incomplete: {', '.join(u.runs) or 'none'}) on {json.dumps(u.scenario)}")
     code = judge(found, known)
     print(f"inconclusive: {len(found)} verdict(s) not held in {path}; exit {int(code)} ({code.name.lower()})")
     return int(code)
