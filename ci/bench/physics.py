@@ -24,16 +24,19 @@ import time
 from pathlib import Path
 from typing import Any
 
+import click
 from rich.console import Console
 from rich.table import Table
 
 from ci.audit.campaign import AuditPlan
+from ci.cli.audit import _cells as audit_cells
 from ci.cli.audit import audit as audit_command
 from ci.cli.main import cli
 from ci.shared.machine import machine
 from ci.shared.options import names
 from sim.opportunity import Replay
 from sim.scene import Scene
+from spec.errors import OptionError, SuiteError, check_number
 
 
 class StepTimer:
@@ -81,9 +84,11 @@ def audit_one_model(model: str, km: float, cells: str, out: Path) -> tuple[float
             code = cli.main(args, standalone_mode=False)
         except SystemExit as done:
             code = done.code
+        except click.ClickException as error:  # bad input the audit's options refused (--cells): one line, exit 2
+            raise OptionError("--cells", cells, error.format_message()) from None
         wall_s = time.perf_counter() - started
     if code not in (0, None):
-        sys.exit(f"bench_physics: the audit of model {model} exited {code}")
+        raise SuiteError(f"the audit of model {model} exited {code}")
     rows = json.loads((out / "audit.json").read_text())["combinations"]
     return wall_s, sum(r["km"] for r in rows), timer
 
@@ -98,8 +103,22 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=int(defaults["workers"]),
                         help="processes the default audit runs on (its --workers)")
     args = parser.parse_args()
+    try:
+        measure(args)
+    except SuiteError as error:
+        print(f"bench_physics: error: {error}", file=sys.stderr)
+        sys.exit(error.exit_code)
+
+
+def measure(args: argparse.Namespace) -> None:
+    """The table (see the module's docstring), for checked options."""
+    check_number("--km", args.km, positive=True)
+    check_number("--default-km", args.default_km, positive=True)
+    check_number("--workers", args.workers, low=1)
+    cells_m = audit_cells(args.cells)  # the audit's own check of the list: one line naming the bad length
+    defaults: dict[str | None, Any] = {param.name: param.default for param in audit_command.params}
     models = names("--model", str(defaults["model_text"]))
-    per_model = len(AuditPlan(models=models[:1], cells_m=tuple(float(c) for c in args.cells.split(","))).configs())
+    per_model = len(AuditPlan(models=models[:1], cells_m=cells_m).configs())
     console = Console(width=150)
     console.print(f"overtake audit --model M --cells {args.cells} --km {args.km} --runs 1 --engines interpreter "
                   f"--snapshots 0 --workers 1 (in process): {per_model} combinations per model; {machine()}")
