@@ -38,6 +38,9 @@ from sim.opportunity import Replay
 from sim.scene import Scene
 from spec.errors import OptionError, SuiteError, check_number
 
+#: The audit command's defaults (its grid, models, km, runs and workers), read from its options.
+DEFAULTS: dict[str | None, Any] = {param.name: param.default for param in audit_command.params}
+
 
 class StepTimer:
     """Wall seconds and count of every ``Scene.step`` while installed (a context manager), and of those taken in
@@ -96,11 +99,10 @@ def audit_one_model(model: str, km: float, cells: str, out: Path) -> tuple[float
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--km", type=float, default=1.0, help="km per combination (one run each)")
-    defaults: dict[str | None, Any] = {param.name: param.default for param in audit_command.params}
-    parser.add_argument("--cells", default=str(defaults["cells"]), help="cell lengths, comma-separated")
-    parser.add_argument("--default-km", type=float, default=float(defaults["km"]) * int(defaults["runs"]),
+    parser.add_argument("--cells", default=str(DEFAULTS["cells"]), help="cell lengths, comma-separated")
+    parser.add_argument("--default-km", type=float, default=float(DEFAULTS["km"]) * int(DEFAULTS["runs"]),
                         help="km per combination of the default audit (its --km x --runs)")
-    parser.add_argument("--workers", type=int, default=int(defaults["workers"]),
+    parser.add_argument("--workers", type=int, default=int(DEFAULTS["workers"]),
                         help="processes the default audit runs on (its --workers)")
     args = parser.parse_args()
     try:
@@ -116,8 +118,7 @@ def measure(args: argparse.Namespace) -> None:
     check_number("--default-km", args.default_km, positive=True)
     check_number("--workers", args.workers, low=1)
     cells_m = audit_cells(args.cells)  # the audit's own check of the list: one line naming the bad length
-    defaults: dict[str | None, Any] = {param.name: param.default for param in audit_command.params}
-    models = names("--model", str(defaults["model_text"]))
+    models = names("--model", str(DEFAULTS["model_text"]))
     per_model = len(AuditPlan(models=models[:1], cells_m=cells_m).configs())
     console = Console(width=150)
     console.print(f"overtake audit --model M --cells {args.cells} --km {args.km} --runs 1 --engines interpreter "
