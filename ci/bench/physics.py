@@ -9,7 +9,7 @@ replays' alike), and prints per model: km driven, wall seconds, physics steps, t
 default audit (``--default-km`` per combination, by default the command's own ``--km`` x ``--runs``) takes at that
 rate on ``--workers`` processes, in all, in physics alone (the floor below which the audit's closed loop cannot go at
 this fidelity on this machine) and in the drives' physics without the missed-opportunity replays (the floor if those
-were dropped). The timer costs about a microsecond a step.
+were dropped).
 """
 
 from __future__ import annotations
