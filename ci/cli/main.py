@@ -68,6 +68,8 @@ def main() -> None:
         click.echo(f"overtake: error: {error.format_message()}", err=True)
         sys.exit(error.exit_code)
     except (Interrupted, click.exceptions.Abort, KeyboardInterrupt) as signalled:  # the latter: a cancelled check
+        if isinstance(signalled.__cause__, EOFError) and received() is None:  # click makes any EOFError an Abort:
+            _failed(signalled.__cause__)  # a pipe closed under us (a helper process died) is no Ctrl-C
         _stopped(signalled.signum if isinstance(signalled, Interrupted) else received())
     except SuiteError as error:
         click.echo(f"overtake: error: {error}", err=True)
@@ -75,11 +77,16 @@ def main() -> None:
     except Exception as error:
         if received() is not None:  # a signal raised inside a native call arrives wrapped (ctypes.ArgumentError)
             _stopped(received())
-        if os.environ.get("OVERTAKE_DEBUG"):
-            raise
-        click.echo(f"overtake: internal error: {type(error).__name__}: {error} (set OVERTAKE_DEBUG=1 for details)",
-                   err=True)
-        sys.exit(ExitCode.ENGINE_FAILED)
+        _failed(error)
+
+
+def _failed(error: BaseException) -> NoReturn:
+    """An error of ours, not of the input: one line and exit 5, or the traceback with OVERTAKE_DEBUG set."""
+    if os.environ.get("OVERTAKE_DEBUG"):
+        raise error
+    click.echo(f"overtake: internal error: {type(error).__name__}: {error} (set OVERTAKE_DEBUG=1 for details)",
+               err=True)
+    sys.exit(ExitCode.ENGINE_FAILED)
 
 
 if __name__ == "__main__":

@@ -19,8 +19,10 @@ import enum
 import functools
 import logging
 import os
+import secrets
 import shutil
 import signal
+import sys
 import tempfile
 import threading
 from collections.abc import Callable, Generator, Iterator, Sequence
@@ -136,7 +138,7 @@ def _run_jobs(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: Exe
         with contextlib.ExitStack() as stack:
             call = fn
             if progress:
-                manager = SyncManager()
+                manager = SyncManager(address=_progress_address())
                 manager.start(worker_setup)  # the progress queue's server process dies with the campaign too
                 stack.callback(manager.shutdown)
                 queue = manager.Queue()
@@ -151,6 +153,15 @@ def _run_jobs(fn: Callable[..., R], jobs: Sequence[tuple[Any, ...]], choice: Exe
             except BaseException:  # an interrupt, a failed job, or a consumer that stopped: nothing queued starts
                 _stop(pool)
                 raise
+
+
+def _progress_address() -> str | None:
+    """Where the progress queue's server listens: on Linux, a socket in the abstract namespace, which has no file and
+    so no length limit from TMPDIR (multiprocessing's default is a file under TMPDIR, and a Unix socket's path may
+    not exceed 107 bytes: a long TMPDIR made every campaign on 2 workers fail); elsewhere multiprocessing's default."""
+    if not sys.platform.startswith("linux"):
+        return None
+    return f"\0overtake-progress-{os.getpid()}-{secrets.token_hex(8)}"
 
 
 def worker_setup() -> None:

@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
+import click
 import pytest
 
+from ci.cli import main as entry
+from spec.errors import ExitCode
 from spec.library import builtin
 from tests.conftest import run_cli as run
 
@@ -153,3 +157,21 @@ def test_plan_on_a_finer_grid_from_the_file_or_the_option(tmp_path: Path) -> Non
         assert len(clash.stderr.strip().splitlines()) == 1
     odd = run("plan", plain, "--cell-m", "10")
     assert odd.returncode == 2 and "not a whole number" in odd.stderr and len(odd.stderr.strip().splitlines()) == 1
+
+
+def test_an_end_of_file_inside_a_command_is_an_internal_error_not_an_interrupt(
+        monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    """click turns every EOFError into its Abort, which reads as Ctrl-C; a closed pipe (a helper process that died)
+    must say what it was and exit 5."""
+    @click.command("broken")
+    def broken() -> None:
+        raise EOFError("the pipe closed")
+
+    monkeypatch.setitem(entry.cli.commands, "broken", broken)
+    monkeypatch.setattr(sys, "argv", ["overtake", "broken"])
+    monkeypatch.delenv("OVERTAKE_DEBUG", raising=False)
+    with pytest.raises(SystemExit) as ended:
+        entry.main()
+    err = capsys.readouterr().err
+    assert ended.value.code == ExitCode.ENGINE_FAILED, err
+    assert "internal error: EOFError: the pipe closed" in err and "interrupted" not in err

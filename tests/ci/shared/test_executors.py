@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import operator
+import os
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -61,6 +64,25 @@ def test_progress_reported_by_a_job_reaches_this_process_while_it_runs(choice: E
     heard: list[tuple[int, int]] = []
     assert dict(run_jobs(report_twice, JOBS, choice, heard.append)) == EXPECTED
     assert sorted(heard) == sorted((i, k) for i in range(len(JOBS)) for k in (1, 2))
+
+
+PROGRESS_ON_TWO_WORKERS = """
+from ci.shared.executors import ExecutorChoice, ExecutorKind, run_jobs
+from tests.ci.shared.test_executors import report_twice
+heard = []
+done = dict(run_jobs(report_twice, [(1, 2), (3, 4)], ExecutorChoice(ExecutorKind.PROCESSES, 2), heard.append))
+print(done == {0: 3, 1: 7} and sorted(heard) == [(1, 1), (1, 2), (3, 1), (3, 2)])
+"""
+
+
+def test_progress_on_two_workers_runs_under_a_temporary_folder_too_long_for_a_unix_socket(tmp_path: Path) -> None:
+    """A Unix socket's path has at most 107 bytes; the progress queue's server must not need one under TMPDIR (a
+    fresh process: multiprocessing keeps its first temporary folder for the life of the process)."""
+    long = tmp_path / ("t" * 110)
+    long.mkdir()
+    done = subprocess.run([sys.executable, "-c", PROGRESS_ON_TWO_WORKERS], env={**os.environ, "TMPDIR": str(long)},
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 0 and done.stdout.strip() == "True", done.stderr
 
 
 def mark_and_wait(folder: str, index: int) -> int:
