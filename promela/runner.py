@@ -205,13 +205,14 @@ def search(problem: Problem, strategy: Strategy, timeout_s: float | None = None,
 
     A cached verifier that will not start or answers nonsense is rebuilt once; if the rebuilt one
     fails too, the engine error names the cache to clear. Without a time limit pan gets
-    ``DEFAULT_TIMEOUT_S``."""
+    ``DEFAULT_TIMEOUT_S``, counted from when the verifier is built: a compile (once per shape, on a busy machine
+    seconds) is not the search's time, and counting it made a first search ``incomplete`` by load alone."""
     check_tools()
-    started = time.perf_counter()
     limit = DEFAULT_TIMEOUT_S if timeout_s is None else timeout_s
     shape = shape_of(problem) if problem.scenario.sound is None else sound_model.shape_of(problem)
     for attempt in (1, 2):
         built = verifier(shape, strategy)
+        started = time.perf_counter()
         try:
             return _search_with(built, problem, limit, started, serve)
         except (EngineError, OSError) as err:

@@ -224,6 +224,22 @@ def test_search_through_a_stand_in_reads_a_clean_no_plan(fakes: Path, monkeypatc
     assert runner.search(PROBLEM, Strategy.SHORTEST, serve=serve).status is Status.NO_PLAN_WITHIN_HORIZON
 
 
+@pytest.mark.requires_spin
+def test_the_time_limit_counts_the_search_not_the_verifiers_build(fakes: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Unserved: the stand-in's run is timed here (a served run's limit is kept by the real server, from the same
+    start)."""
+    fake = fake_pan(fakes, "exit 0", recorded("no_plan-bfs"))
+    fake.write_text(fake.read_text().replace("#!/bin/sh\n", "#!/bin/sh\nsleep 0.2\n"))
+
+    def slow_build(shape: object, strategy: Strategy) -> runner.Verifier:
+        time.sleep(2.5)  # a compile on a busy machine, longer than the limit
+        return runner.Verifier(fake, False)
+
+    monkeypatch.setattr(runner, "verifier", slow_build)
+    done = runner.search(PROBLEM, Strategy.SHORTEST, timeout_s=2.0, serve=False)  # the search: about 0.2 s
+    assert done.status is Status.NO_PLAN_WITHIN_HORIZON, done.detail
+
+
 # -- the replay and the compile: their failures are engine errors -------------------------------------------------
 @pytest.mark.parametrize(("ending", "said"), [
     ((-9, "INIT 0 0 0 | 12 |\n"), r"replay of pan's trail failed \(signal 9 \(SIGKILL\)\): INIT"),
