@@ -9,7 +9,7 @@ from typing import Any
 import click
 from rich.table import Table
 
-from ci.cli.common import err, faults_options, out, print_json, print_table
+from ci.cli.common import err, faults_options, print_json, print_paths, print_table
 from ci.shared.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.shared.options import (
     CELL_M,
@@ -189,7 +189,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
             cost_table.add_row(f"{c.cell_m:g}", c.model, c.engine, str(c.n), figure(c.median_ms, 2),
                                figure(c.p99_ms, 2), figure(c.median_states, 0), str(c.incomplete))
         print_table(cost_table, 3, "audit.md and audit.json")
-        out.print("written: " + ", ".join(str(p) for p in paths))
+        print_paths("written:", paths)
     sys.exit(ExitCode.OK)
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -39,6 +40,13 @@ def _pipe_width() -> int | None:
 
 out = Console(highlight=False, width=_pipe_width())
 err = Console(stderr=True, highlight=False)
+
+
+def print_paths(heading: str, paths: Sequence[object]) -> None:
+    """``heading``, then each path on a line of its own, never folded (a folded path cannot be copied)."""
+    out.print(heading)
+    for path in paths:
+        out.print(f"  {path}", soft_wrap=True)
 
 MODEL = click.Choice([m.value for m in ModelChoice])
 

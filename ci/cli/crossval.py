@@ -14,7 +14,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColum
 from rich.table import Table
 from rich.text import Text
 
-from ci.cli.common import cell_option, err, horizon_option, out, print_json, print_table, sound_options
+from ci.cli.common import cell_option, err, horizon_option, out, print_json, print_paths, print_table, sound_options
 from ci.shared.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.shared.options import CHECK_COUNT, MAX_WORKERS, REPRODUCERS, SCHEDULER, SECONDS, SEED, WORKERS, names
 from ci.shared.options import out_dir as checked_out_dir
@@ -163,7 +163,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
         print_json(data)
     else:
         _print(data, wall_s)
-        out.print("written: " + ", ".join(str(p) for p in paths))
+        print_paths("written:", paths)
     if not summary.all_held:  # a failure is a disagreement; a verdict not reached alone claims nothing
         sys.exit(ExitCode.DISAGREE if summary.any_failed else ExitCode.INCOMPLETE)
     sys.exit(ExitCode.COVERAGE_MISSED if summary.missed() else ExitCode.OK)

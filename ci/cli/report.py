@@ -9,7 +9,7 @@ from pathlib import Path
 
 import click
 
-from ci.cli.common import err, out
+from ci.cli.common import err, out, print_paths
 from ci.shared.options import FRAMED, out_file
 from spec.errors import OptionError
 
@@ -84,8 +84,7 @@ def report(folders: tuple[Path, ...], out_path: str, markdown_path: str | None, 
         written.append(md_file)
     for finding in made.headline.findings:
         out.print(f"- {finding}")
-    out.print(f"read {len(made.found)} campaign folder(s), skipped {len(made.skipped)}; wrote "
-              + ", ".join(str(p) for p in written))
+    print_paths(f"read {len(made.found)} campaign folder(s), skipped {len(made.skipped)}; wrote:", written)
 
 
 COMMANDS = (report,)
