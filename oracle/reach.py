@@ -277,7 +277,7 @@ def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, c
     sound = _sound(scenario)
     cars = _drivers(scenario)
     end_s = sum(float(ACTION_RULES[a].duration_s) for a in actions) + CONTINUATION_S
-    b, e = sound.bounds, sound.bounds.sensing_error_m
+    b, e = sound.bounds, sound.start_error_m  # the sensing error and the snapshot's age (``Sound.age_m``)
     ev = sound.tracking.speed_mps
 
     def interval(c: Vehicle) -> tuple[float, float]:

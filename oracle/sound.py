@@ -80,7 +80,7 @@ class PaperCells:
     def __init__(self, problem: Problem) -> None:
         sound, grid = problem.scenario.sound, problem.grid
         b = sound.bounds if sound is not None else None
-        zero = b is not None and not b.phantoms and b.sensing_error_m == 0 and all(
+        zero = b is not None and not b.phantoms and b.sensing_error_m == 0 and b.latency_s == 0 and all(
             s.low_mps == s.high_mps == grid.speed for s in (b.same_mps, b.oncoming_mps))
         if not zero:
             raise ValueError("the paper's cell rules hold only with zero bounds (common speed, no error, no phantoms)")

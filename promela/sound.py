@@ -227,7 +227,7 @@ def _tables(shape: SoundShape, table: SoundTable) -> str:
         f"static const double FOLLOWER_M = {_f(follower_limit_m(0.0, s))};  /* spec.sound.follower_limit_m */",
         f"static const double SAME_LOW = {_f(b.same_mps.low_mps)}, SAME_HIGH = {_f(b.same_mps.high_mps)};",
         f"static const double ONC_LOW = {_f(b.oncoming_mps.low_mps)}, ONC_HIGH = {_f(b.oncoming_mps.high_mps)};",
-        f"static const double SENSING_ERROR_M = {_f(b.sensing_error_m)};",
+        f"static const double START_ERROR_M = {_f(sound.start_error_m)};  /* sensing error + age */",
         f"static const double SPEEDS_MPS[N_SPEEDS] = {{{', '.join(map(_f, table.speeds_mps))}}};  /* for reading */",
         f"static const double GAIN_M[N_SPEEDS] = {{{', '.join(map(_f, table.gain_m))}}};",
         f"static const int ACTION_SPEED[CONTINUATION] = {{{action_speed}}};",
@@ -483,8 +483,8 @@ static void sound_load(void)
 		lo = measured ? v[at++] : LEFT_EXTENT[lane][cell][0];
 		hi = measured ? v[at++] : LEFT_EXTENT[lane][cell][1];
 		if (!(lo <= hi)) { sound_malformed("a left-lane interval"); }
-		S_LO[n_same] = lo - SENSING_ERROR_M;
-		S_HI[n_same] = hi + SENSING_ERROR_M;
+		S_LO[n_same] = lo - START_ERROR_M;
+		S_HI[n_same] = hi + START_ERROR_M;
 		n_same++;
 	}
 	n_onc = 0;
@@ -494,8 +494,8 @@ static void sound_load(void)
 		lo = measured ? v[at++] : ONCOMING_EXTENT[cell][0];
 		hi = measured ? v[at++] : ONCOMING_EXTENT[cell][1];
 		if (!(lo <= hi)) { sound_malformed("a right-lane interval"); }
-		O_LO[n_onc] = lo - SENSING_ERROR_M;
-		O_HI[n_onc] = hi + SENSING_ERROR_M;
+		O_LO[n_onc] = lo - START_ERROR_M;
+		O_HI[n_onc] = hi + START_ERROR_M;
 		n_onc++;
 	}
 	for (j = 0; j < N_PHANTOMS; j++)  /* the unseen stretch from the view's edge outwards */

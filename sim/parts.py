@@ -176,7 +176,8 @@ class DriveConfig:
 
     def parts(self, observers: tuple[Observer, ...] = ()) -> Parts:
         """The assembly this configuration names."""
-        sound = Sound(self.bounds) if self.model == "sound" else None
+        # the sound model plans for the snapshot's age at the plan's start: the planner's time in the loop
+        sound = Sound(replace(self.bounds, latency_s=LOOP.plan_budget_s)) if self.model == "sound" else None
         planner = Planner(get_engine(self.engine), self.strategy, self.grid, sound)
         traffic, sensor = TRAFFIC_MODELS[self.traffic], SENSOR_MODELS[self.sensor]
         if self.traffic != "paper":

@@ -18,6 +18,7 @@ drive's seed, which every random part draws from.
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 import time
 from collections.abc import Callable
@@ -127,6 +128,7 @@ class Simulator:
         self.takeover: Takeover | None = None  # the fallback's take-over under way
         self.proved: Containment | None = None  # the containment of the last sound decision that was executed
         self.sweep: tuple[Reading, ...] | None = ()  # the last sweep the sensors delivered (None: it was dropped)
+        self.swept_at = (0.0, 0.0)  # when it was taken and where the AV was then, along the road from the start (m)
         # for the fallback: the nearest vehicles sensed ahead and behind in the left lane, ahead in the oncoming one
         self.lead: Nearest | None = None
         self.follower: Nearest | None = None
@@ -354,6 +356,7 @@ class Simulator:
         """A sweep: the sensors read the truth (through any fault injectors), and the steering fault moves on."""
         pose = self.car.pose()
         self.summary.sweeps += 1
+        self.swept_at = (self.summary.sim_time_s, self.origin_km * 1000 + pose.x_m)
         raw = self.sensor.read(in_range(pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming))
         if self.tracker is None:
             self.sweep = raw
@@ -428,17 +431,25 @@ class Simulator:
         """The last sweep's readings (a dropped sweep: none)."""
         return self.sweep or ()
 
-    def _sight(self, readings: tuple[Reading, ...], av_x_m: float) -> None:
+    def _sight(self, readings: tuple[Reading, ...], av_x_m: float, t_s: float | None = None) -> None:
         """The vehicles a plan is made knowing, for the paper's re-planning rule (``Sighting``), under the drive's
-        bounds (without any: the paper's world, every vehicle at the common speed, sensed exactly)."""
+        bounds (without any: the paper's world, every vehicle at the common speed, sensed exactly): ``readings`` taken
+        with the AV at ``av_x_m`` at ``t_s`` (default: now)."""
         bounds = self.watch.bounds if self.watch is not None else PROFILES["paper"]
-        self.sighted = Sighting(readings, bounds, av_x_m, self.summary.sim_time_s)
+        self.sighted = Sighting(readings, bounds, av_x_m, self.summary.sim_time_s if t_s is None else t_s)
 
     def _sensed_anew(self) -> bool:
         """Whether the last sweep shows a vehicle the plan under way was not made knowing: re-plan (the paper's rule;
-        readings carry no identity, so "new" is a reading no vehicle of the plan's snapshot can explain)."""
+        readings carry no identity, so "new" is a reading no vehicle of the plan's snapshot can explain). Its readings
+        are placed from where the AV was when it was taken, at that time: an action may end after the sweep (a
+        decision acts a control step after its snapshot, and actions on 5.25 m cells are not whole sweeps)."""
         assert self.sighted is not None
-        return self.sighted.new(self._sense(), self.car.pose().x_m, self.summary.sim_time_s)
+        return self.sighted.new(self._sense(), *self._where_swept())
+
+    def _where_swept(self) -> tuple[float, float]:
+        """Where the AV was when the last sweep was taken (in the road's frame now) and when."""
+        t_s, along_m = self.swept_at
+        return along_m - self.origin_km * 1000, t_s
 
     def _snapshot(self) -> tuple[Reading, ...]:
         """The last sweep as a decision's snapshot; a dropped sweep is a snapshot that cannot be read."""
@@ -524,6 +535,16 @@ class Simulator:
         self._sight(readings, pose.x_m)
         return self._execute(answer.actions, answer.states, seen, pose.speed_mps, frame_mps)
 
+    def _while_planning(self) -> bool:
+        """A sound decision's snapshot ages while the planner runs: the world moves on for ``LOOP.plan_budget_s``
+        (one control step) before the decision acts, the AV keeping its reference speed in its lane; the sound model
+        plans for it (its bounds' ``latency_s``: ``spec.sound.Sound.age_m``). The paper model's plans act at their
+        snapshot's instant, as its model means (its prediction starts there). The time the planner took on the
+        machine is counted apart (``plan_ms``; the audit counts the plans over the budget). False on a collision
+        meanwhile."""
+        self.doing = f"planning ({self.doing})"
+        return self.executor.hold(LOOP.plan_budget_s, self.executor.v_ref_mps, self._tick)
+
     def _sensing_stop(self, pending: tuple[Action, ...], err: ScenarioError) -> bool:
         """The paper model's snapshot could not be read (or made no scenario): the plan under way goes on, else the
         stop is recorded and the AV waits in lane."""
@@ -570,21 +591,34 @@ class Simulator:
             return self._fallback(f"sensing: {err.reason}")
         answer = self.planner.plan(scenario)
         self._planned(answer, scenario, lane)
+        act = self._sound_choice(answer, scenario, readings, pose)
+        if not self._while_planning():
+            return False
+        return act()
+
+    def _sound_choice(self, answer: Answer, scenario: Scenario, readings: tuple[Reading, ...],
+                      pose: Pose) -> Callable[[], bool]:
+        """What a sound decision does, chosen when its snapshot (``readings``, the AV at ``pose``) was taken: the
+        plan, a step in lane, what the last decision proved, or the fallback; it acts once the planner's time is over
+        (``_while_planning``)."""
         why = answer.status.value
         if answer.status is Status.PLAN and answer.actions:
             if not self._refused(answer.actions, self.pending):
-                return self._sound_execute(answer.actions, readings, pose.speed_mps, f"plan {self.summary.plans}")
+                self._sight(readings, pose.x_m)
+                return functools.partial(self._sound_execute, answer.actions, pose.speed_mps,
+                                         f"plan {self.summary.plans}")
             why = "an overtake refused: the tracker holds a contradiction"
         elif answer.status not in (Status.PLAN, *NO_OVERTAKE):
             self._fail(FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
         step = keep_lane(problem_for(scenario, ModelKind.FINAL))
         if step is not None:
             self.summary.keep_lane_steps += 1
-            return self._sound_execute((step,), readings, pose.speed_mps, f"keeping the lane ({why})")
+            self._sight(readings, pose.x_m)
+            return functools.partial(self._sound_execute, (step,), pose.speed_mps, f"keeping the lane ({why})")
         if self.proved is not None and self.proved.sensed is None and self.proved.sense(
                 self.summary.sim_time_s, self.summary.km, pose.x_m, readings, self.doing) is None:
-            return self._keep_proved(why)
-        return self._fallback(f"{why}, and no safe step in lane")
+            return functools.partial(self._keep_proved, why)
+        return functools.partial(self._fallback, f"{why}, and no safe step in lane")
 
     def _keep_proved(self, why: str) -> bool:
         """No plan and no step from the fresh snapshot (its cells may be coarser than what the last decision knew),
@@ -595,7 +629,8 @@ class Simulator:
         pending, self.pending = self.pending, ()
         if pending:
             self.summary.kept_plans.append(self._event(FailureKind.PLANNER, why, "kept the rest of the last plan"))
-            return self._sound_execute(pending, (), self.car.pose().speed_mps, "the last plan, kept")
+            self._sight(self._sense(), *self._where_swept())
+            return self._sound_execute(pending, self.car.pose().speed_mps, "the last plan, kept")
         self.summary.minimal_risk_steps += 1
         self.doing = f"minimal-risk manoeuvre (the last decision's, {why})"
         self.enveloped = True
@@ -604,17 +639,15 @@ class Simulator:
         finally:
             self.enveloped = False
 
-    def _sound_execute(self, actions: tuple[Action, ...], readings: tuple[Reading, ...], speed_mps: float,
-                       what: str) -> bool:
-        """Execute a sound decision's actions from the car's own speed (its reference starts at the car), while
+    def _sound_execute(self, actions: tuple[Action, ...], speed_mps: float, what: str) -> bool:
+        """Execute a sound decision's actions from the speed it planned with (the reference starts at the car), while
         its containment holds as the AV senses it; a sensed breach ends it at once (after any sideways move), and the
-        next decision re-plans from a fresh snapshot."""
+        next decision re-plans from a fresh snapshot. The caller has sighted what the decision knew (``_sight``)."""
         self._hand_back()
         self.proved = self.containment
         # a breach sensed while a take-over was under way did not interrupt it; it ends this decision before its step
         self.interrupt = self.interrupt or (self.containment is not None and self.containment.sensed is not None)
         self.executor.reset_reference()
-        self._sight(readings or self._sense(), self.car.pose().x_m)
         # a breach sensed before the first step (while a take-over was handing back): no step
         executed = () if self.interrupt else actions[: LOOP.replan_after_actions]
         self.pending = actions[len(executed):]

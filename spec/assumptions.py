@@ -59,6 +59,10 @@ class Bounds:
     #: whether a same-direction vehicle behind the AV brakes for it (False: it keeps its speed whatever the AV does,
     #: and the AV must not drive slower than it may while it is near: ``spec.safety.Conflict.BEHIND``)
     followers_react: bool = True
+    #: how long the snapshot ages before the plan acts, seconds: the planner's time (``spec.physical.LOOP``'s
+    #: ``plan_budget_s``, one control step, in the closed loop; 0 for a plan that acts at the snapshot's instant). The
+    #: world moves on meanwhile and the AV keeps its reference speed; ``spec.sound.Sound.age_m`` turns it into metres.
+    latency_s: float = 0.0
 
     def speeds(self, lane: Lane) -> SpeedBounds:
         """The bounds of the vehicles of ``lane`` (the left lane carries same-direction traffic, the right oncoming)."""
@@ -90,7 +94,14 @@ def check_bounds(bounds: Bounds, key: Callable[[str], str] = lambda name: f"--{n
     error = check_number(key("sensing_error_m"), bounds.sensing_error_m)
     if error > float(WINDOW_M):
         raise OptionError(key("sensing_error_m"), error, f"larger than the sensed window ({float(WINDOW_M):g} m)")
+    check_number(key("latency_s"), bounds.latency_s, high=MAX_LATENCY_S)
     return bounds
+
+
+#: The longest planning latency the bounds take, seconds: 15 control steps, far above the closed loop's budget (one). A
+#: snapshot that old is no longer one to plan from: under the default bounds an oncoming vehicle closes more than half a
+#: paper cell on the AV meanwhile (``spec.sound.Sound.age_m``: 12.3 m).
+MAX_LATENCY_S = 0.5
 
 
 _COMMON_MPS = TRAFFIC.speed_mps

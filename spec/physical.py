@@ -136,9 +136,22 @@ class LoopSpec:
     tolerance_unit_m: float = _PAPER_CELL_M  # tolerances count cells of the paper's grid, whatever the planner's
     wait_s: float = float(PAPER_GRID.time_unit_s)  # driving on without a plan (the paper's 3 s time unit)
 
+    @property
+    def control_dt_s(self) -> float:
+        """One control step: the controller reads and commands once per this many seconds."""
+        return self.physics_dt_s * self.control_every_steps
+
+    @property
+    def plan_budget_s(self) -> float:
+        """A decision's planning time, in simulated time, and the most it may take on the machine: one control step.
+        The controller acts once per control step, so a plan made from a snapshot acts at the next step at the
+        earliest; the world moves on meanwhile (``spec.assumptions.Bounds.latency_s``). A plan that took longer on
+        the machine than this broke the assumption (the audit counts it)."""
+        return self.control_dt_s
+
 
 ROAD, CAR, SENSORS, TRAFFIC, LOOP = RoadSpec(), CarSpec(), SensorSpec(), TrafficSpec(), LoopSpec()
 SPEEDS, IDM, EVENTS, NOISE = SpeedSpec(), IdmSpec(), EventSpec(), NoiseSpec()
 
 #: The highest stop rate that means anything: a stop starts at most once per vehicle per control step (a chance of 1).
-MAX_STOP_RATE_PER_H = 3600 / (LOOP.physics_dt_s * LOOP.control_every_steps)
+MAX_STOP_RATE_PER_H = 3600 / LOOP.control_dt_s

@@ -44,7 +44,7 @@ from spec.assumptions import DEFAULT_PROFILE, Bounds, Phantom, check_bounds, par
 from spec.cells import left_extent_m, oncoming_extent_m
 from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING, MinimalRisk, Piece, Reference, Tracking
 from spec.errors import OptionError, check_number
-from spec.grid import Grid
+from spec.grid import COMMON_SPEED_MPS, Grid
 from spec.lanes import Lane
 from spec.models import GoalRule
 from spec.motion import Ramp, action_speed_mps, ramp_gain_m, ramp_s
@@ -79,8 +79,39 @@ class Sound:
     oncoming_view_m: float | None = None
 
     def phantoms(self) -> tuple[Phantom, ...]:
-        """The phantoms of this snapshot: the bounds' own, the oncoming one where the view of that lane ended."""
-        return self.bounds.phantom_vehicles(self.oncoming_view_m)
+        """The phantoms of this snapshot: the bounds' own, the oncoming one where the view of that lane ended; each
+        nearer by ``age_m`` (a vehicle beyond the view at the snapshot may have come that much closer by the plan's
+        start), never past the AV (an oncoming vehicle that has passed it is behind it, out of the plan's way)."""
+        age = self.age_m
+        found = self.bounds.phantom_vehicles(self.oncoming_view_m)
+        if age == 0:
+            return found
+        return tuple(replace(p, dx_m=math.copysign(max(abs(p.dx_m) - age, PHANTOM_NEAREST_M), p.dx_m),
+                             why=f"{p.why}, aged {age:g} m") for p in found)
+
+    @property
+    def closing_mps(self) -> float:
+        """The fastest a vehicle within the bounds moves against the AV while the snapshot ages: the AV anywhere from
+        a standstill to its fastest action's speed plus its envelope's speed error (``Tracking.speed_mps``); an oncoming
+        vehicle at its top speed towards it, or a same-direction one at either end of its lane's speeds."""
+        b = self.bounds
+        av_top = max(float(r.speed_factor) for r in ACTION_RULES.values()) * float(COMMON_SPEED_MPS) \
+            + self.tracking.speed_mps
+        return max(b.oncoming_mps.high_mps + av_top, b.same_mps.high_mps, av_top - b.same_mps.low_mps)
+
+    @property
+    def age_m(self) -> float:
+        """How far any vehicle may move against the AV while the snapshot ages by the bounds' ``latency_s`` (the
+        plan acts that much later; the AV keeps its reference speed meanwhile): ``latency_s`` x ``closing_mps``.
+        Every sensed vehicle's interval is widened by it either way (``start_error_m``) and every phantom comes that
+        much nearer (``phantoms``); 0 without latency."""
+        return self.bounds.latency_s * self.closing_mps
+
+    @property
+    def start_error_m(self) -> float:
+        """How far a sensed vehicle's centre may be from its reading's interval at the plan's start: the sensing
+        error, plus the snapshot's age (``age_m``). Every engine widens a sensed vehicle's interval by this."""
+        return self.bounds.sensing_error_m + self.age_m
 
     def describe(self) -> str:
         b = self.bounds
@@ -90,17 +121,21 @@ class Sound:
         return (f"sound model, bounds {b.name}: same-direction {b.same_mps.low_mps:g}..{b.same_mps.high_mps:g} m/s, "
                 f"oncoming {b.oncoming_mps.low_mps:g}..{b.oncoming_mps.high_mps:g} m/s, sensing error "
                 f"{b.sensing_error_m:g} m, phantoms {'on' if b.phantoms else 'off'}{view}, followers "
-                f"{'react' if b.followers_react else 'keep their speed'}")
+                f"{'react' if b.followers_react else 'keep their speed'}"
+                + (f", latency {b.latency_s:g} s (vehicles {self.age_m:.3g} m on)" if b.latency_s else ""))
 
 
 #: The keys of a scenario file's ``bounds`` table (and the command line's options of the same names).
 BOUNDS_KEYS = ("profile", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
-               "oncoming_view_m")
+               "oncoming_view_m", "latency_s")
+#: How near the AV an aged phantom may come (``Sound.phantoms``): never onto it (Spin reads a phantom at 0 as none).
+PHANTOM_NEAREST_M = 1e-3
 
 
 def sound_from(base: Sound | None, profile_name: str | None = None, same: object = None, oncoming: object = None,
                sensing_error_m: object = None, phantoms: bool | None = None, av_speed_mps: object = None,
-               where: str = "--", followers_react: bool | None = None, oncoming_view_m: object = None) -> Sound:
+               where: str = "--", followers_react: bool | None = None, oncoming_view_m: object = None,
+               latency_s: object = None) -> Sound:
     """The sound model from a base (a file's, or None: the default profile), a named profile and overrides of its
     numbers; every value is checked, and bad input names the option or key (``where`` + its name)."""
     def key(name: str) -> str:
@@ -130,6 +165,9 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
             raise OptionError(key("followers_react"), followers_react, "must be true or false")
         bounds = replace(bounds, followers_react=followers_react)
         changed.append("followers_react")
+    if latency_s is not None:
+        bounds = replace(bounds, latency_s=check_number(key("latency_s"), latency_s))
+        changed.append("latency")
     if changed:
         bounds = replace(bounds, name=f"{bounds.name} (changed: {', '.join(changed)})",
                          source=f"{bounds.source}; changed by the user: {', '.join(changed)}")
@@ -160,7 +198,7 @@ def sound_from_table(table: object, where: str = "bounds") -> Sound:
             raise OptionError(f"{where}.{name}", table[name], f"unknown key (allowed: {', '.join(BOUNDS_KEYS)})")
     return sound_from(None, table.get("profile"), table.get("same_mps"), table.get("oncoming_mps"),
                       table.get("sensing_error_m"), table.get("phantoms"), table.get("av_speed_mps"), f"{where}.",
-                      table.get("followers_react"), table.get("oncoming_view_m"))
+                      table.get("followers_react"), table.get("oncoming_view_m"), table.get("latency_s"))
 
 
 def sound_to_table(sound: Sound) -> dict[str, object]:
@@ -170,6 +208,8 @@ def sound_to_table(sound: Sound) -> dict[str, object]:
                                 "oncoming_mps": [b.oncoming_mps.low_mps, b.oncoming_mps.high_mps],
                                 "sensing_error_m": b.sensing_error_m, "phantoms": b.phantoms,
                                 "followers_react": b.followers_react}
+    if b.latency_s:
+        table["latency_s"] = b.latency_s
     if sound.start_mps is not None:
         table["av_speed_mps"] = sound.start_mps
     if sound.oncoming_view_m is not None:
@@ -207,8 +247,8 @@ def vehicles(lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Gr
              left_m: tuple[Extent, ...] | None = None, right_m: tuple[Extent, ...] | None = None) -> tuple[
         Vehicle, ...]:
     """Every vehicle of a scenario (the AV starting in ``lane``) as an interval (``sensed_extents`` widened by the
-    sensing error), then the phantoms."""
-    e = sound.bounds.sensing_error_m
+    sensing error and the snapshot's age: ``Sound.start_error_m``), then the phantoms."""
+    e = sound.start_error_m
     out = []
     same, oncoming = sensed_extents(lane, left, right, grid, left_m, right_m)
     for i, (cell, (lo, hi)) in enumerate(zip(left, same, strict=True)):

@@ -14,8 +14,11 @@ import pytest
 from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 
+from spec.assumptions import profile
 from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
+from spec.library import builtin
+from spec.physical import LOOP
 from spec.scenario import Scenario, make_scenario, sensed
 from spec.sound import Sound, sensed_extents
 
@@ -91,3 +94,27 @@ def measured_like(rng: random.Random, scenario: Scenario) -> Scenario:
     pick = [(lo + a * (hi - lo), lo + a * (hi - lo) + b * (hi - lo) * (1 - a))
             for lo, hi in (*same, *oncoming) for a, b in [(rng.random(), rng.choice((0.0, 0.3)))]]
     return sensed(scenario, tuple(pick[:len(same)]), tuple(pick[len(same):]))
+
+
+#: The shortest plan's length where a snapshot's age decides it (``aged_witness``): acting at the snapshot's instant,
+#: and one control step later (the closed loop's planning budget).
+AGED_SHORTEST_LENGTH = {0.0: 3, LOOP.plan_budget_s: 4}
+
+
+def aged_witness(latency_s: float) -> Scenario:
+    """One vehicle ahead, measured at exactly 10 m, under the paper profile with ``latency_s``: acting at once the
+    shortest overtake is three actions, one control step later (the loop's budget; ``Sound.age_m``: 0.75 m either
+    way) four. Found by scanning the measured position over 0..60 m by 0.25 m with the interpreter."""
+    return replace(builtin("one_target").load(), left_m=((10.0, 10.0),),
+                   sound=Sound(replace(profile("paper"), latency_s=latency_s)))
+
+
+def check_aged_witness(engine: str, latency_s: float) -> None:
+    """``engine`` answers ``aged_witness(latency_s)`` as the interpreter does, with the shortest plan's length there."""
+    from oracle.planner import plan
+    from spec.answers import Status, Strategy
+
+    scenario = aged_witness(latency_s)
+    answer = plan(scenario, Strategy.SHORTEST, engine=engine)
+    assert answer.status is Status.PLAN and len(answer.actions) == AGED_SHORTEST_LENGTH[latency_s], answer
+    assert answer.actions == plan(scenario, Strategy.SHORTEST).actions

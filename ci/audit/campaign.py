@@ -187,6 +187,9 @@ class Row:
     losses_of_control: int = 0  # the AV spun or left the road (``spec.faults.lost_control``)
     unreadable: int = 0  # snapshots that could not be read (a sensing stop, never a failure)
     faults: dict[str, dict[str, int]] = field(default_factory=dict)  # kind -> started, sweeps changed, failures
+    #: plans the planner took longer for on this machine than the loop's budget (``LOOP.plan_budget_s``), which the
+    #: drive counted as that long (``sim.simulator``): each a plan that would have acted late (machine-dependent)
+    late_plans: int = 0
 
     def per_1000_km(self, count: float) -> float:
         return 1000 * count / self.km if self.km else math.nan
@@ -256,7 +259,8 @@ class Row:
                 "keep_lane_steps": self.keep_lane_steps, "minimal_risk_steps": self.minimal_risk_steps,
                 "takeovers": self.takeovers, "takeovers_after_breach": self.takeovers_after_breach,
                 "waits_without_plan": self.waits_without_plan, "losses_of_control": self.losses_of_control,
-                "unreadable_snapshots": self.unreadable, "faults": self.faults}
+                "unreadable_snapshots": self.unreadable, "faults": self.faults, "late_plans": self.late_plans,
+                "plan_budget_ms": _num(1000 * LOOP.plan_budget_s)}
 
 
 def figure(value: float | None, digits: int = 1) -> str:
@@ -318,7 +322,8 @@ def _row(key: Key, runs: list[RunSummary]) -> Row:
                sum(r.minimal_risk_steps for r in runs), sum(len(r.takeovers) for r in runs),
                sum(t.after_breach for r in runs for t in r.takeovers), sum(len(r.planner_failures) for r in runs),
                sum(len(r.of_kind(FailureKind.LOSS_OF_CONTROL)) for r in runs),
-               sum(len(r.of_kind(FailureKind.SENSING)) for r in runs), _fault_counts(runs))
+               sum(len(r.of_kind(FailureKind.SENSING)) for r in runs), _fault_counts(runs),
+               late_plans=sum(m > 1000 * LOOP.plan_budget_s for m in plan_ms))
 
 
 def _at_most(edge: float | None, largest: float) -> float | None:
@@ -451,8 +456,9 @@ def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any])
              "| cell m | traffic | sensing | model | runs | km | collisions | per 1,000 km | near misses | "
              "per 1,000 km | overtakes not started, replays that succeeded (checked) | missed per 1,000 km (est.) | "
              "delayed per 1,000 km (est.) | "
-             "traffic collisions | min gap ahead m | min gap oncoming m | violations | plan ms median |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "traffic collisions | min gap ahead m | min gap oncoming m | violations | plan ms median | "
+             f"plans over the {1000 * LOOP.plan_budget_s:.0f} ms budget |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in audit_rows:
         lines.append(f"| {r.cell_m:g} | {r.traffic} | {r.sensing} | {label(r)} | {r.runs} | {r.km:.1f} | "
                      f"{r.collisions} | "
@@ -460,7 +466,7 @@ def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any])
                      f"{r.opportunity_total('missed')} ({r.opportunity_total('checked')}) | "
                      f"{figure(r.missed_per_1000_km)} | {figure(r.delayed_per_1000_km)} | "
                      f"{r.traffic_collisions} | {figure(r.min_gap_left_m, 2)} | {figure(r.min_gap_oncoming_m, 2)} | "
-                     f"{r.violations} | {figure(r.plan_ms_median, 2)} |")
+                     f"{r.violations} | {figure(r.plan_ms_median, 2)} | {r.late_plans} |")
     lines += models_markdown(audit_rows)
     if any(r.faults for r in audit_rows):
         lines += ["", "## Faults injected (docs/faults.md) and the failures attributed to them", "",

@@ -169,13 +169,13 @@ def abbrev(answer: Answer, compact: bool = False) -> str:
 
 
 SOUND_OPTIONS = ("bounds", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
-                 "oncoming_view_m")
+                 "oncoming_view_m", "latency_s")
 
 
 def sound_options(command: Any) -> Any:
     """The sound model's options, handed to the command as one ``sound`` argument: a function that puts the chosen
     model on a scenario (unchanged when none of them is given and the file has no ``bounds`` table)."""
-    from ci.shared.options import METRES, SPEED
+    from ci.shared.options import LATENCY, METRES, SPEED
 
     def wrapper(**kwargs: Any) -> Any:
         given = {k: kwargs.pop(k) for k in SOUND_OPTIONS}
@@ -199,6 +199,9 @@ def sound_options(command: Any) -> Any:
         click.option("--oncoming-view-m", type=METRES, default=None, help="Sound model: how far the snapshot saw "
                      "the oncoming lane (a left-lane vehicle hid it from there on; the oncoming phantom stands "
                      "there). Default: the front-right sensor's range."),
+        click.option("--latency-s", type=LATENCY, default=None, help="Sound model: how long the snapshot ages "
+                     "before the plan acts (the planner's time; the closed loop's is one control step, 1/30 s). "
+                     "Default: 0, the profile's."),
     )):
         wrapper = decorate(wrapper)
     return wrapper
@@ -206,11 +209,12 @@ def sound_options(command: Any) -> Any:
 
 def with_sound(scenario: Scenario, bounds: str | None, same_mps: str | None, oncoming_mps: str | None,
                sensing_error_m: float | None, phantoms: bool | None, av_speed_mps: float | None,
-               followers_react: bool | None = None, oncoming_view_m: float | None = None) -> Scenario:
+               followers_react: bool | None = None, oncoming_view_m: float | None = None,
+               latency_s: float | None = None) -> Scenario:
     """``scenario`` under the sound model the options (over the file's ``bounds``) choose; unchanged without any."""
     if all(v is None for v in (bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
-                               followers_react, oncoming_view_m)):
+                               followers_react, oncoming_view_m, latency_s)):
         return scenario
     sound = sound_from(scenario.sound, bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
-                       followers_react=followers_react, oncoming_view_m=oncoming_view_m)
+                       followers_react=followers_react, oncoming_view_m=oncoming_view_m, latency_s=latency_s)
     return replace(scenario, sound=sound)

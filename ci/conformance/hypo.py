@@ -35,6 +35,7 @@ from spec.errors import ScenarioError
 from spec.files import scenario_from_dict
 from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
+from spec.physical import LOOP
 from spec.scenario import Scenario, make_scenario, sensed
 from spec.sound import Sound, sensed_extents
 
@@ -69,11 +70,15 @@ def _speed_choices() -> tuple[SpeedBounds, ...]:
 #: The bounds the hypothesis source draws with each scenario (``--model sound`` with no bounds option), stated: each
 #: lane's speeds from the paper profile's single speed to the default profile's interval (the spread traffic's
 #: cut-off), in three steps (the ends and halfway); the sensing error none or the default profile's; phantoms on or
-#: off; followers that react or keep their speed. A lattice, not a continuum: every distinct set of bounds is a
-#: verifier Spin compiles (72 here, cached), and the ends are the profiles the suite ships.
+#: off; followers that react or keep their speed; a planning latency of none or one control step (``LATENCY_CHOICES``).
+#: A lattice, not a continuum: every distinct set of bounds is a verifier Spin compiles (144 here, cached), and the
+#: ends are the profiles the suite ships.
 SPEED_CHOICES = _speed_choices()
 ERROR_CHOICES = (assumptions.PROFILES["paper"].sensing_error_m,
                  assumptions.PROFILES[assumptions.DEFAULT_PROFILE].sensing_error_m)
+#: The planning latency: none (the plan acts at the snapshot's instant) or the closed loop's budget (one control step,
+#: ``spec.physical.LOOP.plan_budget_s``): the two the suite plans with.
+LATENCY_CHOICES = (0.0, LOOP.plan_budget_s)
 
 
 #: Where a snapshot's view of the oncoming lane may end (``Sound.oncoming_view_m``: a left-lane vehicle hides the lane
@@ -88,12 +93,12 @@ def drawn_sound(draw: st.DrawFn) -> Sound:
     """Bounds from the stated choices (shrinking towards the paper profile's)."""
     same, oncoming = draw(st.sampled_from(SPEED_CHOICES)), draw(st.sampled_from(SPEED_CHOICES))
     error, phantoms = draw(st.sampled_from(ERROR_CHOICES)), draw(st.sampled_from((True, False)))
-    react = draw(st.sampled_from((True, False)))
+    react, latency = draw(st.sampled_from((True, False))), draw(st.sampled_from(LATENCY_CHOICES))
     name = (f"drawn: same {same.low_mps:g}..{same.high_mps:g}, oncoming {oncoming.low_mps:g}..{oncoming.high_mps:g}, "
             f"error {error:g} m, phantoms {'on' if phantoms else 'off'}, followers "
-            f"{'react' if react else 'keep their speed'}")
-    source = "drawn by the hypothesis source (ci.conformance.hypo.SPEED_CHOICES, ERROR_CHOICES)"
-    return Sound(Bounds(name, same, oncoming, error, phantoms, source, react))
+            f"{'react' if react else 'keep their speed'}, latency {latency:g} s")
+    source = "drawn by the hypothesis source (ci.conformance.hypo.SPEED_CHOICES, ERROR_CHOICES, LATENCY_CHOICES)"
+    return Sound(Bounds(name, same, oncoming, error, phantoms, source, react, latency))
 
 
 def scenarios(grid: Grid, horizon: int | None, model: Sound | str | None = None) -> st.SearchStrategy[Scenario]:

@@ -22,6 +22,7 @@ from typing import Any
 
 import click
 
+from spec.assumptions import MAX_LATENCY_S
 from spec.constants import MAX_HORIZON
 from spec.errors import OptionError, check_number
 from spec.physical import MAX_STOP_RATE_PER_H
@@ -136,6 +137,7 @@ FRACTION = Number(0.0, 1.0)  # a probability
 SPEED = Number(0.0, 100.0)  # m/s: no car on this road goes faster than 360 km/h
 DEGREES = Number(0.0, 90.0)  # a steering offset: past a right angle the wheels point backwards
 SCALE = Number(0.0, 100.0)  # a factor on the bounds' widths: 0 is the rule's middle speed alone
+LATENCY = Number(0.0, MAX_LATENCY_S)  # seconds a snapshot ages before the plan acts (spec.assumptions.MAX_LATENCY_S)
 
 
 def out_dir(option: str, path: str | Path) -> Path:

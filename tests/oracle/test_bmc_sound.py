@@ -31,7 +31,7 @@ from spec.lanes import Lane
 from spec.models import ModelKind
 from spec.scenario import Scenario, make_scenario, problem_for
 from spec.sound import Checks, Sound, vehicles
-from tests.conftest import measured_like, measured_pinned
+from tests.conftest import AGED_SHORTEST_LENGTH, check_aged_witness, measured_like, measured_pinned
 
 #: (profile, cell length, scenarios): 150 scenarios, both strategies each.
 SAMPLE = (("default", 21.0, 60), ("default", 10.5, 60), ("paper", 21.0, 15), ("paper", 10.5, 15))
@@ -221,3 +221,10 @@ def test_measured_intervals_agree(name: str) -> None:
     for scenario in [measured_pinned(sound_), *(measured_like(rng, _draw(rng, PAPER_GRID, sound_)) for _ in range(12))]:
         for strategy in STRATEGIES:
             _agree(scenario, strategy)
+
+
+@pytest.mark.parametrize("latency_s", sorted(AGED_SHORTEST_LENGTH))
+def test_z3_plans_for_the_snapshots_age_where_it_decides_the_plan(latency_s: float) -> None:
+    """Z3 reads the snapshot's age (``Sound.start_error_m``, the aged phantoms) as the interpreter does: where one
+    control step of age (the loop's budget) makes the shortest overtake one action longer, both answer that."""
+    check_aged_witness("z3", latency_s)

@@ -25,6 +25,7 @@ from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
 from spec.library import BUILTINS
 from spec.models import ModelKind
+from spec.physical import LOOP, SENSORS
 from spec.scenario import Problem, Scenario, make_scenario, problem_for, sensed
 from spec.sound import Sound, sensed_extents
 from tests.conftest import scenarios
@@ -37,13 +38,15 @@ PAIRS = 10_000 if CI else 1_000
 @st.composite
 def bounds(draw: st.DrawFn) -> Bounds:
     """Bounds around the common speed, from none at all to the default profile's spread, phantoms or not, followers
-    that react or keep their speed."""
+    that react or keep their speed, a plan that acts at the snapshot's instant or after the loop's planning budget
+    or one sweep period (the motions start where the aged snapshot lets them: ``Sound.start_error_m``)."""
     spread = draw(st.sampled_from((0.0, 0.5, 1.0, 2.1)))
     onc = draw(st.sampled_from((0.0, 1.0, 2.1)))
     error = draw(st.sampled_from((0.0, 0.5, 1.5)))
     phantoms, react = draw(st.booleans()), draw(st.booleans())
+    latency = draw(st.sampled_from((0.0, LOOP.plan_budget_s, 1 / SENSORS.sweep_hz)))
     return Bounds("drawn", SpeedBounds(7 - spread, 7 + spread), SpeedBounds(7 - onc, 7 + onc), error, phantoms,
-                  "drawn by the test", react)
+                  "drawn by the test", react, latency)
 
 
 def sound_scenarios(grid: Grid = PAPER_GRID) -> st.SearchStrategy[Scenario]:

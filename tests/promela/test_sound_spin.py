@@ -31,7 +31,7 @@ from spec.lanes import Lane
 from spec.models import ModelKind
 from spec.scenario import Scenario, make_scenario, problem_for
 from spec.sound import Checks, Sound
-from tests.conftest import measured_like, measured_pinned
+from tests.conftest import AGED_SHORTEST_LENGTH, check_aged_witness, measured_like, measured_pinned
 
 pytestmark = pytest.mark.requires_spin
 
@@ -238,3 +238,10 @@ def test_measured_intervals_agree(name: str) -> None:
     for scenario in [measured_pinned(sound_), *(measured_like(rng, _draw(rng, PAPER_GRID, sound_)) for _ in range(12))]:
         for strategy in (Strategy.SENSIBLE, Strategy.SHORTEST):
             _agree(scenario, strategy)
+
+
+@pytest.mark.parametrize("latency_s", sorted(AGED_SHORTEST_LENGTH))
+def test_spin_plans_for_the_snapshots_age_where_it_decides_the_plan(latency_s: float) -> None:
+    """Spin reads the snapshot's age (``Sound.start_error_m``, the aged phantoms) as the interpreter does: where one
+    control step of age (the loop's budget) makes the shortest overtake one action longer, both answer that."""
+    check_aged_witness("spin", latency_s)

@@ -5,6 +5,7 @@ attributed."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 
 import pytest
@@ -468,3 +469,36 @@ def test_the_fallbacks_wait_in_the_right_lane_ends_as_soon_as_a_sensed_oncoming_
     assert mr.ends_wait(mr.takeover_s + early, swept=False, oncoming_leaves_time=False)
     assert not mr.ends_wait(mr.return_wait_s, swept=True, oncoming_leaves_time=True)
     assert mr.ends_wait(mr.return_wait_s + early, swept=True, oncoming_leaves_time=True)
+
+
+class Timed(Simulator):
+    """A simulator that records, for every sound decision, how long after its snapshot it acted."""
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        self.waits_s: list[float] = []
+
+    def _sound_choice(self, *args: object) -> Callable[[], bool]:
+        act = super()._sound_choice(*args)  # type: ignore[arg-type]
+        taken_s = self.summary.sim_time_s
+
+        def timed() -> bool:
+            self.waits_s.append(self.summary.sim_time_s - taken_s)
+            return act()
+        return timed
+
+
+def test_a_sound_decision_acts_one_control_step_after_its_snapshot_and_plans_for_that_age() -> None:
+    """The planner's time counts in simulated time: the world moves on for the loop's budget before a decision acts,
+    and the sound model plans with that latency in its bounds; containment measures the world from the snapshot,
+    without it."""
+    config = DriveConfig(0.5, model="sound", snapshots=5)
+    sim = Timed(3, config.parts(), snapshots=config.snapshots)
+    try:
+        summary = sim.drive(config.km)
+    finally:
+        sim.close()
+    assert sim.waits_s and all(w == pytest.approx(LOOP.plan_budget_s, abs=1e-6) for w in sim.waits_s)
+    assert LOOP.plan_budget_s == pytest.approx(LOOP.physics_dt_s * LOOP.control_every_steps)  # at the next step
+    assert summary.snapshots and all(s["bounds"]["latency_s"] == LOOP.plan_budget_s for s in summary.snapshots)
+    assert sim.watch is not None and sim.watch.bounds.latency_s == 0.0

@@ -135,12 +135,15 @@ def sound(command: str) -> list[Case]:
 
 def sound_options(command: str, *extra: str) -> list[Case]:
     """The sound model's options: an unknown profile, speed intervals that are not intervals of finite speeds,
-    numbers out of range (a sensing error beyond the window); ``extra`` arguments with each."""
+    numbers out of range (a sensing error beyond the window, a latency above half a second); ``extra`` arguments with
+    each."""
     return [*(_case(command, *extra, f"--bounds={value}", named="--bounds") for value in ("nosuch", "")),
             *(_case(command, *extra, f"{option}={value}", named=option) for option in ("--sensing-error-m",
                                                                                         "--av-speed-mps",
-                                                                                        "--oncoming-view-m")
+                                                                                        "--oncoming-view-m",
+                                                                                        "--latency-s")
               for value in NOT_NUMBERS),
+            _case(command, *extra, "--latency-s=0.6", named="--latency-s"),  # an older snapshot is not planned from
             *(_case(command, *extra, f"--oncoming-view-m={value}", named="--oncoming-view-m")
               for value in ("0", "400")),  # the view starts past the AV's front and ends within the sensor's range
             *(_case(command, *extra, f"{option}={value}", named=option) for option in ("--same-mps", "--oncoming-mps")
@@ -152,7 +155,7 @@ def sound_options(command: str, *extra: str) -> list[Case]:
 BOUNDS_FILES = {"bounds_reversed.toml": "bounds.same_mps", "bounds_key.json": "bounds.speed",
                 "bounds_nan.json": "bounds.sensing_error_m", "bounds_profile.toml": "bounds.profile",
                 "bounds_list.json": "bounds", "bounds_phantoms.toml": "bounds.phantoms",
-                "bounds_view.toml": "bounds.oncoming_view_m"}
+                "bounds_view.toml": "bounds.oncoming_view_m", "bounds_latency.toml": "bounds.latency_s"}
 
 
 def out_dirs(command: str, option: str = "--out") -> list[Case]:
@@ -229,6 +232,7 @@ def _hostile_files(folder: Path) -> None:
         "bounds_list.json": "{" + good + ', "bounds": [1, 2]}',
         "bounds_phantoms.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nphantoms = "yes"\n',
         "bounds_view.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\noncoming_view_m = 400\n',
+        "bounds_latency.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nlatency_s = -0.1\n',
     }
     for name, text in files.items():
         (folder / name).write_text(text)

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from ci.cli.crossval import _model
 from ci.conformance.crossval import DRAWN, VERDICTS_FILE
-from ci.conformance.hypo import ERROR_CHOICES, SPEED_CHOICES, drawn_sound, scenarios
+from ci.conformance.hypo import ERROR_CHOICES, LATENCY_CHOICES, SPEED_CHOICES, drawn_sound, scenarios
 from oracle.shrink import to_toml
 from oracle.sound import reachable_sets
 from spec.answers import SearchResult, Status, Strategy
@@ -25,6 +25,7 @@ from spec.errors import OptionError
 from spec.files import load_scenario
 from spec.grid import PAPER_GRID
 from spec.library import builtin
+from spec.physical import LOOP
 from spec.scenario import Scenario, problem_for
 from spec.sound import Sound
 from tests.conftest import run_cli
@@ -45,6 +46,22 @@ def test_a_sound_campaign_on_the_library_holds_and_records_its_bounds(tmp_path: 
     assert "the sound model, bounds" in (tmp_path / "summary.md").read_text()
     records = [json.loads(line) for line in (tmp_path / VERDICTS_FILE).read_text().splitlines()]
     assert records and all(r["result"]["scenario"]["bounds"]["same_mps"] == [7.0, 7.0] for r in records)
+
+
+def test_the_three_engines_agree_on_the_library_with_the_loops_planning_latency(tmp_path: Path) -> None:
+    """The snapshot aged by the loop's budget (``Sound.age_m``: every interval widened, every phantom nearer), as the
+    closed loop plans: every property holds across the interpreter, Spin and Z3; a bad latency is one line, exit 2."""
+    latency = repr(LOOP.plan_budget_s)
+    done = run_cli("crossval", "--engines", "interpreter,spin,z3", "--workers", "2", "--out", str(tmp_path), "--json",
+                   "--model", "sound", "--latency-s", latency, timeout_s=600)
+    assert done.returncode == 0, done.stderr
+    data = json.loads(done.stdout)
+    assert data["campaign"]["bounds"]["latency_s"] == LOOP.plan_budget_s
+    assert all(p["failed"] == 0 and p["incomplete"] == 0 and p["held"] == p["checked"] > 0
+               for p in data["properties"].values()), data["properties"]
+    for bad in ("-1", "nan", "2"):
+        code, stderr, _ = _crossval(tmp_path / bad, "--model", "sound", "--latency-s", bad)
+        assert code == 2 and len(stderr.strip().splitlines()) == 1 and "--latency-s" in stderr, stderr
 
 
 def test_a_campaign_resumed_under_other_bounds_is_refused_naming_the_difference(tmp_path: Path) -> None:
@@ -92,6 +109,7 @@ def test_hypothesis_draws_bounds_from_the_stated_choices_only(data: st.DataObjec
     sound = data.draw(drawn_sound())
     b = sound.bounds
     assert b.same_mps in SPEED_CHOICES and b.oncoming_mps in SPEED_CHOICES and b.sensing_error_m in ERROR_CHOICES
+    assert b.latency_s in LATENCY_CHOICES
     scenario = data.draw(scenarios(PAPER_GRID, 10, DRAWN))
     assert scenario.sound is not None and scenario.sound.bounds.same_mps in SPEED_CHOICES
 
