@@ -443,7 +443,10 @@ class Server:
 
     def _reply(self, wait_s: float) -> str:
         stdout = self.process.stdout
-        if stdout is None or not select.select([stdout], [], [], wait_s)[0]:
+        poller = select.poll()  # not select(): it cannot watch a descriptor past 1,023
+        if stdout is not None:
+            poller.register(stdout, select.POLLIN)
+        if stdout is None or not poller.poll(max(0, round(wait_s * 1000))):
             self.close()
             raise EngineError(f"the verifier's server did not answer within {wait_s:g} s")
         line = stdout.readline()
@@ -466,17 +469,26 @@ class Server:
         self._work.cleanup()
 
 
-_SERVERS: dict[tuple[Path, int, int], Server] = {}  # (pan, process, thread) -> its server
+_SERVERS: dict[tuple[Path, int, int], Server] = {}  # (pan, process, thread) -> its server, least recently used first
+#: Servers a process's thread keeps at most: starting another stops its least recently used one (a served verifier is a
+#: process, its pipes and a lock; a campaign over many sets of bounds met hundreds, and CI's sound campaign at 144 sets
+#: of bounds ran out of what select() could watch). Starting one again costs a process start: its build is cached.
+MAX_SERVERS = 32
 
 
 def _server(pan: Path) -> Server:
-    """This process's and thread's server of ``pan``, started on first use and again when it has stopped."""
+    """This process's and thread's server of ``pan``, started on first use and again when it has stopped; at most
+    ``MAX_SERVERS`` of them, the least recently used stopped first."""
     key = (pan, os.getpid(), threading.get_ident())
-    server = _SERVERS.get(key)
+    server = _SERVERS.pop(key, None)  # put back last: the most recently used
     if server is None or not server.alive():
         if server is not None:
             server.close()
-        server = _SERVERS[key] = Server(pan)
+        mine = [k for k in _SERVERS if k[1:] == key[1:]]
+        while len(mine) >= MAX_SERVERS:
+            _SERVERS.pop(mine.pop(0)).close()
+        server = Server(pan)
+    _SERVERS[key] = server
     return server
 
 

@@ -289,3 +289,28 @@ def test_a_compile_failure_is_an_engine_error_with_the_tools_last_line(
     with pytest.raises(EngineError) as caught:
         runner._compile(tmp_path, "active proctype p() { skip }\n", runner._flags(Strategy.SENSIBLE))
     assert str(caught.value) == said
+
+
+def test_a_thread_keeps_at_most_max_servers_the_least_recently_used_stopped_first(
+        monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """A campaign over many sets of bounds meets many verifiers: past ``MAX_SERVERS`` the least recently used stops."""
+    class Fake:
+        def __init__(self, pan: Path) -> None:
+            self.pan, self.closed = pan, False
+
+        def alive(self) -> bool:
+            return not self.closed
+
+        def close(self) -> None:
+            self.closed = True
+
+    monkeypatch.setattr(runner, "Server", Fake)
+    monkeypatch.setattr(runner, "_SERVERS", {})
+    pans = [tmp_path / f"pan{i}" for i in range(runner.MAX_SERVERS + 2)]
+    first = runner._server(pans[0])
+    for pan in pans[1:runner.MAX_SERVERS]:
+        runner._server(pan)
+    assert runner._server(pans[0]) is first  # used again: now the most recent
+    runner._server(pans[runner.MAX_SERVERS])  # one too many: pans[1], the least recently used, stops
+    kept = {k[0] for k in runner._SERVERS}
+    assert len(kept) == runner.MAX_SERVERS and pans[0] in kept and pans[1] not in kept and not first.closed
