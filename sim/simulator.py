@@ -128,7 +128,7 @@ class Simulator:
         self.takeover: Takeover | None = None  # the fallback's take-over under way
         self.proved: Containment | None = None  # the containment of the last sound decision that was executed
         self.sweep: tuple[Reading, ...] | None = ()  # the last sweep the sensors delivered (None: it was dropped)
-        self.swept_at = (0.0, 0.0)  # when it was taken and where the AV was then, along the road from the start (m)
+        self.swept_at = (0.0, 0.0)  # where the AV was when it was taken, along the road from the start (m), and when
         # for the fallback: the nearest vehicles sensed ahead and behind in the left lane, ahead in the oncoming one
         self.lead: Nearest | None = None
         self.follower: Nearest | None = None
@@ -356,7 +356,7 @@ class Simulator:
         """A sweep: the sensors read the truth (through any fault injectors), and the steering fault moves on."""
         pose = self.car.pose()
         self.summary.sweeps += 1
-        self.swept_at = (self.summary.sim_time_s, self.origin_km * 1000 + pose.x_m)
+        self.swept_at = (self.origin_km * 1000 + pose.x_m, self.summary.sim_time_s)
         raw = self.sensor.read(in_range(pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming))
         if self.tracker is None:
             self.sweep = raw
@@ -448,7 +448,7 @@ class Simulator:
 
     def _where_swept(self) -> tuple[float, float]:
         """Where the AV was when the last sweep was taken (in the road's frame now) and when."""
-        t_s, along_m = self.swept_at
+        along_m, t_s = self.swept_at
         return along_m - self.origin_km * 1000, t_s
 
     def _snapshot(self) -> tuple[Reading, ...]:
@@ -634,10 +634,12 @@ class Simulator:
         self.summary.minimal_risk_steps += 1
         self.doing = f"minimal-risk manoeuvre (the last decision's, {why})"
         self.enveloped = True
+        since_s = self.summary.sim_time_s
         try:
             return self._brake_in_lane(emergency=False)
         finally:
             self.enveloped = False
+            self._observe(self.summary.plans, 0, None, None, [], since_s)
 
     def _sound_execute(self, actions: tuple[Action, ...], speed_mps: float, what: str) -> bool:
         """Execute a sound decision's actions from the speed it planned with (the reference starts at the car), while
@@ -657,7 +659,10 @@ class Simulator:
             for k, (action, profile) in enumerate(zip(executed, profiles)):
                 self.doing = f"{action.value} ({what}, step {k + 1} of {len(actions)})"
                 self.pending = actions[k + 1:]
-                if not self.executor.run(action, self._tick, profile, stop=lambda: self.interrupt and self.swept()):
+                since_s = self.summary.sim_time_s
+                ran = self.executor.run(action, self._tick, profile, stop=lambda: self.interrupt and self.swept())
+                self._observe(self.summary.plans, k + 1, action, None, [], since_s)
+                if not ran:
                     return False
                 self.summary.actions += 1
                 if self.interrupt:
@@ -686,14 +691,18 @@ class Simulator:
                                  Executor.lane_of(pose.y_m).value, broke)
         self.summary.takeovers.append(self.takeover)
         self.doing = f"fallback ({cause})"
-        if Executor.lane_of(pose.y_m) is Lane.RIGHT:
-            if not self._await_room_to_return():
-                return False
-            self.executor.reset_reference()
-            if not self.executor.run(Action.LEFT_LANE_CHANGE, self._tick, self._return_profile()):
-                return False
-        self.pending, self.proved = (), None
-        return self._brake_in_lane(emergency=True)
+        since_s = self.summary.sim_time_s
+        try:
+            if Executor.lane_of(pose.y_m) is Lane.RIGHT:
+                if not self._await_room_to_return():
+                    return False
+                self.executor.reset_reference()
+                if not self.executor.run(Action.LEFT_LANE_CHANGE, self._tick, self._return_profile()):
+                    return False
+            self.pending, self.proved = (), None
+            return self._brake_in_lane(emergency=True)
+        finally:
+            self._observe(self.summary.plans, 0, None, None, [], since_s)
 
     def _await_room_to_return(self) -> bool:
         """The fallback in the right lane: hold the lane until the sensed left lane leaves room to return
@@ -1027,15 +1036,18 @@ class Simulator:
                 tracked[(lane, index, reading.body)] = (reading.dx_m, cells[index])
         return tracked
 
-    def _observe(self, plan_id: int, step: int, action: Action, predicted: State,
-                 violations: list[Violation]) -> None:
+    def _observe(self, plan_id: int, step: int, action: Action | None, predicted: State | None,
+                 violations: list[Violation], since_s: float | None = None) -> None:
+        """Tell the observers an action (None: a fallback's or minimal-risk manoeuvre's control) ended now; without
+        cells predicted (the sound model), what the AV was doing since ``since_s`` is told as well."""
         if not self.observers:
             return
         pose = self.car.pose()
         measured = {lane: [c.x_m - pose.x_m for c in cars]
                     for lane, cars in (("left_lane", self.traffic.left), ("right_lane", self.traffic.oncoming))}
-        event = StepEvent(self.summary.sim_time_s, self.summary.km, plan_id, step, action, pose.x_m, pose.y_m,
-                          pose.speed_mps, measured, predicted, tuple(violations))
+        t_s = self.summary.sim_time_s
+        event = StepEvent(t_s, self.summary.km, plan_id, step, action, pose.x_m, pose.y_m, pose.speed_mps, measured,
+                          predicted, tuple(violations), self.doing, 0.0 if since_s is None else t_s - since_s)
         for observer in self.observers:
             observer.on_step(event)
 

@@ -55,6 +55,8 @@ from spec.safety import SAFETY, Conflict, SafetySpec
 EPS_M = 1e-9
 #: The most step answers one scenario's rules remember (a few MB; a longer walk starts again).
 MEMO_ENTRIES = 50_000
+#: The AV's fastest action's speed (``ACTION_RULES``' largest speed factor at the common speed), computed once.
+AV_TOP_MPS = max(float(r.speed_factor) for r in ACTION_RULES.values()) * float(COMMON_SPEED_MPS)
 
 
 class Checks(enum.Enum):
@@ -95,8 +97,7 @@ class Sound:
         a standstill to its fastest action's speed plus its envelope's speed error (``Tracking.speed_mps``); an oncoming
         vehicle at its top speed towards it, or a same-direction one at either end of its lane's speeds."""
         b = self.bounds
-        av_top = max(float(r.speed_factor) for r in ACTION_RULES.values()) * float(COMMON_SPEED_MPS) \
-            + self.tracking.speed_mps
+        av_top = AV_TOP_MPS + self.tracking.speed_mps
         return max(b.oncoming_mps.high_mps + av_top, b.same_mps.high_mps, av_top - b.same_mps.low_mps)
 
     @property

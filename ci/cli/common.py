@@ -25,6 +25,7 @@ from spec.errors import ScenarioError
 from spec.files import load_scenario
 from spec.library import builtin
 from spec.models import ModelChoice
+from spec.physical import LOOP
 from spec.scenario import Scenario
 from spec.sound import sound_from
 from spec.state import State
@@ -200,7 +201,8 @@ def sound_options(command: Any) -> Any:
                      "the oncoming lane (a left-lane vehicle hid it from there on; the oncoming phantom stands "
                      "there). Default: the front-right sensor's range."),
         click.option("--latency-s", type=LATENCY, default=None, help="Sound model: how long the snapshot ages "
-                     "before the plan acts (the planner's time; the closed loop's is one control step, 1/30 s). "
+                     f"before the plan acts (the planner's time; the closed loop's is one control step, "
+                     f"{LOOP.plan_budget_s * 1000:.1f} ms). "
                      "Default: 0, the profile's."),
     )):
         wrapper = decorate(wrapper)

@@ -502,3 +502,25 @@ def test_a_sound_decision_acts_one_control_step_after_its_snapshot_and_plans_for
     assert LOOP.plan_budget_s == pytest.approx(LOOP.physics_dt_s * LOOP.control_every_steps)  # at the next step
     assert summary.snapshots and all(s["bounds"]["latency_s"] == LOOP.plan_budget_s for s in summary.snapshots)
     assert sim.watch is not None and sim.watch.bounds.latency_s == 0.0
+
+
+def test_a_sound_drive_traces_every_action_and_every_fallback_and_plots_them(tmp_path) -> None:
+    """The sound model predicts no cells, but its trace still has a line per executed action and per take-over
+    (action null, what it did and for how long), so a drive's lead-up to an encounter can be read and plotted."""
+    import json
+
+    from sim.report import plot_trace
+    from sim.simulator import run_drive
+
+    config = DriveConfig(1.0, model="sound", traffic="spread", stop_rate_per_h=300.0, restart_after_collision=True)
+    summary = run_drive(2, config, str(tmp_path))
+    records = [json.loads(line) for line in (tmp_path / "trace-seed2.jsonl").read_text().splitlines()]
+    actions = [r for r in records if r["action"] is not None]
+    fallbacks = [r for r in records if r["action"] is None]
+    assert summary.takeovers and len(fallbacks) == len(summary.takeovers) + summary.minimal_risk_steps
+    assert len(actions) >= summary.actions > 0  # an action a collision ended is traced, not counted
+    assert all(r["predicted"] is None and r["doing"] and r["duration_s"] > 0 for r in records)
+    assert all(r["doing"].startswith("fallback (") for r in fallbacks)
+    assert [r["t_s"] for r in records] == sorted(r["t_s"] for r in records)
+    png = plot_trace(tmp_path / "trace-seed2.jsonl", tmp_path / "spacetime-seed2.png", config.grid)
+    assert png.stat().st_size > 0
