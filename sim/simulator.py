@@ -1121,8 +1121,8 @@ class Nearest:
 
     def too_near_after(self, closing_mps: float, seconds: float) -> bool:
         """Whether the gap, closing at ``closing_mps`` for ``seconds``, is then nearer than the safety specification
-        allows at that closing speed."""
-        return SAFETY.violated(self.gap_m - closing_mps * seconds, closing_mps)
+        allows at that closing speed (``MinimalRisk.too_near_after``: a prediction takes the car's envelope)."""
+        return MINIMAL_RISK.too_near_after(self.gap_m, closing_mps, seconds)
 
 
 def _drop_back_to(lead: Nearest, follower: Nearest | None, speed_mps: float,

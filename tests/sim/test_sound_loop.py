@@ -360,7 +360,7 @@ def test_a_return_that_would_end_too_near_the_vehicle_ahead_brakes_to_its_speed_
 
     from sim.simulator import Nearest, Simulator
     from spec.actions import ACTION_RULES, Action
-    from spec.envelope import MINIMAL_RISK
+    from spec.envelope import MINIMAL_RISK, TRACKING
     from spec.physical import CAR
     from spec.safety import SAFETY
 
@@ -376,8 +376,14 @@ def test_a_return_that_would_end_too_near_the_vehicle_ahead_brakes_to_its_speed_
 
     assert profile(None).at(change_s) == pytest.approx(10.0)  # nothing ahead: the speed it starts at
     closing = 3.0
-    room = Nearest(SAFETY.required_gap_m(closing) + closing * change_s + CAR.length_m + 0.5, closing)
-    assert profile(room).at(change_s) == pytest.approx(10.0)  # room at its end: as before
+    # room at its end, the car's envelope taken (``MinimalRisk.too_near_after``): as before
+    envelope_m = TRACKING.position_m
+    room = Nearest(SAFETY.required_gap_m(closing + TRACKING.speed_mps) + closing * change_s + envelope_m
+                   + CAR.length_m + 0.5, closing)
+    assert profile(room).at(change_s) == pytest.approx(10.0)
+    # room only for a car exactly on its reference: brakes
+    assert profile(Nearest(SAFETY.required_gap_m(closing) + closing * change_s + CAR.length_m + 0.5,
+                           closing)).at(change_s) == pytest.approx(7.0)
     near = Nearest(5.1 + CAR.length_m, closing)
     braking = profile(near)
     assert braking.at(0.0) == pytest.approx(10.0)
@@ -386,7 +392,8 @@ def test_a_return_that_would_end_too_near_the_vehicle_ahead_brakes_to_its_speed_
     # its speed not fitted yet: the slowest the bounds let it be, not a standstill (seeds 13 and 16 at 6994c0a: the AV
     # stood across the lanes and the vehicle it had passed ran into it)
     assert profile(Nearest(5.1 + CAR.length_m, None)).at(change_s) == pytest.approx(slowest_mps)
-    unfitted_room = SAFETY.required_gap_m(10.0 - slowest_mps) + (10.0 - slowest_mps) * change_s + CAR.length_m + 0.5
+    unfitted_room = SAFETY.required_gap_m(10.0 - slowest_mps + TRACKING.speed_mps) + (10.0 - slowest_mps) * change_s \
+        + envelope_m + CAR.length_m + 0.5
     assert profile(Nearest(unfitted_room, None)).at(change_s) == pytest.approx(10.0)
     assert profile(Nearest(5.1 + CAR.length_m, -1.0)).at(change_s) == pytest.approx(10.0)  # moving away: no brake
 
@@ -437,6 +444,7 @@ def test_a_forced_return_passing_a_vehicle_alongside_brakes_for_the_one_ahead_on
 
 def test_the_fallback_waits_in_the_right_lane_only_while_the_oncoming_lane_leaves_time() -> None:
     from sim.simulator import Nearest, Simulator
+    from spec.envelope import TRACKING
     from spec.physical import CAR
     from spec.safety import SAFETY
 
@@ -444,14 +452,18 @@ def test_the_fallback_waits_in_the_right_lane_only_while_the_oncoming_lane_leave
         return Simulator._oncoming_leaves_time(_fallback_view(None, oncoming, False, sweep), 2.0,  # type: ignore[arg-type]
                                                7.0)
 
+    def need(closing_mps: float) -> float:  # the return's prediction takes the car's envelope (``too_near_after``)
+        return SAFETY.required_gap_m(closing_mps + TRACKING.speed_mps) + closing_mps * 2.1 + TRACKING.position_m \
+            + CAR.length_m
+
     closing = 14.0
-    need_m = SAFETY.required_gap_m(closing) + closing * 2.1 + CAR.length_m
+    need_m = need(closing)
     assert leaves(None)  # none sensed within the front-right sensor's range
     assert not leaves(None, sweep=None)  # a dropped sweep
     assert leaves(Nearest(need_m + 1.0, closing)) and not leaves(Nearest(need_m - 1.0, closing))
     # its speed not measured yet (its first two sweeps): the AV's 7 m/s and the bounds' fastest oncoming speed
     unmeasured = 7.0 + 9.0
-    need_m = SAFETY.required_gap_m(unmeasured) + unmeasured * 2.1 + CAR.length_m
+    need_m = need(unmeasured)
     assert leaves(Nearest(need_m + 1.0, None)) and not leaves(Nearest(need_m - 1.0, None))
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+from dataclasses import replace
 
 import pytest
 from hypothesis import given
@@ -109,3 +110,19 @@ def test_the_fallback_brakes_for_the_closing_speed_it_measured_and_comes_back_up
     assert MINIMAL_RISK.fallback_closing_mps(7.0, 9.0) == 7.0  # more than the AV's speed: a reading jumped
     assert MINIMAL_RISK.fallback_hold_mps(7.0) == 7.0 and MINIMAL_RISK.hold_mps(6.2, 7.0) == 6.2
     assert 0 < MINIMAL_RISK.accel_mps2 < MINIMAL_RISK.emergency_decel_mps2
+
+
+def test_a_returns_predicted_gap_takes_the_cars_envelope_and_a_measured_gap_is_taken_as_it_is() -> None:
+    """Seed 7 of the paper's world (km 21.8): 29.9 m ahead closing at 6.6 m/s, a 3 s return ends inside the
+    specification for a car exactly on its reference, not for one within its stated envelope."""
+    mr = MINIMAL_RISK
+    assert not SAFETY.violated(29.92 - 6.59 * 3.0, 6.59)  # what the return's check said before
+    assert mr.too_near_after(29.92, 6.59, 3.0)
+    exact = replace(TRACKING, position_m=0.0, speed_mps=0.0)
+    assert not mr.too_near_after(29.92, 6.59, 3.0, exact)
+    for gap_m, closing_mps in ((10.0, 7.0), (10.6, 7.0), (2.5, -1.0), (1.9, -1.0)):  # now: the gap as measured
+        assert mr.too_near_after(gap_m, closing_mps, 0.0) == SAFETY.violated(gap_m, closing_mps)
+    # the envelope is the car's, once: a longer prediction closes only by the reference's closing speed
+    margin_m = SAFETY.required_gap_m(7.0 + TRACKING.speed_mps) + TRACKING.position_m
+    assert not mr.too_near_after(margin_m + 7.0 * 5.0 + 0.01, 7.0, 5.0)
+    assert mr.too_near_after(margin_m + 7.0 * 5.0 - 0.01, 7.0, 5.0)
