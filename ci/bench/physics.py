@@ -29,14 +29,15 @@ from rich.console import Console
 from rich.table import Table
 
 from ci.audit.campaign import AuditPlan
-from ci.cli.audit import _cells as audit_cells
 from ci.cli.audit import audit as audit_command
+from ci.cli.audit import parse_cells
 from ci.cli.main import cli
 from ci.shared.machine import machine
 from ci.shared.options import names
 from sim.opportunity import Replay
 from sim.scene import Scene
 from spec.errors import OptionError, SuiteError, check_number
+from spec.physical import LOOP
 
 #: The audit command's defaults (its grid, models, km, runs and workers), read from its options.
 DEFAULTS: dict[str | None, Any] = {param.name: param.default for param in audit_command.params}
@@ -117,13 +118,13 @@ def measure(args: argparse.Namespace) -> None:
     check_number("--km", args.km, positive=True)
     check_number("--default-km", args.default_km, positive=True)
     check_number("--workers", args.workers, low=1)
-    cells_m = audit_cells(args.cells)  # the audit's own check of the list: one line naming the bad length
+    cells_m = parse_cells(args.cells)  # the audit's own check of the list: one line naming the bad length
     models = names("--model", str(DEFAULTS["model_text"]))
     per_model = len(AuditPlan(models=models[:1], cells_m=cells_m).configs())
     console = Console(width=150)
     console.print(f"overtake audit --model M --cells {args.cells} --km {args.km} --runs 1 --engines interpreter "
                   f"--snapshots 0 --workers 1 (in process): {per_model} combinations per model; {machine()}")
-    table = Table(title="the audit's physics floor (PyBullet stepSimulation at 60 Hz)")
+    table = Table(title=f"the audit's physics floor (PyBullet stepSimulation at {1 / LOOP.physics_dt_s:g} Hz)")
     for col in ("model", "km driven", "wall s", "physics steps", "of them in replays", "physics s", "µs per step",
                 "physics share", f"default audit ({args.default_km:g} km x {per_model}, {args.workers} workers) min",
                 "of it physics alone min", "of it the drives' physics min"):

@@ -48,7 +48,8 @@ def _scales(text: str) -> tuple[float, ...]:
     return scales
 
 
-def _cells(text: str) -> tuple[float, ...]:
+def parse_cells(text: str) -> tuple[float, ...]:
+    """The ``--cells`` list: usable cell lengths, none twice; else bad input naming the list."""
     cells = []
     for word in names("--cells", text):
         value = convert("--cells", CELL_M, word)
@@ -122,7 +123,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
                        range_sd_m=range_sd_m, miss_rate=miss_rate, snapshots=snapshots, restart_after_collision=True,
                        opportunity_checks=opportunity_checks, faults=faults,
                        steering_offset_deg=steering_offset_deg, tracking=tracking)
-    plan = AuditPlan(_cells(cells), _models("--traffic", traffic_text, dict(TRAFFIC_MODELS)),
+    plan = AuditPlan(parse_cells(cells), _models("--traffic", traffic_text, dict(TRAFFIC_MODELS)),
                      _models("--sensing", sensing_text, dict(SENSOR_MODELS)), tuple(range(seed, seed + runs)), base,
                      _models("--model", model_text, dict(PLANNING_MODELS)), _scales(scale_text))
     configs = plan.configs()
