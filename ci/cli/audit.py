@@ -9,7 +9,7 @@ from typing import Any
 import click
 from rich.table import Table
 
-from ci.cli.common import err, faults_options, print_json, print_paths, print_table
+from ci.cli.common import err, faults_options, print_header, print_json, print_paths, print_table
 from ci.shared.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.shared.options import (
     CELL_M,
@@ -131,9 +131,9 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
         config.parts()  # the engine exists and answers each model: bad input before any run starts
     get_engine(engine).ready()  # its tools are installed (exit 4), or every plan of every run would fail
     total = len(configs) * runs
-    err.print(f"audit: {len(configs)} combination(s) x seeds {seed}..{seed + runs - 1} = {total} run(s) of {km:g} km; "
-              f"planner {engine}; faults {base.faults or 'none'}; tracking {'on' if tracking else 'off'}; "
-              f"on {executor.describe(total)}; results in {out_dir}")
+    print_header(err, f"audit: {len(configs)} combination(s) x seeds {seed}..{seed + runs - 1} = {total} run(s) of "
+                 f"{km:g} km; planner {engine}; faults {base.faults or 'none'}; "
+                 f"tracking {'on' if tracking else 'off'}; on {executor.describe(total)}", out_dir)
     labels = {i: f"{c.cell_m:g} m, {c.traffic}, {c.sensor}, {c.model}"
                  + ("" if c.bounds_scale == 1 else f" x{c.bounds_scale:g}") + f", seed {s}"
              for i, (c, s) in enumerate((c, s) for c in configs for s in plan.seeds)}

@@ -49,6 +49,12 @@ def print_paths(heading: str, paths: Sequence[object]) -> None:
     for path in paths:
         out.print(f"  {path}", soft_wrap=True)
 
+
+def print_header(console: Console, text: str, results: object) -> None:
+    """A campaign's header: ``text``, then where its results go, on a line of its own, never folded."""
+    console.print(f"{text}; results in:")
+    console.print(f"  {results}", soft_wrap=True)
+
 MODEL = click.Choice([m.value for m in ModelChoice])
 
 

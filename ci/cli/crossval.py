@@ -14,7 +14,17 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColum
 from rich.table import Table
 from rich.text import Text
 
-from ci.cli.common import cell_option, err, horizon_option, out, print_json, print_paths, print_table, sound_options
+from ci.cli.common import (
+    cell_option,
+    err,
+    horizon_option,
+    out,
+    print_header,
+    print_json,
+    print_paths,
+    print_table,
+    sound_options,
+)
 from ci.shared.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.shared.options import CHECK_COUNT, MAX_WORKERS, REPRODUCERS, SCHEDULER, SECONDS, SEED, WORKERS, names
 from ci.shared.options import out_dir as checked_out_dir
@@ -132,10 +142,10 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
     if fresh:
         (out_path / VERDICTS_FILE).unlink(missing_ok=True)
     check_resumable(out_path / VERDICTS_FILE, campaign)  # before any line: one model and bounds per folder
-    err.print(f"crossval: source {source}; properties {', '.join(p.value for p in chosen)}"
+    print_header(err, f"crossval: source {source}; properties {', '.join(p.value for p in chosen)}"
               + (f" (not applicable to these engines: {', '.join(skipped)})" if skipped else "")
-              + f"; engines {', '.join(engines)}; {_describe(model)}; on {executor.describe()}; results in {out_dir}"
-              + (f"; seed {seed}" if source == "hypothesis" else ""))
+              + f"; engines {', '.join(engines)}; {_describe(model)}; on {executor.describe()}"
+              + (f"; seed {seed}" if source == "hypothesis" else ""), out_dir)
     summary = Summary(CoverageTarget(coverage_text), float(grid.cell_m), paper=model is None)
     started = time.perf_counter()
     if source == "hypothesis":

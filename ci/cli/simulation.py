@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from ci.cli.common import err, faults_options, print_json, print_table, strategy_option
+from ci.cli.common import err, faults_options, print_header, print_json, print_table, strategy_option
 from ci.shared.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.shared.options import CELL_M, KM, RUNS, SCHEDULER, SEED, TOLERANCE, WORKERS
 from ci.shared.options import out_dir as out_dir_checked
@@ -81,10 +81,10 @@ def simulate(km: float, until_failure: bool, until_sensing_failure: bool, seed: 
     get_engine(engine).ready()  # its tools are installed (exit 4), or every plan of every run would fail
     limit = f"{km:g} km" + (" or until failure" if until_failure else "") + (
         " or until a failure a sensing fault caused (others restart the drive)" if until_sensing_failure else "")
-    err.print(f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; {model} model; engine {engine}, "
+    print_header(err, f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; {model} model; engine {engine}, "
               f"{strategy.value}, {campaign.grid.describe()}; faults {campaign.faults or 'none'}; "
               f"tracking {'on' if tracking else 'off'}; "
-              f"on {executor.describe(runs)}; results in {Path(out_dir) / RUNS_FILE}")
+              f"on {executor.describe(runs)}", Path(out_dir) / RUNS_FILE)
     resumed = f"already in {RUNS_FILE} (resumed; --fresh runs it again)"
     with km_progress(err, runs, km, resumed) as bar:
         results = run_campaign(campaign, list(range(seed, seed + runs)), out_dir, executor, bar.done, fresh,
