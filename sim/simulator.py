@@ -542,7 +542,8 @@ class Simulator:
         snapshot's instant, as its model means (its prediction starts there). The time the planner took on the
         machine is counted apart (``plan_ms``; the audit counts the plans over the budget). False on a collision
         meanwhile."""
-        self.doing = f"planning ({self.doing})"
+        if not self.doing.startswith("planning ("):  # a decision that did nothing since the last: not nested again
+            self.doing = f"planning ({self.doing})"
         return self.executor.hold(LOOP.plan_budget_s, self.executor.v_ref_mps, self._tick)
 
     def _sensing_stop(self, pending: tuple[Action, ...], err: ScenarioError) -> bool:

@@ -536,3 +536,16 @@ def test_a_sound_drive_traces_every_action_and_every_fallback_and_plots_them(tmp
     assert [r["t_s"] for r in records] == sorted(r["t_s"] for r in records)
     png = plot_trace(tmp_path / "trace-seed2.jsonl", tmp_path / "spacetime-seed2.png", config.grid)
     assert png.stat().st_size > 0
+
+
+def test_planning_is_named_once_in_what_the_av_was_doing_however_many_decisions_did_nothing() -> None:
+    from types import SimpleNamespace
+
+    from sim.simulator import Simulator
+
+    held: list[float] = []
+    sim = SimpleNamespace(doing="brake (plan 3, step 1 of 2)", _tick=None,
+                          executor=SimpleNamespace(v_ref_mps=7.0, hold=lambda s, v, tick: held.append(s) or True))
+    for _ in range(3):
+        assert Simulator._while_planning(sim)  # type: ignore[arg-type]
+    assert sim.doing == "planning (brake (plan 3, step 1 of 2))" and held == [LOOP.plan_budget_s] * 3
