@@ -235,9 +235,14 @@ def _assumptions(bounds: object) -> str:
 
 
 def _difference(ours: object, theirs: object) -> str:
+    """How the recorded bounds (``theirs``) differ from this campaign's, key by key; a key a record lacks was not
+    recorded by the version that wrote it (e.g. ``latency_s``, added since)."""
+    def value(bounds: dict[str, Any], key: str) -> str:
+        return str(bounds[key]) if key in bounds else "not recorded"
+
     if isinstance(ours, dict) and isinstance(theirs, dict):
-        changed = [f"{k} {theirs.get(k)} there, {ours.get(k)} here" for k in dict.fromkeys([*theirs, *ours])
-                   if theirs.get(k) != ours.get(k)]
+        changed = [f"{k} {value(theirs, k)} there, {value(ours, k)} here" for k in dict.fromkeys([*theirs, *ours])
+                   if theirs.get(k) != ours.get(k) or (k in theirs) != (k in ours)]
         return "; ".join(changed)
     return f"{_assumptions(theirs)} there, {_assumptions(ours)} here"
 

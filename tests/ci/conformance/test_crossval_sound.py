@@ -128,3 +128,11 @@ def test_a_reproducer_scenario_keeps_its_bounds_and_shows_the_reachable_sets(tmp
     lines = reachable_sets(problem_for(scenario, answer.model), answer.actions)
     assert len(lines) == len(answer.actions) + 1
     assert all("L0" in line and "phantom-R+" in line for line in lines)
+
+
+def test_bounds_a_record_of_an_older_version_lacks_are_named_as_not_recorded() -> None:
+    from ci.conformance.crossval import _difference
+
+    here = {"same_mps": [4.9, 9.1], "latency_s": 0.0}
+    assert _difference(here, {"same_mps": [4.9, 9.1]}) == "latency_s not recorded there, 0.0 here"
+    assert _difference(here, {"same_mps": [6.0, 8.0], "latency_s": 0.0}) == "same_mps [6.0, 8.0] there, [4.9, 9.1] here"
