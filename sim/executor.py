@@ -47,8 +47,9 @@ class Executor:
     def run(self, action: Action, tick: Callable[[float], bool], profile: SpeedProfile | None = None,
             stop: Callable[[], bool] | None = None) -> bool:
         """Execute ``action`` for its duration along ``profile`` (default: its speed throughout); False as soon
-        as ``tick`` reports a collision. ``stop`` is asked after every control step once any sideways move is over;
-        when it says so the action ends there, the AV in the action's lane."""
+        as ``tick`` reports a collision. ``stop`` is asked after every control step once any sideways move is over
+        (an action in lane has none: from its first step); when it says so the action ends there, the AV in the
+        action's lane."""
         rule = ACTION_RULES[action]
         if rule.from_lane is not None and rule.from_lane is not self.lane:
             raise EngineError(f"simulator: {action.value} asked of an AV in the {self.lane.value} lane "
@@ -68,7 +69,7 @@ class Executor:
             self.lane_due = to_lane if phase >= 1 else None
             if not self.control(profile.at(k * self.dt_s), y_ref, vy_ref, tick):
                 return False
-            if stop is not None and phase >= 1 and stop():
+            if stop is not None and (phase >= 1 or to_lane is self.lane) and stop():
                 break
         self.lane = to_lane
         return True

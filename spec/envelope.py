@@ -241,8 +241,8 @@ class MinimalRisk:
         as the planner's checks do: the car may end ``position_m`` nearer than its reference and close
         ``speed_mps`` faster. A gap measured now (0 s) is taken as it is. Measured without the envelope: seed 7 of
         the paper's world at 33fbde8 (km 21.8) returned behind a vehicle whose gap, 29.9 m closing at 6.6 m/s, was
-        predicted 0.26 m inside the specification at the return's end; the car ran 0.6 m/s above its reference
-        after the sideways move, and the return ended 0.1 m short of it, a near miss (gap 8.0 m at 1.39 s)."""
+        predicted 0.26 m more than the specification requires at the return's end; the car ran 0.6 m/s above its
+        reference after the sideways move, and the return ended 0.1 m short of it, a near miss (gap 8.0 m at 1.39 s)."""
         if seconds <= 0.0:
             return SAFETY.violated(gap_m, closing_mps)
         return SAFETY.violated(gap_m - closing_mps * seconds - tracking.position_m, closing_mps + tracking.speed_mps)
