@@ -218,16 +218,11 @@ class Containment:
                                                        BreachKind.FOLLOWER,
                                                        SAFETY.required_gap_m(closing_mps) - gap_m, doing)))
                         continue
-                name, known, sets = self._sets(lane, car)
-                if known is None and lane is Lane.RIGHT and car.x_m < av.x_m - CAR.length_m:
-                    continue  # an oncoming vehicle the AV has passed: no condition speaks of it
-                dx = car.x_m - self.x0_m
-                misses = [_outside(dx, *reach_m(v, self.bounds, elapsed)) for v in sets]
-                if not misses or min(abs(m) for m in misses) == 0.0:
+                name, known, miss = self._miss(lane, car, av, elapsed)
+                if miss == 0.0:
                     if known is not None and (speeding := self._speed(lane, car, name, t_s, km, doing)):
                         out.append(speeding)
                     continue
-                miss = min(misses, key=abs)
                 if known is None and not sensed(car):
                     continue
                 if known is None:
@@ -239,6 +234,28 @@ class Containment:
                     kind = BreachKind.TOO_SLOW if slow else BreachKind.TOO_FAST
                 out.append(self._breach(Breach(self.decision, km, t_s, name, car.body, kind, abs(miss), doing)))
         return out
+
+    def _miss(self, lane: Lane, car: KinematicCar, av: Pose, elapsed_s: float) -> tuple[str, Vehicle | None, float]:
+        """The vehicle the decision knew ``car`` as (None: unknown), and how far ``car`` is outside every interval it
+        must be inside ``elapsed_s`` after the snapshot (0: inside one, or an oncoming vehicle the AV has passed, of
+        which no condition speaks)."""
+        name, known, sets = self._sets(lane, car)
+        if known is None and lane is Lane.RIGHT and car.x_m < av.x_m - CAR.length_m:
+            return name, known, 0.0
+        dx = car.x_m - self.x0_m
+        misses = [_outside(dx, *reach_m(v, self.bounds, elapsed_s)) for v in sets]
+        return name, known, min(misses, key=abs, default=0.0)
+
+    def hidden(self, t_s: float, km: float, av: Pose, lane: Lane, car: KinematicCar, doing: str) -> Breach | None:
+        """The breach of a vehicle the decision did not know and the sensors do not show, where no phantom could be:
+        for the attribution of an encounter only, never recorded (``check`` counts an unknown vehicle once sensed: one
+        hidden behind another is no vehicle a decision could have known). A vehicle the sensing assumption says the
+        AV would have sensed broke it all the same, and one touching the AV is one no ray reaches."""
+        name, known, miss = self._miss(lane, car, av, t_s - self.t0_s)
+        if known is not None or miss == 0.0:
+            return None
+        return Breach(self.decision, km, t_s, f"{name} the sensors did not show", car.body, BreachKind.APPEARED,
+                      abs(miss), doing)
 
     def _speed(self, lane: Lane, car: KinematicCar, name: str, t_s: float, km: float, doing: str) -> Breach | None:
         """``car``'s breach of its lane's speed bounds, if it drives outside them (its true speed along the lane)."""

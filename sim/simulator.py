@@ -29,7 +29,7 @@ import numpy as np
 
 from oracle.sound import keep_lane
 from sim import opportunity
-from sim.containment import BreachKind, Containment, Sighting
+from sim.containment import Breach, BreachKind, Containment, Sighting
 from sim.discretiser import discretise, in_window, reading_cell
 from sim.executor import Executor
 from sim.faults import GHOST_BODY, FaultEvent, FaultySensor, SteeringFault, attribute
@@ -277,10 +277,21 @@ class Simulator:
         if c is None:
             return None if self.watch is None else "after an assumption broke: no scenario from the snapshot"
         breach = c.breached.get(body)
+        if breach is None and (hidden := self._hidden(c, body)) is not None:
+            return f"after an assumption broke: {hidden.kind.value} by {hidden.size}, {hidden.vehicle}"
         if breach is None or breach.kind.inside:
             return "inside the assumptions"
         return (f"after an assumption broke: {breach.kind.value} by {breach.size}, "
                 f"{self.summary.sim_time_s - breach.t_s:.1f} s before")
+
+    def _hidden(self, c: Containment, body: int) -> Breach | None:
+        """``Containment.hidden`` of the vehicle ``body``: unknown to the decision, unseen (one touching the AV, where
+        no ray reaches), where no phantom could be."""
+        for lane, cars in ((Lane.LEFT, self.traffic.left), (Lane.RIGHT, self.traffic.oncoming)):
+            for car in cars:
+                if car.body == body:
+                    return c.hidden(self.summary.sim_time_s, self.summary.km, self.car.pose(), lane, car, self.doing)
+        return None
 
     def _event(self, kind: FailureKind, cause: str, detail: str) -> Failure:
         """A failure record stamped with where and when the drive is now."""

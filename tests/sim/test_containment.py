@@ -120,6 +120,23 @@ def test_an_unknown_vehicle_breaches_only_where_no_phantom_could_be_and_only_onc
     assert breach.kind is BreachKind.APPEARED and breach.body == 6
 
 
+def test_an_unseen_vehicle_touching_the_av_is_after_an_assumption_broke_not_inside() -> None:
+    """The 2,000 km audit's collision counted inside (following traffic, noisy sensing, seed 55): the vehicle ahead
+    stopped under one decision; the next snapshot, taken as the AV reached it, could not read it (no ray reaches a
+    body touching the AV), so its containment never counted it. It is where no phantom could be: an encounter with it
+    is after the sensing assumption broke (``hidden``), though ``check`` does not count it (it is not sensed)."""
+    c = watch({}, {})
+    touching = car(6, CAR.length_m, 0.0)
+    assert c.check(0.1, 0.0, AV, [touching], [], "brake", never) == []  # type: ignore[list-item]
+    breach = c.hidden(0.1, 0.0, AV, Lane.LEFT, touching, "brake")  # type: ignore[arg-type]
+    assert breach is not None and breach.kind is BreachKind.APPEARED and breach.body == 6 and breach.by_m > 0
+    assert not c.breached  # the attribution's only: nothing recorded, nothing counted
+    beyond = car(5, SENSORS.left_range_m + 10.0)  # where the phantom stands: inside the assumptions
+    assert c.hidden(0.1, 0.0, AV, Lane.LEFT, beyond, "brake") is None  # type: ignore[arg-type]
+    known = watch({6: 30.0}, {})
+    assert known.hidden(0.1, 0.0, AV, Lane.LEFT, car(6, 30.0), "brake") is None  # type: ignore[arg-type]
+
+
 def test_an_oncoming_vehicle_hidden_behind_a_left_lane_vehicle_is_held_to_the_phantom_where_the_view_ended() -> None:
     """A snapshot that saw the oncoming lane to 50 m only (``Sound.oncoming_view_m``): a vehicle sensed at 80 m a
     second later came out of the hidden stretch, inside the assumptions; had the lane been seen to the sensor's range,
