@@ -105,8 +105,8 @@ def test_a_models_name_and_bounds_scale_are_part_of_a_drives_configuration() -> 
 
 
 def test_the_lead_is_the_nearest_vehicle_ahead_and_its_closing_speed_is_fitted_only_on_the_same_one() -> None:
+    from sim.nearest import Nearest as Lead
     from sim.sensors import Reading
-    from sim.simulator import Nearest as Lead
     from spec.envelope import MINIMAL_RISK
     from spec.lanes import Lane
 
@@ -134,8 +134,8 @@ def test_the_fallbacks_closing_speeds_take_the_avs_own_speed_changes_out_and_fol
     c2c5ab8, whose fit said 2.2 m/s closing where it was 2.8, and whose return came within 0.6 m of it), with a
     vehicle behind at 7 m/s: at each sweep the closing speeds are the true ones at the AV's speed then, and between
     sweeps they move with the AV's speed; the vehicles' own speeds stay 7 m/s."""
+    from sim.nearest import Nearest
     from sim.sensors import Reading
-    from sim.simulator import Nearest
     from spec.envelope import MINIMAL_RISK
     from spec.lanes import Lane
 
@@ -200,8 +200,8 @@ def run_drive_summary(seed: int, km: float) -> RunSummary:
 
 
 def test_the_follower_and_the_oncoming_vehicle_are_the_nearest_behind_and_ahead_in_their_lanes() -> None:
+    from sim.nearest import Nearest
     from sim.sensors import Reading
-    from sim.simulator import Nearest
     from spec.lanes import Lane
 
     follower = oncoming = None
@@ -233,7 +233,8 @@ def test_a_follower_that_keeps_its_speed_blocks_the_return_while_nearer_than_the
     from the right lane slower than the vehicle behind and was rear-ended; seed 21 of the reliability campaign: 31 m
     ahead of one closing at 6.8 m/s (the gap enough for the lane change's 3 s) it returned from a standstill, and the
     sideways move took 5 s. A follower closing faster than the fit's error (``MinimalRisk.open_mps``) blocks."""
-    from sim.simulator import Nearest, Simulator
+    from sim.nearest import Nearest
+    from sim.simulator import Simulator
     from spec.physical import CAR
 
     follower = Nearest(gap_m + CAR.length_m, closing_mps)
@@ -248,7 +249,8 @@ def test_the_fallback_passing_a_vehicle_beside_it_is_held_back_only_by_a_gap_ahe
     ``open_mps`` faster than the vehicle beside it while the gap ahead meets the specification now."""
     from types import SimpleNamespace
 
-    from sim.simulator import Nearest, Simulator
+    from sim.nearest import Nearest
+    from sim.simulator import Simulator
     from spec.envelope import MINIMAL_RISK
     from spec.physical import CAR
     from spec.safety import SAFETY
@@ -275,7 +277,8 @@ def test_the_fallback_drops_back_behind_a_vehicle_beside_it_at_that_vehicles_spe
     it now drives ``open_mps`` below that vehicle's speed."""
     from types import SimpleNamespace
 
-    from sim.simulator import Nearest, Simulator
+    from sim.nearest import Nearest
+    from sim.simulator import Simulator
     from spec.envelope import MINIMAL_RISK
 
     view = SimpleNamespace(lead=Nearest(0.9, -2.7), follower=None)
@@ -296,7 +299,8 @@ def test_the_fallback_beside_a_vehicle_it_is_faster_than_drops_back_or_passes_wh
     its own."""
     from types import SimpleNamespace
 
-    from sim.simulator import Nearest, Simulator
+    from sim.nearest import Nearest
+    from sim.simulator import Simulator
     from spec.envelope import MINIMAL_RISK as mr
     from spec.physical import CAR
 
@@ -332,7 +336,8 @@ def test_the_fallback_beside_a_vehicle_alongside_behind_passes_it_when_that_ends
     the vehicle, it drops back; the faster of the two, it passes whatever comes."""
     from types import SimpleNamespace
 
-    from sim.simulator import Nearest, Simulator
+    from sim.nearest import Nearest
+    from sim.simulator import Simulator
     from spec.envelope import MINIMAL_RISK as mr
 
     ahead = Nearest(14.99, -0.04)  # at 7.0 m/s
@@ -364,7 +369,8 @@ def test_a_return_that_would_end_too_near_the_vehicle_ahead_brakes_to_its_speed_
     fitted yet: the slowest the bounds let it be)."""
     from types import SimpleNamespace
 
-    from sim.simulator import Nearest, Simulator
+    from sim.nearest import Nearest
+    from sim.simulator import Simulator
     from spec.actions import ACTION_RULES, Action
     from spec.envelope import MINIMAL_RISK, TRACKING
     from spec.physical import CAR
@@ -412,7 +418,8 @@ def test_a_forced_return_passing_a_vehicle_alongside_brakes_for_the_one_ahead_on
     braking then still stops short of the vehicle ahead; otherwise it brakes at once, as before."""
     from types import SimpleNamespace
 
-    from sim.simulator import Nearest, Simulator
+    from sim.nearest import Nearest
+    from sim.simulator import Simulator
     from spec.envelope import MINIMAL_RISK, TRACKING
     from spec.physical import CAR
     from spec.safety import SAFETY
@@ -449,7 +456,8 @@ def test_a_forced_return_passing_a_vehicle_alongside_brakes_for_the_one_ahead_on
 
 
 def test_the_fallback_waits_in_the_right_lane_only_while_the_oncoming_lane_leaves_time() -> None:
-    from sim.simulator import Nearest, Simulator
+    from sim.nearest import Nearest
+    from sim.simulator import Simulator
     from spec.envelope import TRACKING
     from spec.physical import CAR
     from spec.safety import SAFETY
