@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Install what the suite needs: Spin and gcc from Debian when missing, then this package and its
-# Python dependencies from PyPI (editable, with the dev tools ruff and mypy). OVERTAKE_BROWSER=1 also installs
-# Debian's chromium, which the report's browser test drives (CI always sets it; Playwright never downloads a browser).
+# Python dependencies from PyPI (editable, with the dev tools ruff and mypy) at the versions ci/constraints.txt
+# pins. OVERTAKE_BROWSER=1 also installs Debian's chromium, which the report's browser test drives (CI always
+# sets it; Playwright never downloads a browser).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if ! command -v spin >/dev/null 2>&1 || ! command -v gcc >/dev/null 2>&1; then
@@ -16,4 +17,4 @@ if [ "${OVERTAKE_BROWSER:-0}" = 1 ] && ! command -v chromium >/dev/null 2>&1; th
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq chromium >/dev/null
 fi
-python3 -m pip install -q --disable-pip-version-check --root-user-action=ignore -e '.[dev]'
+python3 -m pip install -q --disable-pip-version-check --root-user-action=ignore -c ci/constraints.txt -e '.[dev]'
