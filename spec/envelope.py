@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from spec.actions import ACTION_RULES
 from spec.grid import COMMON_SPEED_MPS
 from spec.motion import RAMP_SHARE, Ramp, covered_s, ramp_s
 from spec.physical import CAR, LOOP, NOISE, SENSORS
@@ -168,6 +169,28 @@ class MinimalRisk:
     #: Two vehicles in neighbouring lanes whose centres are nearer than this along the road are beside each other:
     #: a car length and the specification's least gap (the gap either would have to the other in one lane).
     beside_m: float = CAR.length_m + SAFETY.min_gap_m
+
+    @property
+    def reaction_s(self) -> float:
+        """How late the fallback's emergency brake may act after the gap ahead first breaks the specification: the
+        gap is read once per sweep, and the brake is commanded at the next control step."""
+        return 1.0 / SENSORS.sweep_hz + LOOP.control_dt_s
+
+    def emergency_cancels_mps(self) -> float:
+        """The highest closing speed on a vehicle that keeps its speed (or stands) that the emergency brake cancels
+        before contact, braking at ``emergency_decel_mps2`` from ``reaction_s`` after the gap first breaks the
+        specification: the gap then, ``time_gap_s x v`` less the ``v x reaction_s`` closed meanwhile, must exceed
+        the ``v^2 / (2 x emergency_decel_mps2)`` that braking closes, so ``v < 2 x emergency_decel_mps2 x (time_gap_s
+        - reaction_s)`` (16.4 m/s at 6 m/s^2; below ``min_gap_m / time_gap_s`` the trigger gap is the least gap,
+        larger still). A vehicle ahead that brakes after the trigger is outside this bound (it broke the bounds)."""
+        return 2.0 * self.emergency_decel_mps2 * (SAFETY.time_gap_s - self.reaction_s)
+
+    @staticmethod
+    def fastest_closing_mps() -> float:
+        """The fastest the AV may close on a standing vehicle: its fastest action's speed and the executor's stated
+        speed error (``TRACKING``), the speed the emergency brake must be able to cancel."""
+        fastest = max(rule.speed_factor for rule in ACTION_RULES.values())
+        return float(fastest) * COMMON_SPEED_MPS + TRACKING.speed_mps
 
     def leaves_slot(self, apart_m: float) -> bool:
         """Whether two vehicles in one lane whose centres are ``apart_m`` apart leave a slot for the AV between them:

@@ -9,13 +9,15 @@ import pytest
 
 from sim.executor import Executor
 from sim.scene import Scene
-from sim.vehicle import KinematicCar, WheeledCar
+from sim.vehicle import KinematicCar, WheeledCar, first_contact
 from spec.actions import ACTION_RULES, Action
+from spec.envelope import MINIMAL_RISK
 from spec.errors import EngineError
 from spec.grid import PAPER_GRID
 from spec.lanes import Lane
 from spec.motion import RAMP_SHARE, action_speed_mps, plan_profiles, ramp_gain_m, ramp_s, reference_offset_m
 from spec.physical import CAR, LOOP
+from spec.safety import SAFETY
 
 COMMON_MPS = PAPER_GRID.speed  # the common speed of the paper's grid
 
@@ -207,3 +209,32 @@ def test_an_action_whose_lane_guard_fails_is_an_error_not_a_straight_drive(world
     _scene, _car, executor = world
     with pytest.raises(EngineError, match="left_lane_change asked of an AV in the left lane"):
         executor.run(Action.LEFT_LANE_CHANGE, no_traffic)
+
+
+def test_the_emergency_brake_from_the_trigger_gap_stops_short_of_a_standing_vehicle_at_the_fastest_closing_speed(
+        world) -> None:
+    """``MinimalRisk.emergency_cancels_mps`` in physics: the car as fast as it goes (asked for the fastest
+    closing speed it may have, ``fastest_closing_mps``) meets a standing vehicle where the gap first breaks the
+    specification, drives on for the fallback's ``reaction_s``, then steps its command down at
+    ``emergency_decel_mps2`` per control step as the fallback does; it stops with no contact, the gap the bound's
+    kinematics predict left."""
+    scene, car, _ = world
+    mr = MINIMAL_RISK
+    fastest_mps = mr.fastest_closing_mps()
+    speeds_while(scene, car, fastest_mps, 12.0)
+    speed_mps = car.pose().speed_mps  # the car tops out a little below 15.5 m/s: as fast as it goes
+    assert speed_mps >= 2 * COMMON_MPS
+    trigger_gap_m = SAFETY.required_gap_m(speed_mps)
+    standing = KinematicCar(scene, car.pose().x_m + CAR.length_m + trigger_gap_m, car.pose().y_m, 0.0)
+    speeds_while(scene, car, speed_mps, mr.reaction_s)
+    command_mps, contacts = speed_mps, 0
+    while car.pose().speed_mps > 0.05 or command_mps > 0.0:
+        command_mps = max(0.0, command_mps - mr.emergency_decel_mps2 * LOOP.control_dt_s)
+        for _ in range(LOOP.control_every_steps):
+            car.command(command_mps, 0.0, scene.dt_s)
+            scene.step()
+            contacts += first_contact(scene, car.body, [standing]) is not None
+    assert contacts == 0
+    left_m = standing.x_m - car.pose().x_m - CAR.length_m
+    predicted_m = trigger_gap_m - speed_mps * mr.reaction_s - speed_mps**2 / (2 * mr.emergency_decel_mps2)
+    assert left_m > 0.0 and left_m == pytest.approx(predicted_m, abs=0.5)  # 1.66 m measured, 1.56 m predicted

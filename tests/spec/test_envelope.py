@@ -126,3 +126,27 @@ def test_a_returns_predicted_gap_takes_the_cars_envelope_and_a_measured_gap_is_t
     margin_m = SAFETY.required_gap_m(7.0 + TRACKING.speed_mps) + TRACKING.position_m
     assert not mr.too_near_after(margin_m + 7.0 * 5.0 + 0.01, 7.0, 5.0)
     assert mr.too_near_after(margin_m + 7.0 * 5.0 - 0.01, 7.0, 5.0)
+
+
+def test_the_emergency_brake_cancels_every_closing_speed_the_car_can_have_before_contact() -> None:
+    """The fallback brakes at the car's limit only once the gap ahead breaks the specification, and a sweep and a
+    control step late: from there, at every closing speed up to the fastest the car may have on a standing vehicle,
+    the gap left exceeds what braking closes (stepped here, not from the closed form), and the stated bound is where
+    that ends."""
+    mr = MINIMAL_RISK
+    fastest = mr.fastest_closing_mps()
+    assert fastest == 2 * 7.0 + TRACKING.speed_mps and mr.reaction_s == pytest.approx(0.1 + 1 / 30)
+    assert fastest < mr.emergency_cancels_mps()
+    dt_s = 1e-3
+
+    def left_at_stop_m(closing_mps: float) -> float:
+        gap_m = SAFETY.required_gap_m(closing_mps) - closing_mps * mr.reaction_s
+        while closing_mps > 0.0:
+            closing_mps = max(0.0, closing_mps - mr.emergency_decel_mps2 * dt_s)
+            gap_m -= closing_mps * dt_s
+        return gap_m
+
+    for k in range(1, 157):
+        assert left_at_stop_m(k * fastest / 156) > 0.0
+    bound = mr.emergency_cancels_mps()
+    assert left_at_stop_m(bound - 0.05) > 0.0 > left_at_stop_m(bound + 0.05)
