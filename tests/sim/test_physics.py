@@ -228,13 +228,15 @@ def test_the_emergency_brake_from_the_trigger_gap_stops_short_of_a_standing_vehi
     standing = KinematicCar(scene, car.pose().x_m + CAR.length_m + trigger_gap_m, car.pose().y_m, 0.0)
     speeds_while(scene, car, speed_mps, mr.reaction_s)
     command_mps, contacts = speed_mps, 0
-    while car.pose().speed_mps > 0.05 or command_mps > 0.0:
+    for _ in range(round(10.0 / LOOP.control_dt_s)):  # braking from 15.5 m/s takes 2.6 s
+        if car.pose().speed_mps <= 0.05 and command_mps == 0.0:
+            break
         command_mps = max(0.0, command_mps - mr.emergency_decel_mps2 * LOOP.control_dt_s)
         for _ in range(LOOP.control_every_steps):
             car.command(command_mps, 0.0, scene.dt_s)
             scene.step()
             contacts += first_contact(scene, car.body, [standing]) is not None
-    assert contacts == 0
+    assert contacts == 0 and car.pose().speed_mps <= 0.05
     left_m = standing.x_m - car.pose().x_m - CAR.length_m
     predicted_m = trigger_gap_m - speed_mps * mr.reaction_s - speed_mps**2 / (2 * mr.emergency_decel_mps2)
     assert left_m > 0.0 and left_m == pytest.approx(predicted_m, abs=0.5)  # 1.66 m measured, 1.56 m predicted
