@@ -3,12 +3,12 @@
 Usage: python -m ci.bench.solver [--iterations 50,20,10] [--rounds 2]
 
 PyBullet solves the joints and the wheels' contacts with ``numSolverIterations`` (50 unless set; the simulator
-never sets it). For each count the AV alone drives the same commands twice over: open loop (7, 14 and 3.5 m/s,
-33 s each, a 0.1 rad steering pulse at 42 s) and through the executor (start-up, then drive, accelerate,
-right_lane_change, left_lane_change, brake: the lane keeping and position reference the drives use). Printed per
-count: µs per ``stepSimulation`` (median over rounds), the open loop's heading after its first 33 s at 7 m/s and its
-end position's distance from the first count's, and the executor's largest position and speed difference from the
-first count's at matching steps. The first count is the reference.
+never sets it). For each count the AV alone drives the same commands twice over: open loop (the common speed, twice
+it and half it, 33 s each, a 0.1 rad steering pulse at 42 s) and through the executor (start-up, then drive,
+accelerate, right_lane_change, left_lane_change, brake: the lane keeping and position reference the drives use).
+Printed per count: µs per ``stepSimulation`` (median over rounds), the open loop's heading after its first 33 s at
+7 m/s and its end position's distance from the first count's, and the executor's largest position and speed
+difference from the first count's at matching steps. The first count is the reference.
 """
 
 from __future__ import annotations
@@ -31,6 +31,7 @@ from spec.lanes import Lane
 from spec.physical import LOOP
 
 OPEN_LOOP_STEPS = 6000  # 100 s at 60 Hz
+COMMON_MPS = PAPER_GRID.speed  # the open loop drives at it, twice it and half it
 PLAN = (Action.DRIVE, Action.ACCELERATE, Action.RIGHT_LANE_CHANGE, Action.LEFT_LANE_CHANGE, Action.BRAKE)
 
 
@@ -58,7 +59,7 @@ def open_loop(iterations: int) -> tuple[float, list[Pose]]:
     car = WheeledCar(timed.scene, 0.0, 0.0)
     poses = []
     for k in range(OPEN_LOOP_STEPS):
-        speed_mps = 7.0 if k < 2000 else 14.0 if k < 4000 else 3.5
+        speed_mps = COMMON_MPS if k < 2000 else 2 * COMMON_MPS if k < 4000 else COMMON_MPS / 2
         car.command(speed_mps, 0.1 if 2500 <= k < 2600 else 0.0, timed.scene.dt_s)
         timed.scene.step()
         if k % 2000 == 1999:
