@@ -16,11 +16,11 @@ from __future__ import annotations
 import argparse
 import math
 import statistics
-import time
 
 from rich.console import Console
 from rich.table import Table
 
+from ci.bench.physics import StepTimer
 from ci.shared.machine import machine
 from sim.executor import Executor
 from sim.scene import Scene
@@ -35,44 +35,34 @@ COMMON_MPS = PAPER_GRID.speed  # the open loop drives at it, twice it and half i
 PLAN = (Action.DRIVE, Action.ACCELERATE, Action.RIGHT_LANE_CHANGE, Action.LEFT_LANE_CHANGE, Action.BRAKE)
 
 
-class Timed:
-    """A scene whose steps are timed."""
-
-    def __init__(self, iterations: int) -> None:
-        self.scene = Scene()
-        self.scene.client.setPhysicsEngineParameter(numSolverIterations=iterations)
-        self.seconds, self.steps = 0.0, 0
-        step = self.scene.step
-
-        def timed() -> None:
-            started = time.perf_counter()
-            step()
-            self.seconds += time.perf_counter() - started
-            self.steps += 1
-
-        self.scene.step = timed  # type: ignore[method-assign]
+def scene_with(iterations: int) -> Scene:
+    """A scene whose contact solver runs ``iterations`` iterations a step."""
+    scene = Scene()
+    scene.client.setPhysicsEngineParameter(numSolverIterations=iterations)
+    return scene
 
 
 def open_loop(iterations: int) -> tuple[float, list[Pose]]:
     """µs per step, and the poses after each third of the drive."""
-    timed = Timed(iterations)
-    car = WheeledCar(timed.scene, 0.0, 0.0)
+    scene = scene_with(iterations)
+    car = WheeledCar(scene, 0.0, 0.0)
     poses = []
-    for k in range(OPEN_LOOP_STEPS):
-        speed_mps = COMMON_MPS if k < 2000 else 2 * COMMON_MPS if k < 4000 else COMMON_MPS / 2
-        car.command(speed_mps, 0.1 if 2500 <= k < 2600 else 0.0, timed.scene.dt_s)
-        timed.scene.step()
-        if k % 2000 == 1999:
-            poses.append(car.pose())
-    timed.scene.close()
-    return timed.seconds / timed.steps * 1e6, poses
+    with StepTimer() as timer:
+        for k in range(OPEN_LOOP_STEPS):
+            speed_mps = COMMON_MPS if k < 2000 else 2 * COMMON_MPS if k < 4000 else COMMON_MPS / 2
+            car.command(speed_mps, 0.1 if 2500 <= k < 2600 else 0.0, scene.dt_s)
+            scene.step()
+            if k % 2000 == 1999:
+                poses.append(car.pose())
+    scene.close()
+    return timer.seconds / timer.steps * 1e6, poses
 
 
 def executed(iterations: int) -> list[Pose]:
     """The AV's pose at every control step of a start-up and a plan, through the executor."""
-    timed = Timed(iterations)
-    car = WheeledCar(timed.scene, 0.0, timed.scene.lane_y(Lane.LEFT))
-    executor = Executor(timed.scene, car, Lane.LEFT, PAPER_GRID)
+    scene = scene_with(iterations)
+    car = WheeledCar(scene, 0.0, scene.lane_y(Lane.LEFT))
+    executor = Executor(scene, car, Lane.LEFT, PAPER_GRID)
     poses: list[Pose] = []
 
     def tick(_dt_s: float) -> bool:
@@ -83,7 +73,7 @@ def executed(iterations: int) -> list[Pose]:
     executor.reset_reference()
     for action in PLAN:
         executor.run(action, tick)
-    timed.scene.close()
+    scene.close()
     return poses
 
 
