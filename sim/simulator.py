@@ -62,6 +62,12 @@ from spec.state import State
 RECENTRE_M = 1000.0
 START_UP_S = 4.0  # holding the lane from standstill at the start (and after a restart): reach the common speed
 MIN_EPISODE_KM = 0.001  # a collision again before the AV has moved a metre since the last one ends the drive
+#: A drive whose AV moves less than a car length for this long (simulated time) is blocked: the episode is given up
+#: (``FailureKind.BLOCKED``) and starts again like one after a collision, or the drive ends. A bound on the
+#: experiment, not on the model: four times the longest wait the fallback states (its return wait, 25.5 s), so no
+#: stated stop (a stop event: at most 3 s of braking and 5 s standing) or wait reaches it. Without it a wreck the AV
+#: cannot pass (wrecks stand until left behind) held a drive for ever.
+BLOCKED_S = 4 * MINIMAL_RISK.return_wait_s
 SNAPSHOT_EVERY = 10
 NO_OVERTAKE = (Status.NO_PLAN, Status.NO_PLAN_WITHIN_HORIZON)  # the final model's answers that refuse an overtake
 SENSOR_STREAM = 1  # the second word of the sensor's seed: [seed, 1]
@@ -330,14 +336,26 @@ class Simulator:
         started = time.perf_counter()
         ok = self.executor.hold(START_UP_S, self.grid.speed, self._tick)  # start-up: reach the common speed
         episode_km = 0.0
+        moved = (self.summary.km, self.summary.sim_time_s)  # where and when the AV last moved a car length
         while self.summary.km < km and not (until_failure and self.summary.ended(sensing_only)):
             if not ok:
                 if not self.restart_after_collision or self.summary.km - episode_km < MIN_EPISODE_KM:
                     break  # a collision ends the drive; so does one that comes again before the AV has moved
                 episode_km = self.summary.km
                 ok = self._restart()
+                moved = (self.summary.km, self.summary.sim_time_s)
                 continue
             ok = self._one_plan()
+            if (self.summary.km - moved[0]) * 1000 >= CAR.length_m:
+                moved = (self.summary.km, self.summary.sim_time_s)
+            elif ok and self.summary.sim_time_s - moved[1] > BLOCKED_S:
+                self._fail(FailureKind.BLOCKED, "blocked", f"the AV moved less than a car length in "
+                           f"{self.summary.sim_time_s - moved[1]:.0f} s, during {self.doing}")
+                if not self.restart_after_collision:
+                    break
+                episode_km = self.summary.km
+                ok = self._restart(collision=False)
+                moved = (self.summary.km, self.summary.sim_time_s)
         self.summary.wall_s = time.perf_counter() - started
         self.summary.traffic_collisions += self.traffic.collisions
         injectors = [*(self.faulty.injectors.values() if self.faulty else ()), *filter(None, [self.steering.injector])]
@@ -345,17 +363,18 @@ class Simulator:
                                                    "sweeps": sum(e.sweeps for e in i.events)} for i in injectors}
         return self.summary
 
-    def _restart(self) -> bool:
-        """After a collision: a fresh scene, AV and traffic (drawn from the drive's generator as it stands); the
-        distance, the failures and every report go on, so an audit measures collisions per km over long runs
-        (as the paper's simulation counted kilometres between failures)."""
-        self.summary.restarts += 1
+    def _restart(self, collision: bool = True) -> bool:
+        """After a collision (or a blocked episode, not counted among ``restarts``): a fresh scene, AV and traffic
+        (drawn from the drive's generator as it stands); the distance, the failures and every report go on, so an
+        audit measures collisions per km over long runs (as the paper's simulation counted kilometres between
+        failures)."""
+        self.summary.restarts += int(collision)
         self.summary.traffic_collisions += self.traffic.collisions
         self.origin_km = self.summary.km
         self.steering.end()
         self.scene.close()
         self._assemble()
-        self.doing = "start-up after a collision"
+        self.doing = "start-up after a collision" if collision else "start-up after a blocked episode"
         return self.executor.hold(START_UP_S, self.grid.speed, self._tick)
 
     # -- the sensors' clock (``spec.physical.SENSORS.sweep_hz``) ------------------------------------------------

@@ -12,6 +12,7 @@ class FailureKind(enum.Enum):
     LOSS_OF_CONTROL = "loss of control"  # the AV spun or left the road (``spec.faults.lost_control``)
     PLANNER = "planner"  # no plan (or none usable) and no plan under way
     SENSING = "sensing"  # the readings made no valid scenario, or the sweep never arrived
+    BLOCKED = "blocked"  # the AV stood (less than a car length in ``sim.simulator.BLOCKED_S``): the episode is given up
 
     @property
     def ends_run(self) -> bool:

@@ -7,13 +7,14 @@ import pytest
 import sim.parts as parts_module
 from sim.parts import DriveConfig
 from sim.sensors import Reading
-from sim.simulator import Simulator
+from sim.simulator import START_UP_S, Simulator
 from spec.actions import Action
 from spec.errors import ScenarioError
 from spec.grid import PAPER_GRID
 from spec.kinds import FailureKind, ViolationKind
 from spec.lanes import Lane
 from spec.motion import ramp_gain_m
+from spec.physical import LOOP
 
 
 def paper_simulator(seed: int, **kw: object) -> Simulator:
@@ -111,3 +112,41 @@ def test_tables_name_failure_kinds_by_their_value() -> None:
     console.print(totals_table([summary]))
     text = console.export_text()
     assert "collision: hit" in text and "kept after planner: no_plan" in text and "FailureKind" not in text
+
+
+class Standing(Simulator):
+    """A simulator whose AV stands wherever a decision would be taken: a world it can never get through."""
+
+    def _one_plan(self) -> bool:
+        return self.executor.hold(LOOP.wait_s, 0.0, self._tick)
+
+
+@pytest.mark.parametrize("restart", [False, True])
+def test_an_av_that_stands_for_the_blocked_bound_ends_its_episode_never_the_drive_hanging(restart: bool) -> None:
+    """Less than a car length in ``BLOCKED_S`` of simulated time: the episode is given up as blocked (a stop, not a
+    failure proper); the drive ends there, or starts again as after a collision (not counted among the restarts)."""
+    from sim.simulator import BLOCKED_S
+
+    sim = Standing(1, DriveConfig(1.0).parts(), restart_after_collision=restart)
+    try:
+        summary = sim.drive(0.1 if restart else 1.0)
+    finally:
+        sim.close()
+    blocked = summary.of_kind(FailureKind.BLOCKED)
+    assert blocked and summary.crash is None and summary.restarts == 0
+    if restart:  # each episode's start-up moves the AV on: the drive ends its distance, blocked again and again
+        assert summary.km >= 0.1 and len(blocked) >= 2
+    else:
+        assert len(blocked) == 1 and summary.km < 0.1
+    # each episode: its start-up, the decisions' waits until the car has stopped, then the bound
+    starts = [0.0] + [f.t_s for f in blocked[:-1]]
+    assert all(BLOCKED_S < f.t_s - t0 <= BLOCKED_S + START_UP_S + 3 * LOOP.wait_s for f, t0 in zip(blocked, starts))
+
+
+def test_the_blocked_bound_is_beyond_every_stop_and_wait_the_world_and_the_fallback_state() -> None:
+    from sim.simulator import BLOCKED_S
+    from spec.envelope import MINIMAL_RISK
+    from spec.physical import EVENTS, SPEEDS
+
+    longest_stop_s = (SPEEDS.mean_mps + SPEEDS.cut_sd * SPEEDS.sd_mps) / EVENTS.stop_decel_mps2 + EVENTS.stop_hold_s
+    assert max(longest_stop_s, MINIMAL_RISK.return_wait_s, MINIMAL_RISK.takeover_s, LOOP.wait_s) < BLOCKED_S
