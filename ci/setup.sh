@@ -17,4 +17,13 @@ if [ "${OVERTAKE_BROWSER:-0}" = 1 ] && ! command -v chromium >/dev/null 2>&1; th
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq chromium >/dev/null
 fi
+# Skipped when this checkout is what Python imports and pyproject.toml and ci/constraints.txt are unchanged since this
+# checkout's last install (.setup-stamp, not tracked): a contributor's repeated test runs do not pay for pip (15 s).
+stamp=".setup-stamp"
+want="$(cat pyproject.toml ci/constraints.txt | sha256sum | cut -d' ' -f1) $(command -v python3)"
+here="$(python3 -c 'import pathlib, spec; print(pathlib.Path(spec.__file__).resolve().parents[1])' 2>/dev/null || true)"
+if [ "$here" = "$(pwd -P)" ] && [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
+  exit 0
+fi
 python3 -m pip install -q --disable-pip-version-check --root-user-action=ignore -c ci/constraints.txt -e '.[dev]'
+echo "$want" > "$stamp"

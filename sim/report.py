@@ -7,11 +7,6 @@ import json
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
-
 from spec.actions import ACTION_RULES, Action
 from spec.grid import Grid
 
@@ -29,12 +24,24 @@ def _duration_s(record: dict[str, Any]) -> float:
     return float(ACTION_RULES[Action(record["action"])].duration_s)
 
 
+def pyplot() -> Any:
+    """matplotlib's pyplot on the Agg backend (files only, never a window), imported when a figure is first drawn: a
+    command that draws none (bad input above all) does not pay the half second it takes."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
 def plot_trace(trace: Path, png: Path, grid: Grid, window_s: float = 300.0) -> Path:
     """Distance of every vehicle from the AV over the last ``window_s`` of the drive (for a failed drive: the
     lead-up to the failure): measured at the end of each action (dots) and as the model predicted (x)."""
     records = [json.loads(line) for line in trace.read_text().splitlines() if line.strip()]
     end_s = records[-1]["t_s"] if records else 0.0
     shown = [r for r in records if r["t_s"] >= end_s - window_s]
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(11, 5))
     for lane, colour, label in LANES:
         measured = [(r["t_s"], d) for r in shown for d in r["measured_dx_m"][lane] if SHOWN_M[0] <= d <= SHOWN_M[1]]

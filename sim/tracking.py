@@ -15,7 +15,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from sim.scene import Scene
 from spec.assumptions import Bounds
@@ -213,6 +212,8 @@ class Tracker:
                     cost[a, b] = abs(x - t.middle_m) + (0.0 if t.confirmed else HELD)
                 elif t.confirmed and t.lo_m - e_m - below_m <= x <= t.hi_m + e_m + above_m:
                     cost[a, b] = BEYOND + abs(x - t.middle_m)
+        from scipy.optimize import linear_sum_assignment  # SciPy's optimiser takes 0.6 s to import: when first needed
+
         rows, cols = linear_sum_assignment(cost)
         return {int(a): int(b) for a, b in zip(rows, cols, strict=True) if cost[a, b] < FORBIDDEN}
 

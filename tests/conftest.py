@@ -26,6 +26,8 @@ settings.register_profile("dev", max_examples=60, deadline=None)
 settings.register_profile("ci", max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow],
                           print_blob=True, derandomize=False)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "dev"))
+#: Whether the tests run in CI's profile: sweeps and samples sized by it run whole there (.ci/run), a part by default.
+CI_PROFILE = os.environ.get("HYPOTHESIS_PROFILE", "dev") == "ci"
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:

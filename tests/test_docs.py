@@ -69,6 +69,7 @@ def test_the_readme_shows_commands() -> None:
     assert {c[1] for c in _readme_commands()} >= {"demo", "plan", "explain", "crossval", "audit", "simulate", "report"}
 
 
+@pytest.mark.slow  # the README's campaigns (an audit of every cell size, traffic and sensing model): .ci/run runs them
 @pytest.mark.parametrize("args", _readme_commands(), ids=lambda a: " ".join(a[:3]))
 def test_every_readme_command_runs_as_printed(args: list[str], tmp_path: Path) -> None:
     if args[1] == "report":  # a report needs campaigns to read: the README's own, made small

@@ -27,11 +27,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-import matplotlib
 import numpy as np
-
-matplotlib.use("Agg")  # files only, never a window
-import matplotlib.pyplot as plt
 
 from ci.shared.executors import ExecutorChoice, run_jobs
 from ci.shared.records import append, campaign_lock, open_for_append, read_records
@@ -39,6 +35,7 @@ from ci.simulation.campaign import campaign_key, recorded_runs
 from oracle.planner import plan
 from sim.opportunity import Refusal
 from sim.parts import DriveConfig
+from sim.report import pyplot
 from sim.safety import attribution_key
 from sim.simulator import run_drive
 from sim.summary import RunSummary
@@ -190,6 +187,7 @@ class Row:
     #: plans the planner took longer for on this machine than the loop's budget (``LOOP.plan_budget_s``), which the
     #: drive counted as that long (``sim.simulator``): each a plan that would have acted late (machine-dependent)
     late_plans: int = 0
+    blocked: int = 0  # episodes given up because the AV stood (``sim.simulator.BLOCKED_S``; a stop, never a failure)
 
     def per_1000_km(self, count: float) -> float:
         return 1000 * count / self.km if self.km else math.nan
@@ -260,7 +258,7 @@ class Row:
                 "takeovers": self.takeovers, "takeovers_after_breach": self.takeovers_after_breach,
                 "waits_without_plan": self.waits_without_plan, "losses_of_control": self.losses_of_control,
                 "unreadable_snapshots": self.unreadable, "faults": self.faults, "late_plans": self.late_plans,
-                "plan_budget_ms": _num(1000 * LOOP.plan_budget_s)}
+                "blocked": self.blocked, "plan_budget_ms": _num(1000 * LOOP.plan_budget_s)}
 
 
 def figure(value: float | None, digits: int = 1) -> str:
@@ -323,7 +321,8 @@ def _row(key: Key, runs: list[RunSummary]) -> Row:
                sum(t.after_breach for r in runs for t in r.takeovers), sum(len(r.planner_failures) for r in runs),
                sum(len(r.of_kind(FailureKind.LOSS_OF_CONTROL)) for r in runs),
                sum(len(r.of_kind(FailureKind.SENSING)) for r in runs), _fault_counts(runs),
-               late_plans=sum(m > 1000 * LOOP.plan_budget_s for m in plan_ms))
+               late_plans=sum(m > 1000 * LOOP.plan_budget_s for m in plan_ms),
+               blocked=sum(len(r.of_kind(FailureKind.BLOCKED)) for r in runs))
 
 
 def _at_most(edge: float | None, largest: float) -> float | None:
@@ -553,6 +552,7 @@ def _plot_models(audit_rows: list[Row], png: Path) -> None:
 def _plot_by_cell(audit_rows: list[Row], png: Path, panels: tuple[tuple[str, Callable[[Row], float]], ...],
                   title: str) -> None:
     """One panel per figure against cell size, one line per traffic, sensing, model and bound scale."""
+    plt = pyplot()
     fig, axes = plt.subplots(1, len(panels), figsize=(11, 4))
     lines = dict.fromkeys((r.traffic, r.sensing, r.model, r.bounds_scale) for r in audit_rows)
     worlds = list(dict.fromkeys((traffic, sensing) for traffic, sensing, _, _ in lines))  # a colour each
@@ -575,6 +575,7 @@ def _plot_by_cell(audit_rows: list[Row], png: Path, panels: tuple[tuple[str, Cal
 
 
 def _plot_latency(costs: list[Cost], png: Path) -> None:
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6, 4))
     for engine, model in dict.fromkeys((c.engine, c.model) for c in costs):
         mine = sorted((c.cell_m, c.median_ms) for c in costs

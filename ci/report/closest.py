@@ -8,8 +8,9 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from ci.report.document import Figure, png_bytes, pyplot
+from ci.report.document import Figure, png_bytes
 from ci.shared.records import read_records
+from sim.report import pyplot
 
 FRAMES, BEFORE_S = 4, 3.0
 

@@ -9,6 +9,8 @@ from typing import Any
 
 from rich.table import Table as RichTable
 
+from sim.report import pyplot
+
 
 @dataclass(frozen=True, slots=True)
 class Table:
@@ -40,16 +42,6 @@ class Figure:
             return self.data
         assert self.path is not None
         return self.path.read_bytes()
-
-
-def pyplot() -> Any:
-    """matplotlib's pyplot on the Agg backend (no display): the report draws its own figures headless."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def png_bytes(fig: Any) -> bytes:

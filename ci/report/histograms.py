@@ -9,7 +9,8 @@ from __future__ import annotations
 
 from collections import defaultdict
 
-from ci.report.document import Figure, png_bytes, pyplot
+from ci.report.document import Figure, png_bytes
+from sim.report import pyplot
 from sim.summary import RunSummary
 
 

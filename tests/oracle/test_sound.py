@@ -3,7 +3,6 @@ reachable-set check and sampled motions within its bounds; the same checks break
 
 from __future__ import annotations
 
-import os
 import random
 from dataclasses import replace
 
@@ -28,11 +27,10 @@ from spec.models import ModelKind
 from spec.physical import LOOP, SENSORS
 from spec.scenario import Problem, Scenario, make_scenario, problem_for, sensed
 from spec.sound import Sound, sensed_extents
-from tests.conftest import scenarios
+from tests.conftest import CI_PROFILE, scenarios
 
-CI = os.environ.get("HYPOTHESIS_PROFILE") == "ci"
 #: Plan/motion pairs the campaign below drives: the issue's 10,000 in CI's profile.
-PAIRS = 10_000 if CI else 1_000
+PAIRS = 10_000 if CI_PROFILE else 1_000
 
 
 @st.composite
@@ -73,7 +71,7 @@ def _check(scenario: Scenario, strategy: Strategy, motions: int, rng: random.Ran
     return len(driven)
 
 
-@settings(max_examples=100 if CI else 25)
+@settings(max_examples=100 if CI_PROFILE else 25)
 @given(st.sampled_from(STANDARD_CELLS_M).flatmap(lambda c: sound_scenarios(Grid(c))),
        st.sampled_from(list(Strategy)), st.integers(0, 2**32 - 1))
 def test_every_sound_plan_survives_every_motion_within_its_bounds(scenario: Scenario, strategy: Strategy,
@@ -207,7 +205,7 @@ def test_the_optimal_plan_costs_the_least_of_every_plan() -> None:
     print(f"seed {seed}")
     rng = random.Random(seed)
     checked = planned = 0
-    while checked < (150 if CI else 40):
+    while checked < (150 if CI_PROFILE else 40):
         scenario = _random_scenario(rng)
         horizon = min(scenario.horizon, 6)
         for kind in ModelKind:
@@ -255,7 +253,7 @@ def test_a_proof_of_no_plan_holds_at_any_horizon() -> None:
     print(f"seed {seed}")
     rng = random.Random(seed)
     proved = 0
-    for _ in range(200 if CI else 60):
+    for _ in range(200 if CI_PROFILE else 60):
         scenario = _random_scenario(rng)
         if solve(scenario, Strategy.SHORTEST, limits=Limits(max_states=100_000)).status is not Status.NO_PLAN:
             continue
@@ -314,7 +312,7 @@ def test_the_search_prune_changes_no_answer(monkeypatch: pytest.MonkeyPatch) -> 
     seed = 7
     print(f"seed {seed}")
     rng = random.Random(seed)
-    cases = [_random_scenario(rng) for _ in range(120 if CI else 40)]
+    cases = [_random_scenario(rng) for _ in range(120 if CI_PROFILE else 40)]
     cases += [replace(b.load(), sound=Sound(profile(name))) for b in BUILTINS for name in ("paper", "default")]
     pruned = [solve(s, Strategy.SHORTEST, limits=Limits(max_states=100_000)) for s in cases]
     monkeypatch.setattr(SoundRules, "hopeless", lambda self, state, goal: False)

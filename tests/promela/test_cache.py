@@ -5,6 +5,7 @@ contradicts is an engine error, never an answer."""
 from __future__ import annotations
 
 import os
+import shutil
 from pathlib import Path
 
 import pytest
@@ -18,24 +19,41 @@ from spec.library import builtin
 from spec.models import ModelKind
 from spec.scenario import Scenario, problem_for
 
-pytestmark = pytest.mark.requires_spin
+pytestmark = [pytest.mark.requires_spin, pytest.mark.xdist_group("verifier-cache")]  # one worker compiles once
 
 
 def _scenario() -> Scenario:
     return builtin("one_target").load()  # type: ignore[union-attr]
 
 
-def _cached(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[Path, SearchResult]:
+@pytest.fixture(scope="module")
+def compiled(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A cache holding the one verifier these tests damage, compiled once for the module (each test gets a copy)."""
+    cache = tmp_path_factory.mktemp("cache")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("OVERTAKE_CACHE", str(cache))
+        runner.search(problem_for(_scenario(), ModelKind.FINAL), Strategy.SENSIBLE)
+    runner.close_servers()
+    return cache
+
+
+@pytest.fixture
+def cached(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, compiled: Path) -> tuple[Path, SearchResult]:
+    """A cache of this test's own (a copy of ``compiled``) and the plan its verifier gives: the damage a test does
+    is what a later process finds."""
+    shutil.copytree(compiled, tmp_path, dirs_exist_ok=True)
     monkeypatch.setenv("OVERTAKE_CACHE", str(tmp_path))
     first = runner.search(problem_for(_scenario(), ModelKind.FINAL), Strategy.SENSIBLE)
+    assert first.extra["verifier_cached"] is True
     (pan,) = tmp_path.glob("pan-*/pan")
     runner.close_servers()  # the damage below is what a later process finds
     return pan, first
 
 
 @pytest.mark.parametrize("damage", ["truncated", "altered", "not executable", "no checksum", "removed"])
-def test_a_damaged_cached_verifier_is_rebuilt(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, damage: str) -> None:
-    pan, first = _cached(tmp_path, monkeypatch)
+def test_a_damaged_cached_verifier_is_rebuilt(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        cached: tuple[Path, SearchResult], damage: str) -> None:
+    pan, first = cached
     if damage == "truncated":
         pan.write_bytes(pan.read_bytes()[:1000])
     elif damage == "altered":
@@ -54,8 +72,9 @@ def test_a_damaged_cached_verifier_is_rebuilt(tmp_path: Path, monkeypatch: pytes
 
 
 def test_a_verifier_that_answers_nonsense_is_rebuilt_once_then_reported_with_the_cache(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    _cached(tmp_path, monkeypatch)
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        cached: tuple[Path, SearchResult]) -> None:
+    assert cached
     calls = {"n": 0}
 
     def nonsense(*args: object, **kw: object) -> SearchResult:
@@ -77,8 +96,9 @@ def _hanging(pan: Path) -> None:
 
 
 def test_a_hung_pan_process_is_incomplete_within_the_default_limit(tmp_path: Path,
-                                                                   monkeypatch: pytest.MonkeyPatch) -> None:
-    pan, _ = _cached(tmp_path, monkeypatch)
+                                                                   monkeypatch: pytest.MonkeyPatch,
+        cached: tuple[Path, SearchResult]) -> None:
+    pan, _ = cached
     monkeypatch.setattr(runner, "DEFAULT_TIMEOUT_S", 0.5)
     _hanging(pan)
     result = runner.search(problem_for(_scenario(), ModelKind.FINAL), Strategy.SENSIBLE, serve=False)
@@ -86,8 +106,9 @@ def test_a_hung_pan_process_is_incomplete_within_the_default_limit(tmp_path: Pat
 
 
 def test_a_hung_run_of_a_server_is_killed_and_incomplete_within_the_default_limit(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    pan, first = _cached(tmp_path, monkeypatch)
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        cached: tuple[Path, SearchResult]) -> None:
+    pan, first = cached
     server = runner._server(pan)
     output = server.folder / "out.txt"
     output.unlink(missing_ok=True)
@@ -100,8 +121,9 @@ def test_a_hung_run_of_a_server_is_killed_and_incomplete_within_the_default_limi
     assert again.actions == first.actions and runner._server(pan) is server  # the server lives on
 
 
-def test_a_server_that_will_not_start_is_rebuilt(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    pan, first = _cached(tmp_path, monkeypatch)
+def test_a_server_that_will_not_start_is_rebuilt(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        cached: tuple[Path, SearchResult]) -> None:
+    pan, first = cached
     monkeypatch.setattr(runner, "SERVER_START_S", 0.5)
     _hanging(pan)
     again = runner.search(problem_for(_scenario(), ModelKind.FINAL), Strategy.SENSIBLE)

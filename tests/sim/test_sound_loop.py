@@ -7,12 +7,14 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
 
 from sim.parts import DriveConfig
 from sim.simulator import Simulator
 from sim.summary import RunSummary
+from sim.tolerance import ToleranceReport
 from spec.errors import OptionError
 from spec.physical import LOOP, SENSORS
 
@@ -62,12 +64,34 @@ def test_sound_plans_start_from_the_cars_measured_speed_and_nothing_inside_the_a
     assert RunSummary.from_json(summary.to_json()).to_json() == summary.to_json()
 
 
-def test_no_sound_decision_runs_on_past_a_sensed_breach_and_a_broken_world_is_counted() -> None:
+#: Vehicles that stop (too slow by far), seed 2: one drive, watched and traced, that the two tests below read.
+STOPPING = DriveConfig(1.0, model="sound", traffic="spread", stop_rate_per_h=300.0, restart_after_collision=True)
+
+
+@pytest.fixture(scope="module")
+def stopping(tmp_path_factory: pytest.TempPathFactory) -> tuple[Watched, RunSummary, Path]:
+    """The drive of ``STOPPING`` as ``sim.simulator.run_drive`` assembles it, watched, its trace in the folder."""
+    from sim.observers import TraceWriter
+
+    folder = tmp_path_factory.mktemp("stopping")
+    with (folder / "trace-seed2.jsonl").open("w") as trace:
+        sim = Watched(2, STOPPING.parts((TraceWriter(trace),)), STOPPING.replan_on_violation,
+                      ToleranceReport(STOPPING.step_tolerance_cells, STOPPING.plan_tolerance_cells), None,
+                      STOPPING.snapshots, STOPPING.restart_after_collision, STOPPING.opportunity_checks)
+        try:
+            summary = sim.drive(STOPPING.km)
+        finally:
+            sim.close()
+    return sim, summary, folder
+
+
+@pytest.mark.xdist_group("stopping")  # the tests reading one drive run on one worker, which drives it once
+def test_no_sound_decision_runs_on_past_a_sensed_breach_and_a_broken_world_is_counted(
+        stopping: tuple[Watched, RunSummary, Path]) -> None:
     """Vehicles that stop (too slow by far): the truth's breaches are counted, the AV senses them from its sweeps and
     ends its decision within a control step and a sideways move of that (an action in lane: by the next sweep), and
     it senses them no sooner than they happen (the monitor reads no truth)."""
-    config = DriveConfig(1.0, model="sound", traffic="spread", stop_rate_per_h=300.0)
-    sim, summary = drive(config, 2)
+    sim, summary, _ = stopping
     assert summary.containment.by_kind.get("too slow", 0) > 0
     assert summary.sensed_breaches > 0 and summary.breach_replans + len(summary.takeovers) > 0
     assert sim.longest_s <= LOOP.lane_change_lateral_s + 2 * sim.executor.dt_s
@@ -167,6 +191,7 @@ def test_the_fallbacks_closing_speeds_take_the_avs_own_speed_changes_out_and_fol
     assert plain.closing_now_mps(9.0) == 2.0 and plain.own_mps(9.0) == 7.0
 
 
+@pytest.mark.slow  # 42 km of drives with the paper's faults and tracking: .ci/run runs it (pytest -m slow)
 def test_the_fallback_neither_brakes_below_traffic_that_keeps_its_speed_nor_returns_into_it() -> None:
     """The paper's world with its faults and tracking (seeds 4 and 6 of the evaluation): the fallback took over
     after vehicles appeared; braking for a standstill ahead that was not there, it was run into by a follower that
@@ -530,17 +555,18 @@ def test_a_sound_decision_acts_one_control_step_after_its_snapshot_and_plans_for
     assert sim.watch is not None and sim.watch.bounds.latency_s == 0.0
 
 
-def test_a_sound_drive_traces_every_action_and_every_fallback_and_plots_them(tmp_path) -> None:
+@pytest.mark.xdist_group("stopping")
+def test_a_sound_drive_traces_every_action_and_every_fallback_and_plots_them(
+        stopping: tuple[Watched, RunSummary, Path], tmp_path: Path) -> None:
     """The sound model predicts no cells, but its trace still has a line per executed action and per take-over
     (action null, what it did and for how long), so a drive's lead-up to an encounter can be read and plotted."""
     import json
 
     from sim.report import plot_trace
-    from sim.simulator import run_drive
 
-    config = DriveConfig(1.0, model="sound", traffic="spread", stop_rate_per_h=300.0, restart_after_collision=True)
-    summary = run_drive(2, config, str(tmp_path))
-    records = [json.loads(line) for line in (tmp_path / "trace-seed2.jsonl").read_text().splitlines()]
+    _, summary, folder = stopping
+    config = STOPPING
+    records = [json.loads(line) for line in (folder / "trace-seed2.jsonl").read_text().splitlines()]
     actions = [r for r in records if r["action"] is not None]
     fallbacks = [r for r in records if r["action"] is None]
     assert summary.takeovers and len(fallbacks) == len(summary.takeovers) + summary.minimal_risk_steps
@@ -548,7 +574,7 @@ def test_a_sound_drive_traces_every_action_and_every_fallback_and_plots_them(tmp
     assert all(r["predicted"] is None and r["doing"] and r["duration_s"] > 0 for r in records)
     assert all(r["doing"].startswith("fallback (") for r in fallbacks)
     assert [r["t_s"] for r in records] == sorted(r["t_s"] for r in records)
-    png = plot_trace(tmp_path / "trace-seed2.jsonl", tmp_path / "spacetime-seed2.png", config.grid)
+    png = plot_trace(folder / "trace-seed2.jsonl", tmp_path / "spacetime-seed2.png", config.grid)
     assert png.stat().st_size > 0
 
 

@@ -95,6 +95,7 @@ def test_a_deviation_quantile_is_a_bound_never_above_the_largest_seen() -> None:
     assert "≤ 0.031 / ≤ 0.031 / 0.031" in markdown([row], [], {})
 
 
+@pytest.mark.slow  # a whole audit through the command, both models, cost on every engine: .ci/run runs it
 def test_the_audit_command_writes_its_reports(tmp_path: Path) -> None:
     done = run("audit", "--cells", "21", "--traffic", "paper", "--sensing", "exact,noisy", "--km", "0.3",
                "--workers", "1", "--engines", "interpreter", "--snapshots", "2", "--out", str(tmp_path), "--json",

@@ -38,6 +38,8 @@ from ci.shared.options import CHECK_COUNT, FRAMED, HORIZON, MAX_STATES, PER_RUN,
 from spec.errors import ExitCode
 from spec.grid import PAPER_GRID
 
+pytestmark = pytest.mark.xdist_group("bad-input")  # on one worker: one fork server and one measured ceiling
+
 ROOT = Path(__file__).resolve().parents[3]  # the checkout under test, whatever is installed
 QUICK_S = 10.0  # bad input is refused before any work: a case that takes longer started some, or hung
 HEADROOM = 256 * 2**20  # address space a scenario-reading command may use above what its imports take
@@ -501,18 +503,24 @@ FRESH = [c for c in CASES if c.args[:2] in {("plan", "/dev/zero"), ("explain", "
          or (c.args[-1] in {"--km=nan", "--horizon=many"} and c.args[0] in {"simulate", "--count"})]
 
 
-@pytest.mark.parametrize("case", FRESH, ids=_ids(FRESH))
-def test_bad_input_in_a_fresh_process_under_a_memory_ceiling(case: Case, tmp_path: Path) -> None:
-    """A sample of the cases as a user starts them (their imports their own), under a ceiling of what the imports
-    take and a few hundred MiB more."""
-    work = _hostile_folder(tmp_path)
+@pytest.fixture(scope="module")
+def imports_vm_peak() -> int:
+    """What a fresh process takes once every command is imported (bytes of address space), measured once."""
     baseline = subprocess.run([sys.executable, "-c", "from tests.ci.cli.test_bad_input import _import_every_command, "
                                "_vm_peak\n_import_every_command()\nprint(_vm_peak())"],
                               capture_output=True, text=True, timeout=60, env=_env(), cwd=ROOT, check=True)
+    return int(baseline.stdout)
+
+
+@pytest.mark.parametrize("case", FRESH, ids=_ids(FRESH))
+def test_bad_input_in_a_fresh_process_under_a_memory_ceiling(case: Case, tmp_path: Path, imports_vm_peak: int) -> None:
+    """A sample of the cases as a user starts them (their imports their own), under a ceiling of what the imports
+    take and a few hundred MiB more."""
+    work = _hostile_folder(tmp_path)
     started = time.monotonic()
     done = subprocess.run([sys.executable, "-m", case.module, *case.args], capture_output=True, text=True,
                           timeout=QUICK_S, cwd=work, env={**_env(), **dict(case.env)},
-                          preexec_fn=_limit(int(baseline.stdout) + HEADROOM))
+                          preexec_fn=_limit(imports_vm_peak + HEADROOM))
     _check(case, Done(done.returncode, done.stdout, done.stderr, time.monotonic() - started))
 
 

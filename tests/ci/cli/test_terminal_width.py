@@ -24,6 +24,8 @@ from oracle.shrink import to_toml
 from spec.grid import grid_for
 from spec.library import builtin
 
+pytestmark = pytest.mark.xdist_group("terminal-width")  # on one worker: the campaign the report reads is run once
+
 WIDTH = 80
 ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]|\x1b\][^\x07\x1b]*(?:\x07|\x1b\\)")
 #: Words only a narrow output has: the line that names the columns a narrow table leaves out and where they all are
@@ -42,7 +44,7 @@ COMMANDS: dict[str, list[str]] = {
     "explain": ["explain", "no_plan_boxed_in"],
     "validate": ["validate", "paper_example", "--actions", "accelerate,right_lane_change"],
     "crossval": ["crossval", "--source", "library", "--engines", "interpreter,spin", "--out", "{out}", "--fresh"],
-    "simulate": ["simulate", "--km", "0.3", "--out", "{out}", "--fresh"],
+    "simulate": ["simulate", "--km", "0.1", "--out", "{out}", "--fresh"],
     "simulate-faults": ["simulate", "--until-failure", "--faults", "paper", "--km", "0.3", "--runs", "2", "--out",
                         "{out}", "--fresh"],
     "audit": ["audit", "--cells", "21", "--traffic", "paper", "--sensing", "exact", "--model", "paper,sound",
@@ -110,7 +112,11 @@ def short_tmp() -> Iterator[Path]:
     shutil.rmtree(folder, ignore_errors=True)
 
 
-@pytest.mark.parametrize("name", COMMANDS)
+#: Commands that drive whole campaigns (an audit of both models, drives until a fault): slow, .ci/run runs them.
+CAMPAIGNS = {"simulate-faults", "audit"}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in CAMPAIGNS else n for n in COMMANDS])
 def test_every_command_reads_at_80_columns_on_a_terminal_and_in_a_pipe(name: str, files: dict[str, str],
                                                                        short_tmp: Path) -> None:
     def args(_tag: str) -> list[str]:  # the same folder each time (--fresh): the paths printed are the same

@@ -21,6 +21,8 @@ from sim.summary import RunSummary
 from spec.errors import ExitCode
 from tests.conftest import run_cli
 
+pytestmark = pytest.mark.xdist_group("report-campaigns")  # on one worker: the campaigns the report reads are run once
+
 
 @pytest.fixture(scope="module")
 def campaigns(tmp_path_factory: pytest.TempPathFactory) -> Path:
@@ -110,6 +112,7 @@ def test_the_command_writes_the_page_and_markdown_with_links_that_resolve(campai
         assert not re.search(r"\bnan\b", output, re.IGNORECASE)
 
 
+@pytest.mark.slow  # a kilometre's audit, then its closest call replayed in PyBullet: .ci/run runs it
 def test_the_closest_call_of_an_audit_is_replayed_and_drawn(tmp_path: Path) -> None:
     """IDM traffic at 21 m: the paper model collides within a kilometre on this seed (tests/sim/test_frames.py)."""
     out = tmp_path / "audit"

@@ -20,6 +20,8 @@ import pytest
 
 from spec.errors import ExitCode
 
+pytestmark = pytest.mark.xdist_group("resume")  # on one worker: each campaign's uninterrupted run is run once
+
 ROOT = Path(__file__).resolve().parents[3]
 TIMING = ("wall_s", "plan_ms", "plan_latency_ms", "ms", "latency")  # how long things took: no two runs agree
 
@@ -139,8 +141,13 @@ def _signalled(campaign: Campaign, out: Path, sig: int, log: Path) -> int:
     return len(_lines(out / campaign.records))
 
 
-@pytest.mark.parametrize("sig", list(SIGNALS), ids=lambda s: signal.Signals(s).name)
-@pytest.mark.parametrize("name", list(CAMPAIGNS))
+#: Ctrl-C on the conformance campaign runs by default; the other signals, and every one on three drives of a
+#: kilometre, are slow (.ci/run runs them).
+CASES = [pytest.param(name, sig, marks=() if (name, sig) == ("crossval", signal.SIGINT) else pytest.mark.slow,
+                      id=f"{name}-{signal.Signals(sig).name}") for name in CAMPAIGNS for sig in SIGNALS]
+
+
+@pytest.mark.parametrize(("name", "sig"), CASES)
 def test_a_signalled_campaign_resumed_ends_as_one_that_ran_through(name: str, sig: int, tmp_path: Path,
                                                                    uninterrupted: Callable[[str], dict[str, Any]]
                                                                    ) -> None:
