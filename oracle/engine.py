@@ -3,7 +3,7 @@ search over offsets for optimal (``oracle.optimum``, the conformance check's own
 
 from __future__ import annotations
 
-from oracle import bitplan, offsets, sound
+from oracle import bitplan, commit, offsets, sound
 from oracle.interpreter import replay
 from oracle.optimum import lexicographic_optimum
 from oracle.search import trivial_answer
@@ -17,6 +17,8 @@ def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult
     """The reference engine. The bitset search is bounded by the horizon (at most a few milliseconds),
     so only the depth-first search watches the limits. A scenario with a sound model goes to ``oracle.sound``."""
     if problem.scenario.sound is not None:
+        if problem.scenario.sound.commitment is not None:
+            return commit.solve(problem, strategy, limits)
         return sound.solve(problem, strategy, limits)
     if strategy is Strategy.SHORTEST:
         return bitplan.shortest(problem)
@@ -46,11 +48,13 @@ def _beyond(problem: Problem) -> SearchResult:
     """The proof that no plan of any length exists: the paper model's bitset closure; the sound model's when every
     path is refused before the horizon (its time has no end, so no closure of all its states)."""
     if problem.scenario.sound is not None:
+        if problem.scenario.sound.commitment is not None:
+            return commit.prove_beyond(problem)
         return sound.prove_beyond(problem)
     return bitplan.beyond_horizon(problem)
 
 
 INTERPRETER = register(
     Engine("interpreter", (Strategy.SENSIBLE, Strategy.SHORTEST, Strategy.OPTIMAL), _solve,
-           "Python reference interpreter and planners", _beyond, sound=True)
+           "Python reference interpreter and planners", _beyond, sound=True, commit=True)
 )

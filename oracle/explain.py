@@ -23,7 +23,7 @@ from spec.answers import Answer, Status, Strategy
 from spec.errors import EngineError
 from spec.lanes import Lane
 from spec.models import ModelKind, models_for
-from spec.scenario import Scenario, make_scenario, problem_for
+from spec.scenario import Scenario, make_scenario, problem_for, sensed
 
 Vehicle = tuple[Lane, int]  # lane and index in that lane's (ascending) cells
 
@@ -86,14 +86,18 @@ def _solver(scenario: Scenario, kind: ModelKind, literals: dict[Vehicle, z3.Bool
 
 def keep_only(scenario: Scenario, keep: set[Vehicle]) -> Scenario:
     """The scenario with only the vehicles in ``keep`` (targets: those kept among the original targets; the sound
-    model's assumptions, if any, unchanged)."""
+    model's assumptions, if any, unchanged; what the snapshot measured of each kept vehicle, ``left_m`` and
+    ``right_m``, kept with it: a vehicle read sharper than its cell stays so)."""
     targets = set(scenario.target_indices)
-    left = [c for i, c in enumerate(scenario.left_lane) if (Lane.LEFT, i) in keep]
-    right = [c for i, c in enumerate(scenario.right_lane) if (Lane.RIGHT, i) in keep]
+    left_i = [i for i in range(len(scenario.left_lane)) if (Lane.LEFT, i) in keep]
+    right_i = [i for i in range(len(scenario.right_lane)) if (Lane.RIGHT, i) in keep]
     kept_targets = sum(1 for i in targets if (Lane.LEFT, i) in keep)
-    reduced = make_scenario(scenario.lane, left, right, kept_targets, scenario.model, scenario.horizon,
+    reduced = make_scenario(scenario.lane, [scenario.left_lane[i] for i in left_i],
+                            [scenario.right_lane[i] for i in right_i], kept_targets, scenario.model, scenario.horizon,
                             grid=scenario.grid)
-    return replace(reduced, sound=scenario.sound)
+    measured = sensed(reduced, None if scenario.left_m is None else tuple(scenario.left_m[i] for i in left_i),
+                      None if scenario.right_m is None else tuple(scenario.right_m[i] for i in right_i))
+    return replace(measured, sound=scenario.sound)
 
 
 def _checked(scenario: Scenario, blocking: tuple[Vehicle, ...], strategy: Strategy) -> Explanation:

@@ -6,7 +6,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
-from oracle import sound
+from oracle import commit, sound
 from oracle.interpreter import Validation, validate
 from oracle.optimum import Cost, Optimum, lexicographic_optimum, plan_cost
 from spec.actions import Action, plan_text
@@ -38,6 +38,11 @@ def plan(
     return replace(answer, states=_checked_states(eng, problem_for(scenario, answer.model, horizon), answer))
 
 
+def _committed(problem: Problem) -> bool:
+    sound_model = problem.scenario.sound
+    return sound_model is not None and sound_model.commitment is not None
+
+
 def solve(
     scenario: Scenario,
     strategy: Strategy | str = Strategy.SENSIBLE,
@@ -63,12 +68,12 @@ def solve(
         result = eng.solve(problem, strategy, (limits or Limits()).remaining(started, time.perf_counter()))
         explored += result.states_explored
         stages.append((kind, result.status, result.detail))
-        if result.status in (Status.PLAN, Status.INCOMPLETE):
-            break
+        if result.status in (Status.PLAN, Status.INCOMPLETE, Status.UNSAFE_START):
+            break  # an unsafe start is unsafe under every model
     elapsed_ms = (time.perf_counter() - started) * 1000
-    if result.status is Status.PLAN:
-        return Answer(Status.PLAN, kind, eng.name, strategy, result.actions, result.states, explored, elapsed_ms,
-                      result.detail, tuple(stages), result.extra)
+    if result.status in (Status.PLAN, Status.UNSAFE_START):
+        return Answer(result.status, kind, eng.name, strategy, result.actions, result.states, explored, elapsed_ms,
+                      result.detail, tuple(stages), result.extra, result.commit)
     if result.status is not Status.INCOMPLETE:
         _prove_beyond(eng, scenario, horizon, stages)
     status = combined_status(stages)
@@ -91,7 +96,18 @@ def _check_no_plan(answer: Answer, scenario: Scenario, model: ModelChoice | None
 
 
 def _checked_states(engine: Engine, problem: Problem, result: SearchResult | Answer) -> tuple[State, ...]:
-    """The states of a plan, after checking it with the interpreter: an invalid plan is an engine error."""
+    """The states of a plan, after checking it with the interpreter: an invalid plan is an engine error (under the
+    commitment semantics: the committed and predicted actions as one answer, split as the engine split them)."""
+    if _committed(problem):
+        if result.commit is None:
+            raise EngineError(f"engine {engine.name} returned a plan without its committed part and escape")
+        checked = commit.validate(problem, (*result.commit.committed, *result.commit.predicted))
+        if not checked.valid:
+            raise EngineError(f"engine {engine.name} returned an invalid answer: {checked.reason}")
+        if checked.commit != result.commit or result.actions != result.commit.committed:
+            raise EngineError(f"engine {engine.name}: its committed part or escape differs from the interpreter's "
+                              f"({checked.reason})")
+        return checked.states
     verdict = verdict_for(problem, result.actions)
     if not verdict.valid:
         raise EngineError(f"engine {engine.name} returned an invalid plan: {verdict.reason}")
@@ -120,8 +136,11 @@ def _prove_beyond(engine: Engine, scenario: Scenario, horizon: int | None,
 
 
 def combined_status(stages: list[tuple[ModelKind, Status, str]]) -> Status:
-    """No plan at all only when every model proved it; an incomplete stage makes the answer incomplete."""
+    """No plan at all only when every model proved it; an incomplete stage makes the answer incomplete; an unsafe
+    start is one under every model."""
     statuses = {status for _, status, _ in stages}
+    if Status.UNSAFE_START in statuses:
+        return Status.UNSAFE_START
     if Status.INCOMPLETE in statuses:
         return Status.INCOMPLETE
     if statuses == {Status.NO_PLAN}:
@@ -155,10 +174,15 @@ def cost_of(problem: Problem, actions: Sequence[Action]) -> Cost:
     return total_cost(zip(actions, replayed.states[1:]))
 
 
-def verdict_for(problem: Problem, actions: Sequence[Action]) -> Validation | sound.SoundValidation:
+Verdict = Validation | sound.SoundValidation | commit.CommitValidation
+
+
+def verdict_for(problem: Problem, actions: Sequence[Action]) -> Verdict:
     """The interpreter's verdict on ``actions``: under the paper's rules, or the sound model's when the scenario has
-    one."""
-    return validate(problem, actions) if problem.scenario.sound is None else sound.validate(problem, actions)
+    one (under its commitment semantics: committed actions with an escape, then the predicted continuation)."""
+    if problem.scenario.sound is None:
+        return validate(problem, actions)
+    return commit.validate(problem, actions) if _committed(problem) else sound.validate(problem, actions)
 
 
 @dataclass(frozen=True, slots=True)
@@ -166,7 +190,7 @@ class PipelineValidation:
     """An action list checked against the pipeline's models: valid under which model, or why under none."""
 
     model: ModelKind  # the model it is a plan for, or the first model tried
-    verdict: Validation | sound.SoundValidation
+    verdict: Verdict
     reason: str  # the valid model's reason, or every model's, joined
 
 
@@ -174,7 +198,7 @@ def validate_pipeline(scenario: Scenario, actions: Sequence[Action], model: Mode
                       horizon: int | None = None) -> PipelineValidation:
     """Whether ``actions`` is a plan under the first model of the choice (default: the scenario's) that accepts it
     (under the sound model when the scenario has one)."""
-    verdicts: list[tuple[ModelKind, Validation | sound.SoundValidation]] = []
+    verdicts: list[tuple[ModelKind, Verdict]] = []
     for kind in models_for(model or scenario.model):
         verdict = verdict_for(problem_for(scenario, kind, horizon), actions)
         if verdict.valid:

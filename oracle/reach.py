@@ -26,7 +26,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from spec.actions import ACTION_RULES, Action
-from spec.cells import left_cell, oncoming_cell
+from spec.cells import left_cell, oncoming_cell, oncoming_extent_m
 from spec.grid import Grid
 from spec.lanes import Lane
 from spec.models import GoalRule
@@ -40,7 +40,9 @@ from spec.sound import Sound, Vehicle, follower_limit_m, vehicles
 MAX_DT_S = 0.01
 #: The step of a sampled motion: the executor's control step (the simulator moves the AV no more often).
 MOTION_DT_S = LOOP.physics_dt_s * LOOP.control_every_steps
-#: How long after a plan the minimal-risk manoeuvre is followed (it reaches its hold speed well within this).
+#: How long after a plan the minimal-risk manoeuvre is followed in the left lane (it reaches its hold speed well within
+#: this, and nothing closes in on it after); in the right lane it is followed until the farthest oncoming vehicle could
+#: have reached the AV at its fastest (``Path.continuation_s``): the manoeuvre stays in that lane for ever.
 CONTINUATION_S = 10.0
 #: The corner motions' phantom starts: at the edge, and this many steps into the unseen stretch up to the farthest
 #: a vehicle there can still meet the AV from (``motions``).
@@ -67,7 +69,10 @@ class Breach:
 class Path:
     """The AV's reference through a plan and the minimal-risk manoeuvre after it: speed, position, lanes."""
 
-    def __init__(self, actions: Sequence[Action], sound: Sound, grid: Grid, lane: Lane) -> None:
+    def __init__(self, actions: Sequence[Action], sound: Sound, grid: Grid, lane: Lane,
+                 oncoming_far_m: float = 0.0) -> None:
+        """``oncoming_far_m``: where the farthest oncoming vehicle may start (a phantom's edge included), for how long
+        a path that ends in the right lane is followed."""
         self.sound, self.grid = sound, grid
         start_mps = grid.speed if sound.start_mps is None else sound.start_mps
         speeds = [action_speed_mps(a, grid) for a in actions]
@@ -103,6 +108,10 @@ class Path:
             self.lanes.append((move, t1, frozenset({rule.to_lane}), False))
             current = rule.to_lane
         self.final_lane = current
+        self.continuation_s = CONTINUATION_S
+        if current is Lane.RIGHT:
+            closing = sound.bounds.oncoming_mps.high_mps + hold
+            self.continuation_s += oncoming_far_m / closing if closing > 0 else 0.0
         self.max_accel = max((abs(r.dv_mps) / r.duration_s for r in self.ramps if r.duration_s > 0), default=0.0)
         #: The fastest the reference ever goes: ramps only move it between the speeds they join, so one of those.
         self.max_speed = max([start_mps, *speeds])
@@ -122,7 +131,7 @@ class Path:
 
     def times(self, dt_s: float) -> list[float]:
         """Samples at most ``dt_s`` apart over the plan and the continuation, every boundary among them."""
-        horizon = self.end_s + CONTINUATION_S
+        horizon = self.end_s + self.continuation_s
         n = max(1, math.ceil(horizon / dt_s))
         out = {horizon * k / n for k in range(n + 1)}
         out.update(self.bounds_s)
@@ -153,7 +162,7 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
     at most at the largest relative speed plus the time gap times the AV's largest acceleration: an interval whose
     samples leave less margin than that could lose is cut in two, down to a microsecond."""
     sound = _sound(scenario)
-    path = Path(actions, sound, scenario.grid, scenario.lane)
+    path = scenario_path(scenario, actions)
     tr, b, length = sound.tracking, sound.bounds, sound.safety.vehicle_length_m
     cars = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid, sound, scenario.left_m,
                     scenario.right_m)
@@ -206,9 +215,9 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
         return interval_ok(t0, mid, m0, m_mid, lanes, entering, behind) or \
             interval_ok(mid, t1, m_mid, m1, lanes, entering, behind)
 
-    # at the start in the left lane, one that can never be clear ahead follows (``spec.sound.follower_limit_m``)
+    # at the start in the left lane, one behind with bumpers clear follows (``spec.sound.follower_limit_m``)
     behind = {i for i, c in enumerate(cars) if scenario.lane is Lane.LEFT and c.lane is Lane.LEFT
-              and c.hi_m <= follower_limit_m(0.0, sound.safety) - TOLERANCE_M}
+              and c.hi_m <= follower_limit_m(0.0, sound.safety, sound.tracking) - TOLERANCE_M}
     previous: tuple[float, float] | None = None
     for t in path.times(dt_s):
         lanes, entering = path.occupancy(t)
@@ -228,6 +237,15 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
                 return found
         previous = (t, margin)
     return None
+
+
+def scenario_path(scenario: Scenario, actions: Sequence[Action]) -> Path:
+    """The AV's reference through ``actions`` from ``scenario``'s start, followed after them as long as an oncoming
+    vehicle of the scenario (its cell's far end, or a phantom's edge) could still reach it."""
+    far = max([oncoming_extent_m(c, scenario.grid)[1] for c in scenario.right_lane]
+              + [hi for _, hi in scenario.right_m or ()]
+              + [p.dx_m for p in _sound(scenario).phantoms() if p.lane is Lane.RIGHT], default=0.0)
+    return Path(actions, _sound(scenario), scenario.grid, scenario.lane, far)
 
 
 def _sound(scenario: Scenario) -> Sound:
@@ -276,7 +294,8 @@ def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, c
     ones, all within the scenario's bounds."""
     sound = _sound(scenario)
     cars = _drivers(scenario)
-    end_s = sum(float(ACTION_RULES[a].duration_s) for a in actions) + CONTINUATION_S
+    path = scenario_path(scenario, actions)
+    end_s = path.end_s + path.continuation_s
     b, e = sound.bounds, sound.start_error_m  # the sensing error and the snapshot's age (``Sound.age_m``)
     ev = sound.tracking.speed_mps
 
@@ -314,7 +333,7 @@ def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, c
         return tuple(((0.0, interval(c)[first]), (at_s, interval(c)[1 - first])) for c in cars)
 
     ahead, behind = ((0.0, ev),), ((0.0, -ev),)
-    mid = (end_s - CONTINUATION_S) / 2
+    mid = path.end_s / 2
     out = [Motion("corner: slowest, readings low, AV ahead", starts("low"), constant(0), ahead),
            Motion("corner: fastest, readings high, AV behind", starts("high"), constant(1), behind),
            Motion("corner: fastest, readings high, AV ahead", starts("high"), constant(1), ahead),
@@ -359,15 +378,15 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
     deviation from its reference changes at its scheduled rate (at most the speed error) and stays within the
     position error."""
     sound = _sound(scenario)
-    path = Path(actions, sound, scenario.grid, scenario.lane)
+    path = scenario_path(scenario, actions)
     cars = _drivers(scenario)
     length, ex, g_min = sound.safety.vehicle_length_m, sound.tracking.position_m, sound.safety.min_gap_m
     pos, idx = list(motion.starts_m), [0] * len(cars)
     dev, dev_k = 0.0, 0
     times = path.times(dt_s)
-    # at the start in the left lane: behind, or touching (a contact before the decision: ``follower_limit_m``)
+    # at the start in the left lane: behind with bumpers clear (``follower_limit_m``; nearer is an unsafe start)
     followers = {i for i, c in enumerate(cars) if c.lane is Lane.LEFT and scenario.lane is Lane.LEFT
-                 and pos[i] <= follower_limit_m(0.0, sound.safety)}
+                 and pos[i] <= follower_limit_m(0.0, sound.safety, sound.tracking)}
     goal_checked, was_entering = goal is None, False
     for k, t in enumerate(times):
         while dev_k + 1 < len(motion.av_offset) and motion.av_offset[dev_k + 1][0] <= t:
@@ -394,23 +413,9 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
             if found is not None:
                 return found
         rear = not sound.bounds.followers_react and path.speed(t) < sound.bounds.same_mps.high_mps - TOLERANCE_M
-        for i, c in enumerate(cars):
-            y, s = pos[i], speeds[i]
-            if rear and c.lane is Lane.LEFT and Lane.LEFT in lanes and i in followers:
-                found = _gap_breach(sound, motion.name, Conflict.BEHIND, c.name, t, x - y - length, s - v)
-                if found is not None:
-                    return found
-            if c.lane is Lane.LEFT and Lane.LEFT in lanes and i not in followers:
-                if entering and y < x:
-                    found = _gap_breach(sound, motion.name, Conflict.CUT_IN, c.name, t, x - y - length, s - v)
-                else:
-                    found = _gap_breach(sound, motion.name, Conflict.AHEAD, c.name, t, y - x - length, v - s)
-                if found is not None:
-                    return found
-            if c.lane is Lane.RIGHT and Lane.RIGHT in lanes and y + length > x:
-                found = _gap_breach(sound, motion.name, Conflict.ONCOMING, c.name, t, y - x - length, v + s)
-                if found is not None:
-                    return found
+        found = instant_breach(sound, motion.name, t, x, v, lanes, entering, rear, cars, pos, speeds, followers)
+        if found is not None:
+            return found
         step = (times[k + 1] - t) if k + 1 < len(times) else 0.0
         dev = max(-ex, min(ex, dev + rate * step))
         for i, c in enumerate(cars):
@@ -418,6 +423,34 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
             pos[i] = pos[i] + move if c.lane is Lane.LEFT else pos[i] - move
             if i in followers and sound.bounds.followers_react:
                 pos[i] = min(pos[i], path.position(t + step) + dev - length - g_min)
+    return None
+
+
+def instant_breach(sound: Sound, motion: str, t: float, x: float, v: float, lanes: frozenset[Lane], entering: bool,
+                   rear: bool, cars: Sequence[Vehicle], pos: Sequence[float], speeds: Sequence[float],
+                   followers: set[int]) -> Breach | None:
+    """The first vehicle whose gap to the AV (at ``x``, speed ``v``, occupying ``lanes``) breaks the specification at
+    one instant, each vehicle at ``pos`` moving at ``speeds``: ahead in the left lane (behind it while entering that
+    lane: a cut-in; a follower only where followers keep their speed and the AV is slower, ``rear``), oncoming while
+    the AV is in the right lane and the vehicle not yet past."""
+    length = sound.safety.vehicle_length_m
+    for i, c in enumerate(cars):
+        y, s = pos[i], speeds[i]
+        if rear and c.lane is Lane.LEFT and Lane.LEFT in lanes and i in followers:
+            found = _gap_breach(sound, motion, Conflict.BEHIND, c.name, t, x - y - length, s - v)
+            if found is not None:
+                return found
+        if c.lane is Lane.LEFT and Lane.LEFT in lanes and i not in followers:
+            if entering and y < x:
+                found = _gap_breach(sound, motion, Conflict.CUT_IN, c.name, t, x - y - length, s - v)
+            else:
+                found = _gap_breach(sound, motion, Conflict.AHEAD, c.name, t, y - x - length, v - s)
+            if found is not None:
+                return found
+        if c.lane is Lane.RIGHT and Lane.RIGHT in lanes and y + length > x:
+            found = _gap_breach(sound, motion, Conflict.ONCOMING, c.name, t, y - x - length, v + s)
+            if found is not None:
+                return found
     return None
 
 

@@ -187,10 +187,10 @@ class _Search:
     """One problem's successors, goal and limits for a search, its rules looked up once (hashing a problem is not
     free)."""
 
-    def __init__(self, problem: Problem, limits: Limits | None) -> None:
+    def __init__(self, problem: Problem, limits: Limits | None, rules: Rules | None = None) -> None:
         self.problem, self.limits = problem, limits or Limits()
         self.deadline = None if self.limits.timeout_s is None else time.monotonic() + self.limits.timeout_s
-        self.rules, self.goal, self.horizon = rules_for(problem), problem.goal, problem.horizon
+        self.rules, self.goal, self.horizon = rules or rules_for(problem), problem.goal, problem.horizon
         self.key = self.rules.key
         # The guards read the lane and the lane changes only.
         self.enabled = {(lane, lc): [a for a in Action
@@ -240,12 +240,13 @@ class _Search:
                             tuple(display(self.problem, s) for s in reversed(states)), extra or {})
 
 
-def _trivial(problem: Problem) -> SearchResult | None:
+def _trivial(problem: Problem, rules: Rules | None = None) -> SearchResult | None:
     first = start(problem)
-    hit = rules_for(problem).start_violation(first)
+    rules = rules or rules_for(problem)
+    hit = rules.start_violation(first)
     if hit is not None:
         return SearchResult(Status.NO_PLAN, (), 1, f"initial state: {hit.describe()}")
-    if done(problem, first):
+    if rules.goal_holds(first, problem.goal) and rules.continuation_violation(first) is None:
         return SearchResult(Status.PLAN, (), 1, "goal holds in the initial state, safe for ever",
                             (display(problem, first),))
     return None
@@ -270,12 +271,13 @@ def prove_beyond(problem: Problem) -> SearchResult:
     return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 0, beyond(problem))
 
 
-def sensible(problem: Problem, limits: Limits | None = None) -> SearchResult:
-    """Depth-first search in the action order (the paper's "sensible" plan), states with their step counts."""
-    trivial = _trivial(problem)
+def sensible(problem: Problem, limits: Limits | None = None, rules: Rules | None = None) -> SearchResult:
+    """Depth-first search in the action order (the paper's "sensible" plan), states with their step counts; under
+    ``rules`` when given (the predicted continuation's, ``oracle.commit``), else the problem's."""
+    trivial = _trivial(problem, rules)
     if trivial is not None:
         return trivial
-    search = _Search(problem, limits)
+    search = _Search(problem, limits, rules)
     key = search.key
     status, actions, states, explored, detail = depth_first(
         start(problem), search.successors, search.done, search.limits.max_states, search.limits.timeout_s,
@@ -285,16 +287,17 @@ def sensible(problem: Problem, limits: Limits | None = None) -> SearchResult:
     return SearchResult(status, actions, explored, detail, tuple(display(problem, s) for s in states))
 
 
-def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
-    """Breadth-first search with ordered expansion: the first shortest plan in the action order.
+def shortest(problem: Problem, limits: Limits | None = None, rules: Rules | None = None) -> SearchResult:
+    """Breadth-first search with ordered expansion: the first shortest plan in the action order (under ``rules``
+    when given).
 
     When the search ends without a plan, it is "no plan" (of any length) if every path of the graph it built (a
     state's moves depend on its key alone) is refused before the horizon, as the paper's bitset search says when
     a layer empties; "no plan within the horizon" otherwise."""
-    trivial = _trivial(problem)
+    trivial = _trivial(problem, rules)
     if trivial is not None:
         return trivial
-    search = _Search(problem, limits)
+    search = _Search(problem, limits, rules)
     key, first = search.key, start(problem)
     entries: list[Entry] = [(first, -1, None)]
     seen = {key(first)}
@@ -328,6 +331,8 @@ def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
         return SearchResult(Status.NO_PLAN, (), len(entries),
                             f"no plan of any length: every path ends within {longest + 1} action(s), refused or "
                             "unable ever to reach the goal")
+    if rules is not None:
+        return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(entries), beyond(problem))
     _UNPROVED[problem] = None
     if len(_UNPROVED) > 16:
         _UNPROVED.popitem(last=False)
@@ -356,17 +361,18 @@ def _longest(moves: dict[Hashable, list[Hashable]], root: Hashable, cap: int) ->
     return depth[root]
 
 
-def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
+def optimal(problem: Problem, limits: Limits | None = None, rules: Rules | None = None) -> SearchResult:
     """The least-cost plan (``spec.cost``, lexicographic) of at most ``horizon`` actions: a uniform-cost search.
 
     Every cost term only grows along a plan, so the first goal state taken from the queue is least-cost (ties: the
     one pushed first). A state taken after one with the same key (``Rules.key``: everything the future depends on
     but the steps) was taken with no more steps is dominated: it costs no less (the queue's order) and has no more
-    of the horizon left. ``tests/oracle/test_sound.py`` checks it against every plan of a walk."""
-    trivial = _trivial(problem)
+    of the horizon left (under ``rules`` when given). ``tests/oracle/test_sound.py`` checks it against every plan of a
+    walk."""
+    trivial = _trivial(problem, rules)
     if trivial is not None:
         return trivial
-    search = _Search(problem, limits)
+    search = _Search(problem, limits, rules)
     key = search.key
     entries: list[Entry] = [(start(problem), -1, None)]
     queue: list[tuple[tuple[int, ...], int]] = [((0,) * len(COST_TERMS), 0)]  # cost, entry (ties: pushed first)

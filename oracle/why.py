@@ -29,11 +29,13 @@ from oracle.explain import Vehicle, keep_only, vehicle_name
 from oracle.planner import plan
 from spec.answers import Answer, Status, Strategy
 from spec.assumptions import Bounds, Phantom, profile
+from spec.constants import MAX_HORIZON
 from spec.envelope import EXACT_AV
 from spec.errors import EngineError
+from spec.grid import STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
 from spec.models import models_for
-from spec.scenario import Scenario, problem_for
+from spec.scenario import Scenario, problem_for, refined
 from spec.sound import Sound, Violation
 from spec.state import Collision
 
@@ -108,6 +110,20 @@ class Narrowed:
 
 
 @dataclass(frozen=True, slots=True)
+class Widened:
+    """A parameter of the question, not an assumption (the horizon, the cell size), changed alone, and the answer."""
+
+    what: str  # "horizon", "cell size"
+    stated: str
+    changed: str
+    answer: Answer
+
+    @property
+    def has_plan(self) -> bool:
+        return self.answer.status is Status.PLAN
+
+
+@dataclass(frozen=True, slots=True)
 class SoundExplanation:
     """Why a scenario of the sound model has no plan: which answer, the start's violation, the blocking vehicles
     with the plan each removal allows, and what narrowing the assumptions does."""
@@ -121,6 +137,7 @@ class SoundExplanation:
     narrowings: tuple[Narrowed, ...]  # each assumption wider than the paper's world narrowed alone
     everything: Narrowed | None  # all of them narrowed at once (None: none is wider than the paper's world)
     enough: Narrowed | None  # the least set of narrowings found that gives a plan (None: not even all of them)
+    parameters: tuple[Widened, ...] = ()  # the horizon and the cell size, each changed alone
 
     @property
     def status(self) -> Status:
@@ -136,10 +153,13 @@ class SoundExplanation:
 
 
 def name(scenario: Scenario, suspect: Suspect) -> str:
-    """``suspect`` of ``scenario`` as people read it (sensed vehicles as ``oracle.explain`` names them)."""
+    """``suspect`` of ``scenario`` as people read it (sensed vehicles as ``oracle.explain`` names them; a phantom by
+    lane, place and the speeds its lane's bounds let it come at)."""
     if isinstance(suspect, Phantom):
         kind = "oncoming" if suspect.lane is Lane.RIGHT else "same-direction"
-        return f"the {kind} phantom at {suspect.dx_m:+g} m ({suspect.why})"
+        bound = None if scenario.sound is None else scenario.sound.bounds.speeds(suspect.lane)
+        speeds = "" if bound is None else f", {bound.low_mps:g}..{bound.high_mps:g} m/s"
+        return f"the {kind} phantom at {suspect.dx_m:+g} m ({suspect.why}{speeds})"
     return vehicle_name(scenario, suspect)
 
 
@@ -200,11 +220,30 @@ def explain_sound(scenario: Scenario) -> SoundExplanation:
     answer = plan(scenario, Strategy.SHORTEST)
     if answer.status in (Status.PLAN, Status.INCOMPLETE):
         return SoundExplanation(scenario, answer, None, (), None, (), (), None, None)
-    violation = start_violation(scenario) if answer.status is Status.NO_PLAN else None
+    violation = start_violation(scenario) if answer.status in (Status.NO_PLAN, Status.UNSAFE_START) else None
     blocking, removals = _blocking(scenario)
     narrowings, everything, enough = _assumptions(scenario)
     reduced = keep_suspects(scenario, blocking)
-    return SoundExplanation(scenario, answer, violation, blocking, reduced, removals, narrowings, everything, enough)
+    return SoundExplanation(scenario, answer, violation, blocking, reduced, removals, narrowings, everything, enough,
+                            _parameters(scenario) if violation is None else ())
+
+
+def _parameters(scenario: Scenario) -> tuple[Widened, ...]:
+    """The horizon (to the longest a scenario takes) and the cell size (the finest standard one that divides the
+    scenario's, every vehicle's centre where it was: each known more narrowly), each changed alone. A scenario whose
+    vehicles were measured (``left_m``, ``right_m``) is not bounded by its cells: no cell size is tried."""
+    out = []
+    if scenario.horizon < MAX_HORIZON:
+        out.append(Widened("horizon", f"{scenario.horizon} actions", f"{MAX_HORIZON} actions",
+                           _ask(replace(scenario, horizon=MAX_HORIZON))))
+    if scenario.left_m is None and scenario.right_m is None:
+        finer = [Grid(c) for c in STANDARD_CELLS_M
+                 if Grid(c).cell_m < scenario.grid.cell_m and (scenario.grid.cell_m / Grid(c).cell_m).denominator == 1]
+        if finer:
+            grid = min(finer, key=lambda g: g.cell_m)
+            out.append(Widened("cell size", f"{float(scenario.grid.cell_m):g} m", f"{float(grid.cell_m):g} m",
+                               _ask(replace(refined(scenario, grid), sound=scenario.sound))))
+    return tuple(out)
 
 
 def _blocking(scenario: Scenario) -> tuple[tuple[Suspect, ...], tuple[tuple[Suspect, Answer], ...]]:

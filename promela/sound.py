@@ -224,7 +224,7 @@ def _tables(shape: SoundShape, table: SoundTable) -> str:
         f"static const double UNIT_S = {_f(table.unit_s)}, CELL_M = {_f(table.cell_m)};",
         f"static const double E_X = {_f(tr.position_m)}, E_V = {_f(tr.speed_mps)}, LEN = {_f(s.vehicle_length_m)};",
         f"static const double EPS_M = {_f(EPS_M)};",
-        f"static const double FOLLOWER_M = {_f(follower_limit_m(0.0, s))};  /* spec.sound.follower_limit_m */",
+        f"static const double FOLLOWER_M = {_f(follower_limit_m(0.0, s, tr))};  /* spec.sound.follower_limit_m */",
         f"static const double SAME_LOW = {_f(b.same_mps.low_mps)}, SAME_HIGH = {_f(b.same_mps.high_mps)};",
         f"static const double ONC_LOW = {_f(b.oncoming_mps.low_mps)}, ONC_HIGH = {_f(b.oncoming_mps.high_mps)};",
         f"static const double START_ERROR_M = {_f(sound.start_error_m)};  /* sensing error + age */",

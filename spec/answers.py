@@ -1,5 +1,6 @@
-"""What a planner is asked (a strategy, limits) and answers: a plan, no plan (proved, or within the horizon),
-or an incomplete search; the values every engine returns and every layer above reads."""
+"""What a planner is asked (a strategy, limits) and answers: a plan, no plan (proved, or within the horizon), a start
+that already breaks the safety specification, or an incomplete search; the values every engine returns and every
+layer above reads."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from dataclasses import dataclass, field
 
 from spec.actions import Action
 from spec.errors import ExitCode
+from spec.escapes import Escape
 from spec.models import ModelKind
 from spec.state import State
 
@@ -21,16 +23,19 @@ class Strategy(enum.Enum):
 
 
 class Status(enum.Enum):
-    """The four answers, never reported one as another."""
+    """The five answers, never reported one as another."""
 
     PLAN = "plan"
-    NO_PLAN = "no_plan"  # proved: no plan of any length exists
+    NO_PLAN = "no_plan"  # proved: no plan of any length exists (commitments: no committed step is provable)
     NO_PLAN_WITHIN_HORIZON = "no_plan_within_horizon"  # exhaustive up to the horizon
     INCOMPLETE = "incomplete"  # a search limit was hit: nothing is claimed
+    #: the sound model's commitment semantics: the snapshot already breaks the safety specification; never a plan,
+    #: the answer names the violation and the escape to take (``spec.escapes.unsafe_start_escape``)
+    UNSAFE_START = "unsafe_start"
 
     @property
     def exit_code(self) -> ExitCode:
-        """The CLI's exit code: 0 plan, 1 no plan, 3 incomplete."""
+        """The CLI's exit code: 0 plan, 1 no plan (an unsafe start among them), 3 incomplete."""
         return {Status.PLAN: ExitCode.OK, Status.INCOMPLETE: ExitCode.INCOMPLETE}.get(self, ExitCode.NO)
 
 
@@ -49,6 +54,33 @@ class Limits:
 
 
 @dataclass(frozen=True, slots=True)
+class Commit:
+    """The parts of an answer under the commitment semantics (``spec.escapes``): the committed actions (a plan's
+    ``actions``, what the AV executes until it decides again), the escape proved from where they end (None: they are
+    a whole proved plan; from an unsafe start, the escape to take, unproved) and the predicted continuation to the
+    goal under nominal motion (no safety claim)."""
+
+    committed: tuple[Action, ...]
+    escape: Escape | None
+    predicted: tuple[Action, ...] = ()
+    escape_proved: bool = True  # False only from an unsafe start: nothing is proved from it
+
+    def to_json(self) -> dict[str, object]:
+        """The three parts, each with what is proved of it."""
+        escape = self.escape
+        return {
+            "committed": {"actions": [a.value for a in self.committed], "proved": True},
+            "escape": None if escape is None else {"kind": escape.kind.value,
+                                                   "actions": [a.value for a in escape.actions],
+                                                   "then": "minimal_risk", "proved": self.escape_proved},
+            "predicted": {"actions": [a.value for a in self.predicted], "proved": False,
+                          "motion": "the paper's rules from the snapshot's cells: every vehicle at the common speed, "
+                                    "no phantoms"},
+            "whole_plan": escape is None,
+        }
+
+
+@dataclass(frozen=True, slots=True)
 class SearchResult:
     """What one search of one model returns."""
 
@@ -58,6 +90,7 @@ class SearchResult:
     detail: str = ""
     states: tuple[State, ...] = ()  # the engine's own states along the plan (initial included), if it reports them
     extra: dict[str, object] = field(default_factory=dict)  # engine facts: versions, cache hits, costs
+    commit: Commit | None = None  # under the commitment semantics: the committed part, the escape, the prediction
 
 
 @dataclass(frozen=True, slots=True)
@@ -75,6 +108,7 @@ class Answer:
     detail: str = ""
     stages: tuple[tuple[ModelKind, Status, str], ...] = field(default=())
     extra: dict[str, object] = field(default_factory=dict)
+    commit: Commit | None = None  # under the commitment semantics (``actions`` are the committed ones)
 
     def to_json(self) -> dict[str, object]:
         """The documented JSON object of ``overtake plan --json``."""
@@ -88,6 +122,7 @@ class Answer:
             "detail": self.detail,
             "stages": [{"model": m.value, "status": st.value, "detail": d} for m, st, d in self.stages],
             **self.extra,
+            **({} if self.commit is None else self.commit.to_json()),
             "stats": {"states_explored": self.states_explored, "elapsed_ms": round(self.elapsed_ms, 3)},
         }
 

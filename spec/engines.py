@@ -35,6 +35,8 @@ class Engine:
     check_tools: Callable[[], None] | None = None
     #: Whether it answers the sound model (a scenario with ``sound`` set); the others answer the paper's rules only.
     sound: bool = False
+    #: Whether it answers the sound model's commitment semantics (``spec.escapes``); the others its whole plans only.
+    commit: bool = False
 
     def ready(self) -> None:
         """Check, before any work, that the engine can run here (exit 4 with the install command if not)."""
@@ -98,11 +100,16 @@ def parse_strategy(text: str | Strategy) -> Strategy:
 
 
 def check_model(engine: Engine, scenario: Scenario) -> None:
-    """Raise bad input when ``scenario`` asks for the sound model and ``engine`` answers the paper's rules only."""
+    """Raise bad input when ``scenario`` asks for the sound model and ``engine`` answers the paper's rules only, or
+    for the sound model's commitment semantics and ``engine`` answers its whole plans only."""
     if scenario.sound is not None and not engine.sound:
         able = ", ".join(e.name for e in load_engines().values() if e.sound) or "none"
         raise OptionError("--bounds", scenario.sound.bounds.name, f"engine {engine.name} answers the paper model "
                           f"only; the sound model is answered by: {able}")
+    if scenario.sound is not None and scenario.sound.commitment is not None and not engine.commit:
+        able = ", ".join(e.name for e in load_engines().values() if e.commit) or "none"
+        raise OptionError("--semantics", "commit", f"engine {engine.name} answers the sound model's whole plans only "
+                          f"(--semantics whole); committed actions with an escape are answered by: {able}")
 
 
 def check_strategy(engine: Engine, strategy: Strategy) -> None:

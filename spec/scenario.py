@@ -112,6 +112,21 @@ def make_scenario(
     return scenario
 
 
+def refined(scenario: Scenario, grid: Grid) -> Scenario:
+    """The same scenario on a finer ``grid`` whose cells divide the scenario's: every vehicle at the same distance
+    from the AV, the same targets and horizon (the same traffic, cut finer)."""
+    ratio = scenario.grid.cell_m / grid.cell_m
+    if ratio.denominator != 1:
+        raise ValueError(f"{grid.describe()} does not divide {scenario.grid.describe()}")
+    k, av = int(ratio), scenario.grid.av_cell
+
+    def move(cells: tuple[int, ...]) -> list[int]:
+        return [grid.av_cell + (c - av) * k for c in cells]
+
+    return make_scenario(scenario.lane, move(scenario.left_lane), move(scenario.right_lane), scenario.targets,
+                         scenario.model, scenario.horizon, grid=grid)
+
+
 def sensed(scenario: Scenario, left_m: object = None, right_m: object = None) -> Scenario:
     """``scenario`` with what its snapshot measured: per vehicle of a lane (in its cells' order) an interval
     ``[lo, hi]`` of metres ahead of the AV where its centre was (a reading: ``[dx, dx]``; a kept track: its

@@ -37,6 +37,7 @@ from __future__ import annotations
 import enum
 import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 from spec.actions import ACTION_RULES, Action
@@ -44,6 +45,7 @@ from spec.assumptions import DEFAULT_PROFILE, Bounds, Phantom, check_bounds, par
 from spec.cells import left_extent_m, oncoming_extent_m
 from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING, MinimalRisk, Piece, Reference, Tracking
 from spec.errors import OptionError, check_number
+from spec.escapes import COMMIT, Commitment, Semantics, parse_escape_kinds, parse_most_actions, parse_semantics
 from spec.grid import COMMON_SPEED_MPS, Grid
 from spec.lanes import Lane
 from spec.models import GoalRule
@@ -79,6 +81,9 @@ class Sound:
     #: how far ahead the front-right sensor saw the oncoming lane at the snapshot, metres (None: its whole range): a
     #: left-lane vehicle hides the lane from there on, and the oncoming phantom stands there (``phantoms``)
     oncoming_view_m: float | None = None
+    #: how an answer is formed (``spec.escapes``): committed actions with a proved escape and a predicted
+    #: continuation; None: whole plans, each proved to its end and for ever after
+    commitment: Commitment | None = None
 
     def phantoms(self) -> tuple[Phantom, ...]:
         """The phantoms of this snapshot: the bounds' own, the oncoming one where the view of that lane ended; each
@@ -119,7 +124,10 @@ class Sound:
         if self.checks is Checks.PAPER_CELLS:
             return f"the sound model's code path with the paper's cell rules (identity check), bounds {b.name}"
         view = "" if self.oncoming_view_m is None else f" (the oncoming one from {self.oncoming_view_m:g} m)"
-        return (f"sound model, bounds {b.name}: same-direction {b.same_mps.low_mps:g}..{b.same_mps.high_mps:g} m/s, "
+        answers = ("whole plans" if self.commitment is None else
+                   f"commitments with a proved escape: {self.commitment.describe()}")
+        return (f"sound model ({answers}); bounds {b.name}: same-direction "
+                f"{b.same_mps.low_mps:g}..{b.same_mps.high_mps:g} m/s, "
                 f"oncoming {b.oncoming_mps.low_mps:g}..{b.oncoming_mps.high_mps:g} m/s, sensing error "
                 f"{b.sensing_error_m:g} m, phantoms {'on' if b.phantoms else 'off'}{view}, followers "
                 f"{'react' if b.followers_react else 'keep their speed'}"
@@ -128,7 +136,7 @@ class Sound:
 
 #: The keys of a scenario file's ``bounds`` table (and the command line's options of the same names).
 BOUNDS_KEYS = ("profile", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
-               "oncoming_view_m", "latency_s")
+               "oncoming_view_m", "latency_s", "semantics", "commit_max", "escapes")
 #: How near the AV an aged phantom may come (``Sound.phantoms``): never onto it (Spin reads a phantom at 0 as none).
 PHANTOM_NEAREST_M = 1e-3
 
@@ -136,9 +144,11 @@ PHANTOM_NEAREST_M = 1e-3
 def sound_from(base: Sound | None, profile_name: str | None = None, same: object = None, oncoming: object = None,
                sensing_error_m: object = None, phantoms: bool | None = None, av_speed_mps: object = None,
                where: str = "--", followers_react: bool | None = None, oncoming_view_m: object = None,
-               latency_s: object = None) -> Sound:
-    """The sound model from a base (a file's, or None: the default profile), a named profile and overrides of its
-    numbers; every value is checked, and bad input names the option or key (``where`` + its name)."""
+               latency_s: object = None, semantics: object = None, commit_max: object = None,
+               escapes: object = None) -> Sound:
+    """The sound model from a base (a file's, or None: the default profile, under the commitment semantics), a named
+    profile and overrides of its numbers and semantics; every value is checked, and bad input names the option or
+    key (``where`` + its name)."""
     def key(name: str) -> str:
         return f"{where}{name.replace('_', '-')}" if where == "--" else f"{where}{name}"
 
@@ -179,9 +189,31 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
     view = base.oncoming_view_m if base is not None else None
     if oncoming_view_m is not None:
         view = check_view_m(key("oncoming_view_m"), oncoming_view_m)
+    commitment = commitment_from(base.commitment if base is not None else COMMIT, semantics, commit_max, escapes, key)
     if base is None:
-        return Sound(bounds, start_mps=start, oncoming_view_m=view)
-    return replace(base, bounds=bounds, start_mps=start, oncoming_view_m=view)
+        return Sound(bounds, start_mps=start, oncoming_view_m=view, commitment=commitment)
+    return replace(base, bounds=bounds, start_mps=start, oncoming_view_m=view, commitment=commitment)
+
+
+def commitment_from(base: Commitment | None, semantics: object, commit_max: object, escapes: object,
+                    key: Callable[[str], str]) -> Commitment | None:
+    """The semantics ``base`` has, changed by the options or keys given: ``semantics`` (``commit`` or ``whole``),
+    the most actions committed to, the escapes allowed (either of the last two asks for the commitment semantics;
+    with ``whole`` they are bad input)."""
+    chosen = None if semantics is None else parse_semantics(semantics, key("semantics"))
+    if chosen is Semantics.WHOLE:
+        for name, value in (("commit_max", commit_max), ("escapes", escapes)):
+            if value is not None:
+                raise OptionError(key(name), value, "applies to the commitment semantics, not to whole plans")
+        return None
+    if chosen is None and commit_max is None and escapes is None:
+        return base
+    found = base or COMMIT
+    if commit_max is not None:
+        found = replace(found, most_actions=parse_most_actions(commit_max, key("commit_max")))
+    if escapes is not None:
+        found = replace(found, escapes=parse_escape_kinds(escapes, key("escapes")))
+    return found
 
 
 def check_view_m(where: str, value: object) -> float:
@@ -199,7 +231,8 @@ def sound_from_table(table: object, where: str = "bounds") -> Sound:
             raise OptionError(f"{where}.{name}", table[name], f"unknown key (allowed: {', '.join(BOUNDS_KEYS)})")
     return sound_from(None, table.get("profile"), table.get("same_mps"), table.get("oncoming_mps"),
                       table.get("sensing_error_m"), table.get("phantoms"), table.get("av_speed_mps"), f"{where}.",
-                      table.get("followers_react"), table.get("oncoming_view_m"), table.get("latency_s"))
+                      table.get("followers_react"), table.get("oncoming_view_m"), table.get("latency_s"),
+                      table.get("semantics"), table.get("commit_max"), table.get("escapes"))
 
 
 def sound_to_table(sound: Sound) -> dict[str, object]:
@@ -215,6 +248,13 @@ def sound_to_table(sound: Sound) -> dict[str, object]:
         table["av_speed_mps"] = sound.start_mps
     if sound.oncoming_view_m is not None:
         table["oncoming_view_m"] = sound.oncoming_view_m
+    c = sound.commitment
+    if c is None:  # a table without the key is the commitment semantics
+        table["semantics"] = Semantics.WHOLE.value
+    if c is not None and c.most_actions is not None:
+        table["commit_max"] = c.most_actions
+    if c is not None and c.escapes != COMMIT.escapes:
+        table["escapes"] = [k.value for k in c.escapes]
     return table
 
 
@@ -270,16 +310,16 @@ def rear_binds(bounds: Bounds, slowest_mps: float) -> bool:
     return not bounds.followers_react and slowest_mps < bounds.same_mps.high_mps - CLOSING_EPS_MPS
 
 
-def follower_limit_m(x0_m: float, safety: SafetySpec) -> float:
+def follower_limit_m(x0_m: float, safety: SafetySpec, tracking: Tracking) -> float:
     """At a plan's start, the AV in the left lane at ``x0_m``: a same-direction vehicle whose every position is short
-    of this (its centre less than a car length ahead of the AV's, so it can never be clear ahead) follows the AV.
+    of this (bumpers clear behind every position of the AV, its envelope's position error taken) follows the AV: a
+    lane keeps its order, and the specification has no conflict behind the AV in its own lane.
 
-    Such a vehicle is behind the AV, or touching it: a contact the collision monitor has counted before the decision
-    and no plan can undo, so the start refuses nothing for it; a lane keeps its order, so it follows for the rest of
-    the plan (the specification has no conflict behind the AV in its own lane). On 21 m cells the cell behind the
-    AV's reaches to the AV's centre, and bumpers clear (the earlier rule) refused every start after an overtake's
-    return: the overtaken vehicle is in that cell."""
-    return x0_m + safety.vehicle_length_m
+    A vehicle neither that far behind nor clear ahead with its gap may touch the AV already: the start breaks the
+    specification (``start_violation``), an answer of its own, never a plan (``spec.answers.Status.UNSAFE_START``).
+    On 21 m cells the cell behind the AV's reaches to its centre, so a start from cells alone right after an
+    overtake's return is such a start; one from what the snapshot measured (``Scenario.left_m``) is not."""
+    return x0_m - tracking.position_m - safety.vehicle_length_m
 
 
 Extent = tuple[float, float]  # where a vehicle's centre can be, metres ahead of the AV's (negative: behind)
@@ -419,7 +459,7 @@ class SoundRules:
                                                                 + sound.bounds.oncoming_mps.high_mps)
         self.fastest_mps = max(max(self.speeds.values()), self.start_mps)
         self._goal_m: tuple[GoalRule | None, float | None] = (None, None)
-        self._steps: dict[tuple[tuple[object, ...], Action], Violation | None] = {}
+        self._steps: dict[tuple[tuple[object, ...], Action, Action | None], Violation | None] = {}
         self._at_boundary: dict[tuple[int, int, float | None, float | None], float] = {}
         self._relative = _shapes(sound, grid)
         self._start_followers: frozenset[int] | None = None
@@ -640,7 +680,7 @@ class SoundRules:
         else:
             behind = pieces[0]
             p = behind.piece
-            allow = (follower_limit_m(p.x0_m, self.sound.safety), p.t0_s)
+            allow = (follower_limit_m(p.x0_m, self.sound.safety, self.sound.tracking), p.t0_s)
         for v in self.same:
             if v.lo_m >= ahead.ahead[0] + EPS_M or v.hi_m <= allow[0] - EPS_M:
                 continue
@@ -657,15 +697,25 @@ class SoundRules:
         seg = Segment(0.0, 0.0, frozenset({state.lane}), state.lane is Lane.LEFT, at_start=True)
         return self.check_segment(seg, [self._bounded(p) for p in ref.pieces(0.0, 0.0)])
 
-    def step_violation(self, state: SoundState, action: Action) -> Violation | None:
+    def step_violation(self, state: SoundState, action: Action, following: Action | None = None) -> Violation | None:
         """Whether ``action`` from ``state`` keeps the specification at every instant of its window (each question
-        answered once: a pipeline's searches, its proof and its validation ask the same ones)."""
-        asked = (state.key(), action)
+        answered once: a pipeline's searches, its proof and its validation ask the same ones).
+
+        Without ``following`` the window runs to the action's end at its own speed, whatever comes after (a search
+        does not know). With it (a sequence known whole: a commitment and its escape, ``oracle.commit``) the window
+        ends where the ramp into ``following``, centred on the boundary, starts: from there on the reference is that
+        ramp, and ``following``'s own window (from the start of the ramp into it) checks it."""
+        cut = self._cut_s(state, action, following)
+        asked = (state.key(), action, following if cut is not None else None)
         if asked in self._steps:
             return self._steps[asked]
         found = None
         followers = self.followers(state, action)
         for seg, pieces in self.window(state, action):
+            if cut is not None:
+                if seg.t0_s >= cut:
+                    break
+                seg, pieces = self._clipped(seg, pieces, cut)
             found = self.check_segment(seg, pieces, followers)
             if found is not None:
                 break
@@ -673,6 +723,22 @@ class SoundRules:
             self._steps.clear()
         self._steps[asked] = found
         return found
+
+    def _cut_s(self, state: SoundState, action: Action, following: Action | None) -> float | None:
+        """Where ``action``'s window ends when ``following`` comes after it: the start of the ramp into it (None: no
+        ramp, the speeds are the same, or nothing follows)."""
+        if following is None or self.speeds[following] == self.speeds[action]:
+            return None
+        end_s = (state.t_units + self.grid.units(action)) * self.unit_s
+        return end_s - ramp_s(self.speeds[action], self.speeds[following]) / 2
+
+    def _clipped(self, seg: Segment, pieces: list[Bounded], cut_s: float) -> tuple[Segment, list[Bounded]]:
+        """A window's segment and its pieces up to ``cut_s`` (each piece's thresholds taken over what is left)."""
+        if seg.t1_s <= cut_s:
+            return seg, pieces
+        kept = [b if b.piece.t1_s <= cut_s else self._bounded(replace(b.piece, t1_s=cut_s))
+                for b in pieces if b.piece.t0_s < cut_s]
+        return replace(seg, t1_s=cut_s), kept
 
     def after(self, state: SoundState, action: Action) -> SoundState:
         """The state after ``action`` (``advance``), with the vehicles that follow the AV once it gets into the left

@@ -28,14 +28,13 @@ from rich.table import Table
 
 from ci.conformance.crossval import parse_space
 from ci.conformance.properties import RUNS, RunKey
-from ci.shared.gen import refined
 from ci.shared.machine import machine
 from oracle.planner import solve
 from spec.answers import Limits, Status, Strategy
 from spec.assumptions import profile
 from spec.errors import EngineError
 from spec.grid import PAPER_GRID, grid_for
-from spec.scenario import Scenario
+from spec.scenario import Scenario, refined
 from spec.sound import Sound
 
 DEFAULT_SPACE = "left=2@8..20,right=1@12..30,lanes=both"

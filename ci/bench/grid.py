@@ -19,12 +19,11 @@ from rich.console import Console
 from rich.table import Table
 
 from ci.bench.latency import library_and_generated
-from ci.shared.gen import refined
 from ci.shared.machine import machine
 from oracle.planner import plan
 from spec.answers import Limits, Status, Strategy
 from spec.grid import STANDARD_CELLS_M, Grid
-from spec.scenario import Scenario
+from spec.scenario import Scenario, refined
 
 CASES = (("interpreter", Strategy.SENSIBLE), ("interpreter", Strategy.SHORTEST), ("spin", Strategy.SENSIBLE),
          ("spin", Strategy.SHORTEST), ("z3", Strategy.SHORTEST))

@@ -24,14 +24,13 @@ from rich.console import Console
 from rich.table import Table
 
 from ci.conformance.crossval import parse_space
-from ci.shared.gen import refined
 from ci.shared.machine import machine
 from oracle import reach
 from oracle.planner import plan
 from spec.answers import Status, Strategy
 from spec.assumptions import profile
 from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
-from spec.scenario import Scenario
+from spec.scenario import Scenario, refined
 from spec.sound import Sound
 
 DEFAULT_SPACE = "left=2@8..20,right=1@12..30,lanes=both"

@@ -175,18 +175,33 @@ def abbrev(answer: Answer, compact: bool = False) -> str:
     return ("" if compact else " ").join(SHORT[a] for a in answer.actions) or "(empty)"
 
 
+#: The commitment semantics' options (the last of ``SOUND_OPTIONS``).
+COMMIT_OPTIONS = ("semantics", "commit_max", "escapes")
 SOUND_OPTIONS = ("bounds", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
-                 "oncoming_view_m", "latency_s")
+                 "oncoming_view_m", "latency_s", *COMMIT_OPTIONS)
 
 
 def sound_options(command: Any) -> Any:
     """The sound model's options, handed to the command as one ``sound`` argument: a function that puts the chosen
     model on a scenario (unchanged when none of them is given and the file has no ``bounds`` table)."""
+    return _sound_options(command, commitment=True)
+
+
+def whole_sound_options(command: Any) -> Any:
+    """``sound_options`` without the commitment semantics' (a campaign that holds several engines to each other:
+    only the interpreter answers commitments): the model is always the sound model's whole plans."""
+    return _sound_options(command, commitment=False)
+
+
+def _sound_options(command: Any, commitment: bool) -> Any:
     from ci.shared.options import LATENCY, METRES, SPEED
 
+    names = SOUND_OPTIONS if commitment else SOUND_OPTIONS[:-len(COMMIT_OPTIONS)]
+
     def wrapper(**kwargs: Any) -> Any:
-        given = {k: kwargs.pop(k) for k in SOUND_OPTIONS}
-        kwargs["sound"] = lambda scenario: with_sound(scenario, **given)
+        given = {k: kwargs.pop(k) for k in names}
+        kwargs["sound"] = (lambda scenario: with_sound(scenario, **given)) if commitment else \
+            (lambda scenario: _whole(with_sound(scenario, **given)))
         return command(**kwargs)
 
     wrapper.__name__, wrapper.__doc__ = command.__name__, command.__doc__
@@ -210,19 +225,34 @@ def sound_options(command: Any) -> Any:
                      f"before the plan acts (the planner's time; the closed loop's is one control step, "
                      f"{LOOP.plan_budget_s * 1000:.1f} ms). "
                      "Default: 0, the profile's."),
-    )):
+    ) + ((
+        click.option("--semantics", default=None, help="Sound model: commit (committed actions with a proved "
+                     "escape and a predicted continuation; the default) or whole (every plan proved to its end; "
+                     "the answer Spin and Z3 give). See docs/sound.md."),
+        click.option("--commit-max", default=None, help="Sound model, commit: the most actions one answer commits "
+                     "to (default: as many as are proved)."),
+        click.option("--escapes", default=None, help="Sound model, commit: the escapes it may prove, comma-separated "
+                     "(minimal_risk, abort, complete; default: all)."),
+    ) if commitment else ())):
         wrapper = decorate(wrapper)
     return wrapper
+
+
+def _whole(scenario: Scenario) -> Scenario:
+    """``scenario`` with the sound model's whole plans, where it has the sound model."""
+    return scenario if scenario.sound is None else replace(scenario, sound=replace(scenario.sound, commitment=None))
 
 
 def with_sound(scenario: Scenario, bounds: str | None, same_mps: str | None, oncoming_mps: str | None,
                sensing_error_m: float | None, phantoms: bool | None, av_speed_mps: float | None,
                followers_react: bool | None = None, oncoming_view_m: float | None = None,
-               latency_s: float | None = None) -> Scenario:
+               latency_s: float | None = None, semantics: str | None = None, commit_max: str | None = None,
+               escapes: str | None = None) -> Scenario:
     """``scenario`` under the sound model the options (over the file's ``bounds``) choose; unchanged without any."""
     if all(v is None for v in (bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
-                               followers_react, oncoming_view_m, latency_s)):
+                               followers_react, oncoming_view_m, latency_s, semantics, commit_max, escapes)):
         return scenario
     sound = sound_from(scenario.sound, bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
-                       followers_react=followers_react, oncoming_view_m=oncoming_view_m, latency_s=latency_s)
+                       followers_react=followers_react, oncoming_view_m=oncoming_view_m, latency_s=latency_s,
+                       semantics=semantics, commit_max=commit_max, escapes=escapes)
     return replace(scenario, sound=sound)

@@ -23,7 +23,7 @@ from ci.cli.common import (
     print_json,
     print_paths,
     print_table,
-    sound_options,
+    whole_sound_options,
 )
 from ci.shared.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.shared.options import CHECK_COUNT, MAX_WORKERS, REPRODUCERS, SCHEDULER, SECONDS, SEED, WORKERS, names
@@ -84,7 +84,7 @@ class RateColumn(ProgressColumn):
 @click.option("--model", "model_name", type=click.Choice(MODELS), default="paper", show_default=True,
               help="The paper's rules, or the sound model (under --bounds and the options below; with --source "
                    "hypothesis the bounds are drawn with each scenario unless given).")
-@sound_options
+@whole_sound_options
 def crossval(source: str, space: str, property_text: str, engine_text: str, workers: int | None, executor_kind: str,
              scheduler: str | None, timeout_s: float, coverage_text: str, seed: int | None, count: int | None,
              max_reproducers: int,

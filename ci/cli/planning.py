@@ -23,13 +23,14 @@ from ci.cli.common import (
     strategy_option,
 )
 from ci.shared.options import MAX_STATES, SECONDS, out_file
+from oracle.commit import CommitValidation
 from oracle.conform import disagreements
 from oracle.planner import plan as run_plan
 from oracle.planner import validate_pipeline
 from oracle.shrink import engines_disagree, to_toml
 from oracle.shrink import shrink as shrink_scenario
 from spec.actions import parse_action
-from spec.answers import Answer, Limits, Status, Strategy, state_to_json
+from spec.answers import Answer, Commit, Limits, Status, Strategy, state_to_json
 from spec.assumptions import Phantom
 from spec.engines import check_strategy, get_engine, load_engines
 from spec.errors import ActionError, ExitCode, OptionError
@@ -73,7 +74,9 @@ def plan(file: str, strategy: Strategy, model: str | None, horizon: int | None, 
 def _plan_all(scenario: Scenario, strategy: Strategy, model: ModelChoice | None, horizon: int | None, limits: Limits,
               as_json: bool) -> int:
     """Run every engine that answers ``strategy``, side by side, and say whether they agree."""
-    engines = [e for e in load_engines().values() if strategy in e.strategies and (e.sound or scenario.sound is None)]
+    committed = scenario.sound is not None and scenario.sound.commitment is not None
+    engines = [e for e in load_engines().values() if strategy in e.strategies and (e.sound or scenario.sound is None)
+               and (e.commit or not committed)]
     answers = [run_plan(scenario, strategy, model, horizon, e, limits) for e in engines]
     problems = disagreements(answers)
     if as_json:
@@ -108,9 +111,27 @@ def _print_answer(scenario: Scenario, answer: Answer) -> None:
               f"{answer.states_explored} states, {answer.elapsed_ms:.2f} ms)")
     if answer.detail:
         out.print(answer.detail)
-    if answer.actions or answer.states:
+    if answer.commit is not None:
+        _print_commit(answer.commit)
+    elif answer.actions or answer.states:
         out.print("actions: " + (", ".join(a.value for a in answer.actions) or "(none: the goal already holds)"))
+    if answer.actions or answer.states:
         print_states(scenario, answer.actions, answer.states)
+
+
+def _print_commit(parts: Commit) -> None:
+    """The commitment semantics' three parts, each labelled with what is proved of it."""
+    if parts.committed or parts.escape is None:
+        out.print("committed: " + (", ".join(a.value for a in parts.committed) or "(none: the goal already holds)")
+                  + " (proved: safe at every instant for every motion inside the assumptions"
+                  + (", to the goal and for ever after)" if parts.escape is None else ")"))
+    if parts.escape is not None:
+        out.print(f"escape: {parts.escape.describe()} "
+                  + ("(proved with the committed actions, safe for ever after)" if parts.escape_proved else
+                     "(to take at once; nothing is proved from this start)"))
+    if parts.predicted:
+        out.print("predicted: " + ", ".join(a.value for a in parts.predicted)
+                  + " (the paper's rules from the snapshot's cells: nominal motion, no safety claim)")
 
 
 @click.command(name="validate")
@@ -135,11 +156,14 @@ def validate_cmd(file: str, actions_text: str, model: str | None, horizon: int |
         raise OptionError("--actions", actions_text, str(error)) from None
     checked = validate_pipeline(scenario, actions, ModelChoice(model) if model else None, horizon)
     verdict = checked.verdict
+    parts = verdict.commit if isinstance(verdict, CommitValidation) else None
     if as_json:
         print_json({"valid": verdict.valid, "reason": checked.reason, "model": checked.model.value,
-                    "states": [state_to_json(s) for s in verdict.states]})
+                    "states": [state_to_json(s) for s in verdict.states], **({} if parts is None else parts.to_json())})
     else:
         out.print(f"{'valid' if verdict.valid else 'invalid'} (model {checked.model.value}): {checked.reason}")
+        if parts is not None:
+            _print_commit(parts)
         print_states(scenario, actions[: len(verdict.states) - 1], verdict.states)
     sys.exit(ExitCode.OK if verdict.valid else ExitCode.NO)
 
@@ -241,8 +265,10 @@ def _explain_sound(file: str, scenario: Scenario, as_json: bool) -> None:
                   "options shows it).")
         return
     if result.violation is not None:
-        out.print(f"no plan for {file} (no_plan): the start already breaks the safety specification: "
+        out.print(f"no plan for {file} ({result.status.value}): the start already breaks the safety specification: "
                   f"{result.violation.describe()}.")
+        if result.answer.commit is not None and result.answer.commit.escape is not None:
+            out.print(f"The escape to take at once: {result.answer.commit.escape.describe()}.")
     elif result.status is Status.NO_PLAN:
         out.print(f"no plan for {file} (no_plan): {result.answer.detail}.")
     else:
@@ -256,6 +282,9 @@ def _explain_sound(file: str, scenario: Scenario, as_json: bool) -> None:
     else:
         out.print(f"No vehicle or phantom is to blame: without any there is still no plan within the horizon of "
                   f"{scenario.horizon}.")
+    for widened in result.parameters:
+        out.print(f"The {widened.what} changed alone: {widened.stated} -> {widened.changed}: "
+                  f"{_answer_text(widened.answer)}")
     if result.everything is None:
         return
     base = scenario.sound
@@ -313,6 +342,9 @@ def _sound_explanation_json(result: SoundExplanation) -> dict[str, object]:
             "assumptions": [a.value for a in result.everything.assumptions], **_answer_json(result.everything.answer)},
         "enough": None if result.enough is None else {
             "assumptions": [a.value for a in result.enough.assumptions], **_answer_json(result.enough.answer)},
+        "parameters": [{"parameter": w.what, "stated": w.stated, "changed": w.changed, **_answer_json(w.answer)}
+                       for w in result.parameters],
+        **({} if result.answer.commit is None else {"answer": result.answer.commit.to_json()}),
         **_sound_json(scenario),
     }
 

@@ -47,7 +47,6 @@ from rich.console import Console
 from rich.table import Table
 
 from ci.conformance.crossval import parse_space
-from ci.shared.gen import refined
 from ci.shared.machine import machine
 from oracle.planner import plan
 from oracle.reach import MAX_DT_S, TOLERANCE_M, Path
@@ -60,7 +59,7 @@ from spec.lanes import Lane
 from spec.models import ModelKind, models_for
 from spec.rules import disabled_guard
 from spec.safety import Conflict
-from spec.scenario import Problem, Scenario, problem_for
+from spec.scenario import Problem, Scenario, problem_for, refined
 from spec.sound import Sound, SoundRules, SoundState, Vehicle, Violation, follower_limit_m, rear_binds, vehicles
 
 DEFAULT_SPACE = "left=2@8..20,right=1@12..30,lanes=both"
@@ -286,7 +285,7 @@ def judge(scenario: Scenario, path: Path, car: Vehicle, chunk: _Chunk, start_m: 
     if chunk.entry_s is not None:
         at_entry = start_m + speed_mps * chunk.entry_s
         if chunk.entry_s == 0.0 and scenario.lane is Lane.LEFT:  # in the lane from the start: it can never be ahead
-            follows = at_entry <= follower_limit_m(0.0, spec)
+            follows = at_entry <= follower_limit_m(0.0, spec, scenario.sound.tracking)
         else:  # behind every position of the AV, bumpers clear, when it got into the lane
             follows = at_entry + length <= path.position(chunk.entry_s) - ex
         if follows:  # a follower: a conflict only where it keeps its speed and the AV is slower (BEHIND)

@@ -1,5 +1,6 @@
 """Explaining no plan under the sound model: which answer, the blocking vehicles and phantoms (minimal), and the
-assumption to blame, each narrowed to the paper's world."""
+assumption to blame, each narrowed to the paper's world; under whole plans (most tests here) and under the
+commitment semantics (no committed step provable, an unsafe start)."""
 
 from __future__ import annotations
 
@@ -20,16 +21,18 @@ from spec.lanes import Lane
 from spec.library import builtin
 from spec.physical import SENSORS
 from spec.safety import Conflict
-from spec.scenario import Scenario, make_scenario
+from spec.scenario import Scenario, make_scenario, sensed
 from spec.sound import Violation, sound_from, vehicles
 
 ONCOMING_PHANTOM = Phantom(Lane.RIGHT, SENSORS.right_range_m, "front-right sensor's range")
 
 
 def library(name: str, profile: str, **overrides: object) -> Scenario:
-    """A built-in scenario under the sound model of ``profile`` (with overrides of its numbers)."""
+    """A built-in scenario under the sound model of ``profile`` (with overrides of its numbers; whole plans unless
+    ``semantics`` says otherwise)."""
     entry = builtin(name)
     assert entry is not None
+    overrides.setdefault("semantics", "whole")
     return replace(entry.load(), sound=sound_from(None, profile, **overrides))  # type: ignore[arg-type]
 
 
@@ -89,7 +92,7 @@ def test_wider_same_direction_speeds_on_the_paper_profile_are_a_bound_to_blame()
 
 def test_an_unsafe_start_is_no_plan_naming_its_violation() -> None:
     right_ahead = make_scenario("left", [11], [], 1)
-    result = explain_sound(replace(right_ahead, sound=sound_from(None, "default")))
+    result = explain_sound(replace(right_ahead, sound=sound_from(None, "default", semantics="whole")))
     assert result.status is Status.NO_PLAN
     assert isinstance(result.violation, Violation) and result.violation.conflict is Conflict.AHEAD
     assert (result.violation.vehicle.lane, result.violation.vehicle.index) == (Lane.LEFT, 0)
@@ -115,7 +118,8 @@ def test_even_the_papers_world_may_leave_no_plan() -> None:
 
 
 def test_a_horizon_too_short_blames_no_vehicle() -> None:
-    result = explain_sound(replace(make_scenario("right", [], [], 0, horizon=0), sound=sound_from(None, "default")))
+    result = explain_sound(replace(make_scenario("right", [], [], 0, horizon=0),
+                                   sound=sound_from(None, "default", semantics="whole")))
     assert result.status is Status.NO_PLAN_WITHIN_HORIZON and result.blocking == () and result.removals == ()
 
 
@@ -140,7 +144,7 @@ def explain_cli(*args: str) -> tuple[int, str]:
 
 
 def test_cli_names_the_oncoming_phantom_and_the_bound() -> None:
-    code, text = explain_cli("one_target", "--bounds", "default")
+    code, text = explain_cli("one_target", "--bounds", "default", "--semantics", "whole")
     words = " ".join(text.split())  # the console wraps at its width
     assert code == 0 and "(no_plan):" in words and "no plan of any length" in words
     assert "the oncoming phantom at +357 m" in words
@@ -148,7 +152,7 @@ def test_cli_names_the_oncoming_phantom_and_the_bound() -> None:
 
 
 def test_cli_json_under_the_sound_model() -> None:
-    code, text = explain_cli("one_target", "--bounds", "default", "--json")
+    code, text = explain_cli("one_target", "--bounds", "default", "--semantics", "whole", "--json")
     result = json.loads(text)
     assert code == 0 and result["status"] == "no_plan" and result["violation"] is None
     assert {"kind": "phantom", "lane": "right", "index": None, "dx_m": 357.0} \
@@ -158,12 +162,13 @@ def test_cli_json_under_the_sound_model() -> None:
 
 
 def test_cli_takes_the_sound_options_and_a_files_bounds(tmp_path: Path) -> None:
-    code, text = explain_cli("one_target", "--bounds", "default", "--no-phantoms", "--json")
+    code, text = explain_cli("one_target", "--bounds", "default", "--semantics", "whole", "--no-phantoms", "--json")
     result = json.loads(text)
     assert code == 0 and all(b["kind"] == "sensed" for b in result["blocking"])
     assert "phantoms" not in [n["assumption"] for n in result["narrowings"]]
     unsafe = tmp_path / "unsafe.toml"
-    unsafe.write_text('lane = "left"\nleft_lane = [11]\nright_lane = []\ntargets = 1\n[bounds]\nprofile = "default"\n')
+    unsafe.write_text('lane = "left"\nleft_lane = [11]\nright_lane = []\ntargets = 1\n[bounds]\nprofile = "default"\n'
+                      'semantics = "whole"\n')
     code, text = explain_cli(str(unsafe), "--json")
     result = json.loads(text)
     assert code == 0 and result["status"] == "no_plan" and result["violation"]["conflict"] == "ahead"
@@ -172,3 +177,39 @@ def test_cli_takes_the_sound_options_and_a_files_bounds(tmp_path: Path) -> None:
 def test_cli_paper_explain_keeps_its_shape() -> None:
     code, text = explain_cli("no_plan_boxed_in", "--json")
     assert code == 0 and set(json.loads(text)) == {"has_plan", "blocking", "reduced", "removals"}
+
+
+# -- what the snapshot measured, and the commitment semantics -------------------------------------------------------
+def test_keep_only_keeps_what_the_snapshot_measured_of_each_kept_vehicle() -> None:
+    measured = sensed(make_scenario("left", [9, 12], [20], 1), ((-21.0, -20.0), (42.0, 43.0)), ((215.0, 216.0),))
+    reduced = keep_only(measured, {(Lane.LEFT, 1), (Lane.RIGHT, 0)})
+    assert reduced.left_lane == (12,) and reduced.left_m == ((42.0, 43.0),) and reduced.right_m == ((215.0, 216.0),)
+
+
+def test_a_phantom_that_refuses_beside_a_measured_target_is_blamed_with_it() -> None:
+    """A target read 25 m ahead, its cell reaching the AV's bumper: with the reading kept, the target alone leaves
+    a plan and the oncoming phantom is to blame with it; the cell alone (the reading dropped) leaves none, and blamed
+    the target alone on closed-loop refusals where the phantom refused."""
+    scenario = replace(sensed(make_scenario("left", [11], [], 1), ((25.0, 25.0),)),
+                       sound=sound_from(None, "default", semantics="whole"))
+    result = explain_sound(scenario)
+    assert set(result.blocking) == {(Lane.LEFT, 0), ONCOMING_PHANTOM}, result.blocking
+    cells_only = replace(make_scenario("left", [11], [], 1), sound=scenario.sound)
+    assert plan(keep_suspects(cells_only, [(Lane.LEFT, 0)]), Strategy.SHORTEST).status is not Status.PLAN
+
+
+def test_under_the_commitment_semantics_explain_names_what_refuses_every_committed_step() -> None:
+    result = explain_sound(library("prep_case_a", "default", semantics="commit"))
+    assert result.status is Status.NO_PLAN and "no committed step is provable" in result.answer.detail
+    assert result.blocking and all(a.status is Status.PLAN for _, a in result.removals)
+    assert {w.what for w in result.parameters} == {"horizon", "cell size"}
+
+
+def test_under_the_commitment_semantics_an_unsafe_start_names_its_violation_and_escape() -> None:
+    code, text = explain_cli("no_plan_boxed_in", "--bounds", "default", "--json")
+    result = json.loads(text)
+    assert code == 0 and result["status"] in ("unsafe_start", "no_plan")
+    start = make_scenario("left", [9, 17], [20], 0)
+    unsafe = explain_sound(replace(start, sound=sound_from(None, "default")))
+    assert unsafe.status is Status.UNSAFE_START and unsafe.violation is not None
+    assert unsafe.answer.commit is not None and unsafe.answer.commit.escape is not None

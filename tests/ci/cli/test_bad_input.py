@@ -135,10 +135,10 @@ def sound(command: str) -> list[Case]:
                                        for name, key in BOUNDS_FILES.items())]
 
 
-def sound_options(command: str, *extra: str) -> list[Case]:
+def sound_options(command: str, *extra: str, commitment: bool = True) -> list[Case]:
     """The sound model's options: an unknown profile, speed intervals that are not intervals of finite speeds,
-    numbers out of range (a sensing error beyond the window, a latency above half a second); ``extra`` arguments with
-    each."""
+    numbers out of range (a sensing error beyond the window, a latency above half a second), and (``commitment``:
+    where the command takes them) the commitment semantics'; ``extra`` arguments with each."""
     return [*(_case(command, *extra, f"--bounds={value}", named="--bounds") for value in ("nosuch", "")),
             *(_case(command, *extra, f"{option}={value}", named=option) for option in ("--sensing-error-m",
                                                                                         "--av-speed-mps",
@@ -150,14 +150,28 @@ def sound_options(command: str, *extra: str) -> list[Case]:
               for value in ("0", "400")),  # the view starts past the AV's front and ends within the sensor's range
             *(_case(command, *extra, f"{option}={value}", named=option) for option in ("--same-mps", "--oncoming-mps")
               for value in BAD_SPEEDS),
-            _case(command, *extra, "--sensing-error-m=1001", named="--sensing-error-m")]
+            _case(command, *extra, "--sensing-error-m=1001", named="--sensing-error-m"),
+            *(commitment_options(command, *extra) if commitment else ())]
+
+
+def commitment_options(command: str, *extra: str) -> list[Case]:
+    """The commitment semantics' options: an unknown semantics, a commitment of no action or past the longest
+    horizon, escapes unknown, given twice or none, and either with whole plans."""
+    return [*(_case(command, *extra, f"--semantics={value}", named="--semantics") for value in ("partial", "")),
+            *(_case(command, *extra, f"--commit-max={value}", named="--commit-max")
+              for value in ("0", "-1", "201", "1.5", "many", "")),
+            *(_case(command, *extra, f"--escapes={value}", named="--escapes")
+              for value in ("teleport", "abort,abort", "", ",")),
+            _case(command, *extra, "--semantics=whole", "--commit-max=2", named="--commit-max")]
 
 
 #: Scenario files whose ``bounds`` table is wrong, and the key each one's line must name.
 BOUNDS_FILES = {"bounds_reversed.toml": "bounds.same_mps", "bounds_key.json": "bounds.speed",
                 "bounds_nan.json": "bounds.sensing_error_m", "bounds_profile.toml": "bounds.profile",
                 "bounds_list.json": "bounds", "bounds_phantoms.toml": "bounds.phantoms",
-                "bounds_view.toml": "bounds.oncoming_view_m", "bounds_latency.toml": "bounds.latency_s"}
+                "bounds_view.toml": "bounds.oncoming_view_m", "bounds_latency.toml": "bounds.latency_s",
+                "bounds_commit.toml": "bounds.commit_max", "bounds_escapes.json": "bounds.escapes",
+                "bounds_semantics.toml": "bounds.semantics"}
 
 
 def out_dirs(command: str, option: str = "--out") -> list[Case]:
@@ -235,6 +249,9 @@ def _hostile_files(folder: Path) -> None:
         "bounds_phantoms.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nphantoms = "yes"\n',
         "bounds_view.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\noncoming_view_m = 400\n',
         "bounds_latency.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nlatency_s = -0.1\n',
+        "bounds_commit.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\ncommit_max = 0\n',
+        "bounds_escapes.json": '{"lane": "left", "left_lane": [12], "right_lane": [], "bounds": {"escapes": []}}',
+        "bounds_semantics.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nsemantics = 3\n',
     }
     for name, text in files.items():
         (folder / name).write_text(text)
@@ -315,7 +332,7 @@ CASES: list[Case] = [
                     "left=1@20..10,right=0@0..0", "left=5@0..50,right=5@0..50")),
     *schedulers("crossval"), *out_dirs("crossval"), *unknown("crossval"),
     no_spin("crossval", "--engines=interpreter,spin"),
-    *choices("crossval", "--model"), *sound_options("crossval", "--model=sound"),
+    *choices("crossval", "--model"), *sound_options("crossval", "--model=sound", commitment=False),
     _case("crossval", "--bounds=paper", named="--bounds"),  # the bounds choose the sound model: --model sound
     _case("crossval", "--model=sound", "--coverage-target=grid", named="--coverage-target"),
     # the older conformance campaign

@@ -19,10 +19,10 @@ from pathlib import Path
 
 import pytest
 
-from ci.shared.gen import refined
 from oracle.shrink import to_toml
 from spec.grid import grid_for
 from spec.library import builtin
+from spec.scenario import refined
 
 pytestmark = pytest.mark.xdist_group("terminal-width")  # on one worker: the campaign the report reads is run once
 

@@ -1,0 +1,354 @@
+"""The sound model's commitment semantics in the interpreter: committed actions, a proved escape, a predicted
+continuation (``spec.escapes``).
+
+An answer is found in three steps, each on the rules ``spec`` states:
+
+1. the start: one that already breaks the specification is ``unsafe_start`` (its violation, and the lane's first
+   escape to take at once); one where the goal holds for every position and which is safe for ever is the empty
+   plan, whole;
+2. the **committable** first actions: enabled, safe at every instant (``SoundRules.step_violation``) and with an
+   escape proved from where they end (``escape_from``); none is "no plan" naming, per action, what refuses it;
+3. the **predicted** plan: the strategy's search (sensible, shortest, optimal) under nominal motion
+   (``spec.escapes.nominal``), its first action one of the committable ones. Its **committed** part is its longest
+   prefix (at most ``Commitment.most_actions``) whose steps are safe and from whose end an escape is proved; the
+   whole plan when the sound model proves it to its goal and for ever after (no escape needed). The rest is the
+   prediction.
+
+The pipeline (``oracle.planner``) asks the final model, then the preparations model, as for any answer.
+"""
+
+from __future__ import annotations
+
+import heapq
+from collections.abc import Collection, Sequence
+from dataclasses import dataclass, replace
+
+from oracle import bitplan, sound
+from oracle.interpreter import problem_goal, problem_step
+from oracle.offsets import OffsetSearch
+from oracle.search import depth_first
+from oracle.sound import Refusal, rules_for, start
+from spec.actions import ACTION_RULES, Action
+from spec.answers import Commit, Limits, SearchResult, Status, Strategy
+from spec.cost import COST_DOC, COST_TERMS, action_cost
+from spec.escapes import COMMIT, Commitment, Escape, unsafe_start_escape
+from spec.lanes import Lane
+from spec.rules import disabled_reason
+from spec.scenario import Problem
+from spec.sound import SoundRules, SoundState, Violation
+from spec.state import Collision, State
+
+
+def commitment(problem: Problem) -> Commitment:
+    sc = problem.scenario.sound
+    return COMMIT if sc is None or sc.commitment is None else sc.commitment
+
+
+def _sound_rules(problem: Problem) -> SoundRules:
+    rules = rules_for(problem)
+    if not isinstance(rules, SoundRules):
+        raise ValueError("the commitment semantics needs the sound model's physical checks")
+    return rules
+
+
+@dataclass(frozen=True, slots=True)
+class Proved:
+    """An escape proved after a sequence of committed actions: which one, and the state it ends in."""
+
+    escape: Escape
+    end: SoundState
+
+
+def sequence_refusal(rules: SoundRules, state: SoundState, actions: Sequence[Action]) -> tuple[
+        str | None, SoundState]:
+    """Why ``actions`` from ``state``, known whole, are not safe at every instant (each step's window ending where
+    the ramp into the next starts: ``SoundRules.step_violation``'s ``following``; the last one's at its end, where
+    the minimal-risk manoeuvre takes over), or None; and the state they end in (where they got to)."""
+    for n, action in enumerate(actions):
+        following = actions[n + 1] if n + 1 < len(actions) else None
+        found = rules.step_violation(state, action, following)
+        if found is not None:
+            return f"{action.value}, {_short(found)}", state
+        state = rules.after(state, action)
+    return None, state
+
+
+def escape_after(rules: SoundRules, state: SoundState, committed: Sequence[Action],
+                 allowed: Sequence[Escape]) -> Proved | None:
+    """The first of ``allowed`` escapes from the lane ``committed`` ends in such that the committed actions and the
+    escape's, as one sequence, are safe at every instant and end safe for ever under the minimal-risk manoeuvre
+    (an escape keeps its actions' lane guards but not the model's count of lane changes)."""
+    lane = _lane_after(state.lane, committed)
+    for escape in allowed:
+        if escape.from_lane is not lane:
+            continue
+        why, end = sequence_refusal(rules, state, (*committed, *escape.actions))
+        if why is None and rules.continuation_violation(end) is None:
+            return Proved(escape, end)
+    return None
+
+
+def _lane_after(lane: Lane, actions: Sequence[Action]) -> Lane:
+    for action in actions:
+        lane = ACTION_RULES[action].to_lane or lane
+    return lane
+
+
+def no_escape_reason(rules: SoundRules, state: SoundState, committed: Sequence[Action],
+                     allowed: Sequence[Escape]) -> str:
+    """Why no escape of ``allowed`` is proved after ``committed``: each one's first refusal, in short (the conflict,
+    the vehicle, when)."""
+    lane, reasons = _lane_after(state.lane, committed), []
+    for escape in allowed:
+        if escape.from_lane is not lane:
+            continue
+        why, end = sequence_refusal(rules, state, (*committed, *escape.actions))
+        if why is None:
+            found = rules.continuation_violation(end)
+            why = "after it, " + (_short(found) if found is not None else "safe")
+        reasons.append(f"{escape.kind.value} ({', '.join(a.value for a in escape.actions) or 'in lane'}): {why}")
+    return "; ".join(reasons) or f"no escape allowed from the {lane.value} lane"
+
+
+def _short(found: Refusal) -> str:
+    return (f"{found.conflict.value} with {found.vehicle.name} at {found.time_s:.1f} s" if isinstance(found, Violation)
+            else found.describe())
+
+
+def committable(problem: Problem, state: SoundState) -> tuple[dict[Action, Proved], dict[Action, str]]:
+    """The first actions from the start that the sound model commits to (safe, with a proved escape after them),
+    and for every other enabled action why not."""
+    rules, allowed = _sound_rules(problem), commitment(problem)
+    ok: dict[Action, Proved] = {}
+    refused: dict[Action, str] = {}
+    for action in Action:
+        if disabled_reason(State(state.lane, (), (), state.lane_changes, 0), action, problem.rules) is not None:
+            continue
+        escapes = allowed.allowed(_lane_after(state.lane, (action,)))
+        proved = escape_after(rules, state, (action,), escapes)
+        if proved is not None:
+            ok[action] = proved
+            continue
+        found = rules.step_violation(state, action)
+        refused[action] = found.describe() if found is not None else \
+            "no escape after it: " + no_escape_reason(rules, state, (action,), escapes)
+    return ok, refused
+
+
+Key = tuple[int, int, int, int]  # the paper's offset form: lane changes, left offset, oncoming ticks, steps
+
+
+def predict(problem: Problem, strategy: Strategy, firsts: Collection[Action], limits: Limits) -> SearchResult:
+    """The predicted plan: the strategy's plan under the paper's rules (``oracle.offsets``: every vehicle at the
+    common speed from its cell, the paper's collisions and goals), its first action one of ``firsts`` (the ones the
+    sound model commits to), at least one action long. ``sensible``: depth first in the action order; ``shortest``:
+    the first shortest in the action order; ``optimal``: the least ``spec.cost``."""
+    search = OffsetSearch(problem)
+    form = search.form
+
+    def successors(key: Key) -> list[tuple[Action, Key]]:
+        found = search.successors(key)
+        return [m for m in found if m[0] in firsts] if key[3] == 0 else found
+
+    begin: Key = (0, 0, 0, 0)
+    if strategy is Strategy.SENSIBLE:
+        status, actions, _, explored, detail = depth_first(begin, successors, search.goal, limits.max_states,
+                                                           limits.timeout_s)
+        return SearchResult(status, actions, explored, detail)
+    if strategy is Strategy.SHORTEST:
+        parent: dict[tuple[int, int, int], tuple[tuple[int, int, int], Action] | None] = {begin[:3]: None}
+        layer = [begin]
+        while layer:
+            following = []
+            for key in layer:
+                for action, nxt in successors(key):
+                    if nxt[:3] in parent:
+                        continue
+                    parent[nxt[:3]] = (key[:3], action)
+                    if search.goal(nxt):
+                        return SearchResult(Status.PLAN, _back(parent, nxt[:3]), len(parent))
+                    following.append(nxt)
+            layer = following
+        return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(parent))
+    queue: list[tuple[tuple[int, ...], int, Key, tuple[Action, ...]]] = [((0,) * len(COST_TERMS), 0, begin, ())]
+    fewest: dict[tuple[int, int, int], int] = {}
+    pushed = 0
+    while queue:
+        cost, _, key, actions = heapq.heappop(queue)
+        if fewest.get(key[:3], key[3] + 1) <= key[3]:
+            continue
+        fewest[key[:3]] = key[3]
+        if key[3] > 0 and search.goal(key):
+            return SearchResult(Status.PLAN, actions, len(fewest), f"optimal under {COST_DOC}",
+                                extra={"cost": dict(zip(COST_TERMS, cost, strict=True)),
+                                       "cost_order": list(COST_TERMS)})
+        for action, nxt in successors(key):
+            if fewest.get(nxt[:3], nxt[3] + 1) <= nxt[3]:
+                continue
+            pushed += 1
+            added = action_cost(action, form.lanes[nxt[0]])
+            heapq.heappush(queue, (tuple(a + b for a, b in zip(cost, added, strict=True)), pushed, nxt,
+                                   (*actions, action)))
+        if len(fewest) >= limits.max_states:
+            return SearchResult(Status.INCOMPLETE, (), len(fewest), f"state limit {limits.max_states} reached")
+    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(fewest))
+
+
+def _back(parent: dict[tuple[int, int, int], tuple[tuple[int, int, int], Action] | None],
+          key: tuple[int, int, int]) -> tuple[Action, ...]:
+    actions = []
+    link = parent[key]
+    while link is not None:
+        key, action = link
+        actions.append(action)
+        link = parent[key]
+    return tuple(reversed(actions))
+
+
+def solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult:
+    """The interpreter's answer under the commitment semantics (see the module's docstring)."""
+    rules, first = _sound_rules(problem), start(problem)
+    allowed = commitment(problem)
+    hit = rules.start_violation(first)
+    if hit is not None:
+        take = unsafe_start_escape(first.lane)
+        return SearchResult(Status.UNSAFE_START, (), 1, f"the start already breaks the safety specification: "
+                            f"{hit.describe()}; escape at once: {take.describe()}",
+                            commit=Commit((), take, (), escape_proved=False))
+    if rules.goal_holds(first, problem.goal) and rules.continuation_violation(first) is None:
+        return SearchResult(Status.PLAN, (), 1, "goal holds in the initial state, safe for ever",
+                            (sound.display(problem, first),), commit=Commit((), None, ()))
+    ok, refused = committable(problem, first)
+    if not ok:
+        why = "; ".join(f"{a.value}: {r}" for a, r in refused.items())
+        return SearchResult(Status.NO_PLAN, (), 1, f"no committed step is provable (the AV keeps its minimal-risk "
+                            f"manoeuvre): {why}")
+    predicted = predict(problem, strategy, ok, limits)
+    if predicted.status is not Status.PLAN:
+        if predicted.status is Status.NO_PLAN_WITHIN_HORIZON and bitplan.beyond_horizon(problem).status is \
+                Status.NO_PLAN:
+            return SearchResult(Status.NO_PLAN, (), predicted.states_explored, "the paper's rules prove that no "
+                                "plan of any length reaches the goal (the predicted continuation's model)")
+        detail = (f"no predicted continuation reaches the goal within {problem.horizon} actions from a committable "
+                  f"step ({', '.join(a.value for a in ok)}) under the paper's rules" + (
+                      f": {predicted.detail}" if predicted.detail else ""))
+        return replace(predicted, detail=detail, states=())
+    committed, escape = split(problem, predicted.actions, allowed)
+    states = states_along(problem, committed)
+    return SearchResult(Status.PLAN, committed, predicted.states_explored, _detail(committed, escape, predicted),
+                        states, predicted.extra, Commit(committed, escape, predicted.actions[len(committed):]))
+
+
+def states_along(problem: Problem, actions: Sequence[Action]) -> tuple[State, ...]:
+    """The display states along ``actions`` under the sound model's rules (the initial one first)."""
+    rules, state = _sound_rules(problem), start(problem)
+    shown = [sound.display(problem, state)]
+    for action in actions:
+        state = rules.after(state, action)
+        shown.append(sound.display(problem, state))
+    return tuple(shown)
+
+
+def _detail(committed: tuple[Action, ...], escape: Escape | None, predicted: SearchResult) -> str:
+    if escape is None:
+        return "a whole plan, proved to its goal and safe for ever after" + (
+            f" ({predicted.detail})" if predicted.detail else "")
+    return (f"{len(committed)} committed action(s) with a proved escape; {len(predicted.actions) - len(committed)} "
+            "predicted to the goal under the paper's rules")
+
+
+def split(problem: Problem, actions: Sequence[Action], allowed: Commitment) -> tuple[tuple[Action, ...], Escape | None]:
+    """The committed part of a predicted plan and its escape: the whole plan when the sound model proves it (safe at
+    every instant, the goal for every position at its end, safe for ever after) within ``most_actions``; else its
+    longest prefix of at most ``most_actions`` actions after which an escape is proved (at least its first action,
+    which the search made committable)."""
+    rules, first = _sound_rules(problem), start(problem)
+    most = len(actions) if allowed.most_actions is None else min(allowed.most_actions, len(actions))
+    if most == len(actions):
+        why, end = sequence_refusal(rules, first, actions)
+        if why is None and rules.goal_holds(end, problem.goal) and rules.continuation_violation(end) is None:
+            return tuple(actions), None
+    for n in range(most, 0, -1):
+        prefix = tuple(actions[:n])
+        proved = escape_after(rules, first, prefix, allowed.allowed(_lane_after(first.lane, prefix)))
+        if proved is not None:
+            return prefix, proved.escape
+    raise ValueError(f"the predicted plan's first action {actions[0].value} has no escape (it was committable)")
+
+
+@dataclass(frozen=True, slots=True)
+class CommitValidation:
+    """The verdict on an action list under the commitment semantics: which part fails and why, if any."""
+
+    valid: bool
+    reason: str
+    states: tuple[State, ...]  # display states along the committed part (the initial one first)
+    commit: Commit | None = None  # the split, when valid
+
+
+def validate(problem: Problem, actions: Sequence[Action]) -> CommitValidation:
+    """Whether ``actions`` is an answer of the commitment semantics: from a safe start, a non-empty committed prefix
+    (safe steps, an escape proved after it, at most ``most_actions``; or the whole list, proved to the goal), the
+    whole list enabled within the horizon, and reaching the goal under nominal motion (the predicted continuation),
+    as ``solve`` answers. Says which part fails and why."""
+    rules, first = _sound_rules(problem), start(problem)
+    shown = (sound.display(problem, first),)
+    hit = rules.start_violation(first)
+    if hit is not None:
+        return CommitValidation(False, f"unsafe start: the start already breaks the safety specification: "
+                                f"{hit.describe()}", shown)
+    if len(actions) > problem.horizon:
+        return CommitValidation(False, f"{len(actions)} actions exceed the horizon of {problem.horizon}", shown)
+    if not actions:
+        whole = rules.goal_holds(first, problem.goal) and rules.continuation_violation(first) is None
+        return CommitValidation(whole, "goal holds in the initial state, safe for ever" if whole else
+                                "the empty list commits to nothing: the goal does not hold for every position "
+                                "at the start", shown, Commit((), None, ()) if whole else None)
+    state = first
+    for n, action in enumerate(actions, start=1):
+        reason = disabled_reason(State(state.lane, (), (), state.lane_changes, 0), action, problem.rules)
+        if reason is not None:
+            return CommitValidation(False, f"step {n}: {reason}", shown)
+        state = rules.after(state, action)
+    allowed = commitment(problem)
+    escapes = allowed.allowed(_lane_after(first.lane, actions[:1]))
+    if escape_after(rules, first, actions[:1], escapes) is None:
+        found = rules.step_violation(first, actions[0])
+        if found is not None:
+            return CommitValidation(False, f"committed part: step 1 ({actions[0].value}): {found.describe()}", shown)
+        return CommitValidation(False, f"committed part: no escape after step 1 ({actions[0].value}): "
+                                f"{no_escape_reason(rules, first, actions[:1], escapes)}", shown)
+    predicted = _predicted_reason(problem, actions)
+    if predicted is not None:
+        return CommitValidation(False, f"predicted continuation: {predicted}", shown)
+    committed, escape = split(problem, actions, allowed)
+    commit = Commit(committed, escape, tuple(actions[len(committed):]))
+    what = ("a whole plan, proved to its goal and safe for ever after" if escape is None else
+            f"{len(committed)} committed action(s), escape {escape.describe()}, {len(actions) - len(committed)} "
+            "predicted under the paper's rules")
+    return CommitValidation(True, what, states_along(problem, committed), commit)
+
+
+def _predicted_reason(problem: Problem, actions: Sequence[Action]) -> str | None:
+    """Why ``actions`` are no predicted plan (the paper's rules, ``oracle.interpreter``: each step collision-free,
+    the goal first after the last, never at the start), or None when they are one."""
+    state = problem.scenario.initial_state()
+    for n, action in enumerate(actions, start=1):
+        if n > 1 and problem_goal(problem, state):
+            return f"the goal already holds under the paper's rules before step {n}"
+        after = problem_step(problem, state, action)
+        if isinstance(after, Collision):
+            return f"step {n} ({action.value}) under the paper's rules: {after.describe()}"
+        state = after
+    if not problem_goal(problem, state):
+        return f"the goal does not hold under the paper's rules after {len(actions)} action(s)"
+    return None
+
+
+def prove_beyond(problem: Problem) -> SearchResult:
+    """After an answer of no plan within the horizon: "no plan" where ``solve`` proves it (no committable step, or
+    no plan of any length under the paper's rules), else no plan within the horizon."""
+    found = solve(problem, Strategy.SHORTEST, Limits())
+    if found.status is Status.NO_PLAN:
+        return found
+    return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), found.states_explored, found.detail)
