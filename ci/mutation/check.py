@@ -54,7 +54,10 @@ class Detector:
 
 
 def _pytest(*targets: str) -> list[str]:
-    return [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *targets]
+    """The tests as ``ci/test.sh`` runs them (every core, a module's shared fixture on one worker), stopping at the
+    first failure."""
+    return [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", "-n", "auto", "--dist", "loadgroup",
+            *targets]
 
 
 def _crossval(work: Path, *args: str) -> list[str]:
