@@ -8,7 +8,13 @@ objective changes no plan, since every plan of a model and start lane has the sa
 lane changes except in preparations case B, where the plan without a lane change also has no
 right-lane step. Another was measured and replaced: counting a target alongside the AV as
 behind it (``spec.rules.behind_line`` one cell later) changes no plan, since the goal wants the
-AV in its own lane, where a vehicle alongside is a collision.
+AV in its own lane, where a vehicle alongside is a collision. Three of the commitment semantics' were
+measured and left out (2026-12-03, each against its continuous-motion checks and a sweep of 1,700 answers): an
+escape's end taken as safe for ever unchecked (after an escape's own steps the minimal-risk manoeuvre's ramp only
+slows the AV, and no answer changed where the checks could see it), a step's window known whole cut a whole ramp
+before its boundary instead of half (the stretch it leaves unchecked is never the worst instant: the next window
+starts later and holds it), and every escape tried from either lane (a physically empty manoeuvre the model
+checks as consistently as the motions do: a fault of progress, not of safety).
 """
 
 from __future__ import annotations
@@ -214,6 +220,22 @@ MUTANTS: tuple[Mutant, ...] = (
            "        base = p.x0_m - low * p.t0_s + tr.position_m + s.vehicle_length_m",
            "        base = p.x0_m - low * p.t0_s + s.vehicle_length_m",
            "the AV's position error ignored towards a vehicle ahead"),
+    # -- the commitment semantics (spec.escapes, oracle.commit): each caught by the continuous-motion checks ----------
+    Mutant("commit-one-action-past-its-escape", "oracle/commit.py",
+           "        if proved is not None:\n            return prefix, proved.escape",
+           "        if proved is not None:\n            return tuple(actions[: n + 1]), proved.escape",
+           "the committed part one action longer than the escape was proved after"),
+    Mutant("commit-escape-skips-its-first-action", "oracle/commit.py",
+           "        why, end = sequence_refusal(rules, state, (*committed, *escape.actions))\n"
+           "        if why is None and",
+           "        why, end = sequence_refusal(rules, state, (*committed, *escape.actions[1:]))\n"
+           "        if why is None and",
+           "an escape proved without its first action (the abort's return, the completion's speeding past)"),
+    Mutant("commit-whole-plan-goal-unchecked", "oracle/commit.py",
+           "        if why is None and rules.goal_holds(end, problem.goal) and rules.continuation_violation(end) "
+           "is None:",
+           "        if why is None and rules.continuation_violation(end) is None:",
+           "a predicted plan taken as a whole proved plan without its goal for every position (no escape kept)"),
 )
 
 
