@@ -14,7 +14,7 @@ no plan exists at all; otherwise only "none within the horizon" is claimed.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
 
 from oracle.abstraction import Move, Offsets, offsets_of
@@ -208,6 +208,50 @@ def shortest(problem: Problem) -> SearchResult:
         if not any(layer):
             return SearchResult(Status.NO_PLAN, (), explored, "every path collides")
     return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), explored, f"no plan within {problem.horizon} actions")
+
+
+def live_positions(problem: Problem, firsts: Collection[Action]) -> tuple[Callable[[int, int, int, int], bool], int]:
+    """Which offsets ``(lane changes, l, o)`` after ``steps`` actions still reach the goal within the horizon on a
+    plan whose first action is one of ``firsts`` (reached that way, and the goal or a step towards it), as a test
+    ``live(lc, l, o, steps)``, and how many positions the forward layers held. A search that skips every other
+    successor finds the same first plan as one that explores them: they hold no goal, and none is on its way. No
+    position is live when no such plan exists."""
+    form = offsets_of(problem)
+    space = BitSpace(problem, *_l_range(form, problem.horizon), form=form)
+    width, nothing = space.width, [0] * len(space.lanes)
+    layer = list(nothing)
+    for flat in space.moves[0]:
+        if flat.move.action in firsts:
+            layer[flat.move.lc_dst] |= space.image(flat, space.start())
+    layers = [[space.start(), *nothing[1:]], layer]
+    for _ in range(problem.horizon - 1):
+        layers.append(space.advance(layers[-1]) if any(layers[-1]) else list(nothing))
+    explored = sum(x.bit_count() for layer in layers for x in layer)
+    live = [list(nothing) for _ in layers]
+    for k in range(len(layers) - 1, 0, -1):
+        onward = list(nothing)
+        if k + 1 < len(layers):
+            for lc, moves in enumerate(space.moves):
+                for flat in moves:
+                    onward[lc] |= space.preimage(flat, live[k + 1][flat.move.lc_dst])
+        live[k] = [x & (g | o) for x, g, o in zip(layers[k], space.goals, onward, strict=True)]
+    if not form.track_left:  # the search keeps l at 0 where no left-lane vehicle is tracked: any row stands for it
+        live = [[_columns(x, space) for x in layer] for layer in live]
+    low = space.l_low
+
+    def is_live(lc: int, l_off: int, o: int, steps: int) -> bool:
+        return bool(live[steps][lc] >> ((l_off - low) * width + o) & 1) if 0 < steps < len(live) else steps == 0
+
+    return is_live, explored
+
+
+def _columns(x: int, space: BitSpace) -> int:
+    """Every row's columns folded onto the row of l = 0."""
+    folded = 0
+    while x:
+        folded |= x & space.row_bits
+        x >>= space.width
+    return folded << ((0 - space.l_low) * space.width)
 
 
 def beyond_horizon(problem: Problem, explored: int = 0) -> SearchResult:

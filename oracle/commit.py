@@ -143,12 +143,13 @@ def predict(problem: Problem, strategy: Strategy, firsts: Collection[Action], li
     common speed from its cell, the paper's collisions and goals), its first action one of ``firsts`` (the ones the
     sound model commits to), at least one action long. ``sensible``: depth first in the action order; ``shortest``:
     the first shortest in the action order; ``optimal``: the least ``spec.cost``."""
+    live, _ = bitplan.live_positions(problem, firsts)
     search = OffsetSearch(problem)
     form = search.form
 
     def successors(key: Key) -> list[tuple[Action, Key]]:
-        found = search.successors(key)
-        return [m for m in found if m[0] in firsts] if key[3] == 0 else found
+        """Only towards the goal (``bitplan.live_positions``): the same first plan, without its dead ends."""
+        return [m for m in search.successors(key) if (key[3] > 0 or m[0] in firsts) and live(*m[1])]
 
     begin: Key = (0, 0, 0, 0)
     if strategy is Strategy.SENSIBLE:

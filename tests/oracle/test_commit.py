@@ -11,7 +11,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from oracle import chain, commit, reach, sound
+from oracle import bitplan, chain, commit, reach, sound
+from oracle.offsets import OffsetSearch
 from oracle.planner import plan, validate_pipeline
 from spec.actions import Action
 from spec.answers import Limits, Status, Strategy
@@ -19,7 +20,7 @@ from spec.assumptions import profile
 from spec.escapes import COMMIT, Commitment, EscapeKind
 from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid, grid_for
 from spec.library import BUILTINS, builtin
-from spec.models import ModelKind
+from spec.models import PIPELINE, ModelKind
 from spec.scenario import Scenario, make_scenario, problem_for
 from spec.sound import Sound, sound_from
 from tests.conftest import CI_PROFILE
@@ -56,6 +57,30 @@ def test_every_committed_part_and_its_escape_survive_every_motion_within_the_bou
                                                                                      strategy: Strategy,
                                                                                      seed: int) -> None:
     _check(committed(scenario), strategy, 4, random.Random(seed))
+
+
+@settings(max_examples=200 if CI_PROFILE else 40)
+@given(st.sampled_from(STANDARD_CELLS_M).flatmap(lambda c: sound_scenarios(Grid(c))),
+       st.sampled_from(list(PIPELINE)), st.sets(st.sampled_from(list(Action)), min_size=1))
+def test_the_live_positions_are_exactly_those_that_still_reach_the_goal_in_time(scenario: Scenario, kind: ModelKind,
+                                                                                firsts: set[Action]) -> None:
+    """``bitplan.live_positions`` against every offset the prediction's search can reach, judged by recursion over
+    its successors: the pruned search skips exactly the dead ends."""
+    problem = problem_for(scenario, kind)
+    live, _ = bitplan.live_positions(problem, firsts)
+    search = OffsetSearch(problem)
+    judged: dict[tuple[int, int, int, int], bool] = {}
+
+    def reaches(key: tuple[int, int, int, int]) -> bool:
+        if key not in judged:
+            nexts = [k for a, k in search.successors(key) if key[3] > 0 or a in firsts]
+            judged[key] = (key[3] > 0 and search.goal(key)) or any([reaches(k) for k in nexts])
+        return judged[key]
+
+    reaches((0, 0, 0, 0))
+    for key, alive in judged.items():
+        if key[3] > 0:
+            assert live(*key) is alive, (key, alive)
 
 
 @pytest.mark.parametrize("name", [b.name for b in BUILTINS])
