@@ -51,6 +51,26 @@ class Detector:
     command: Callable[[Mutant, Path], list[str]]
     caught_codes: tuple[int, ...]  # exit codes that mean "found a fault"; 0 means it did not
     env: tuple[tuple[str, str], ...] = ()  # set for this detector only (as .ci/run sets them)
+    tests: bool = False  # pytest on every core with -x: a failure stops the session as an interruption
+
+    def caught(self, done: subprocess.CompletedProcess[str]) -> bool:
+        """Whether the run found the fault: one of its exit codes, or (tests) pytest-xdist stopping the session at the
+        first failure or error, which it reports as an interruption (exit 2) after the summary line naming it (as
+        pytest on one core exits 1 for them); a collection error stops it otherwise and is no catch."""
+        if done.returncode in self.caught_codes:
+            return True
+        return (self.tests and done.returncode == PYTEST_INTERRUPTED and _STOPPED_AT_FAILURE in done.stdout
+                and any(_a_test(line) for line in done.stdout.splitlines()))
+
+
+_STOPPED_AT_FAILURE = "stopping after 1 failures"  # pytest-xdist's words when -x stops the session
+PYTEST_INTERRUPTED = 2  # pytest.ExitCode.INTERRUPTED
+
+
+def _a_test(line: str) -> bool:
+    """A summary line naming a test that failed or errored (``ERROR path`` alone is a module that did not import)."""
+    kind, _, rest = line.partition(" ")
+    return kind == "FAILED" or (kind == "ERROR" and "::" in rest.split(" ", 1)[0])
 
 
 def _pytest(*targets: str) -> list[str]:
@@ -78,7 +98,7 @@ FAILS_CI = (ExitCode.DISAGREE, ExitCode.INCOMPLETE)
 
 DETECTORS: tuple[Detector, ...] = (
     Detector("tests of the mutated layer", lambda m, work: _pytest(f"tests/{m.path.split('/')[0]}", SELF_CHECK),
-             (1,)),
+             (1,), tests=True),
     Detector("crossval library", lambda m, work: _crossval(work / "library", "--source", "library"),
              FAILS_CI),
     Detector("crossval exhaustive (CI's space)",
@@ -98,7 +118,7 @@ DETECTORS: tuple[Detector, ...] = (
                                        _ci_seed(), "--cell-m", "10.5", "--model", "sound", "--engines",
                                        "interpreter,spin", "--properties", CI_FINE_PROPERTIES),
              FAILS_CI, (("HYPOTHESIS_PROFILE", "ci"),)),
-    Detector("tests (all)", lambda m, work: _pytest("tests", SELF_CHECK), (1,)),
+    Detector("tests (all)", lambda m, work: _pytest("tests", SELF_CHECK), (1,), tests=True),
 )
 #: The detectors that are cross-validation campaigns (``--crossval-only``: what catches a mutant without the tests).
 CROSSVAL = tuple(d for d in DETECTORS if d.name.startswith("crossval"))
@@ -159,7 +179,7 @@ def check(m: Mutant, cache: Path, on_detector: Callable[[str], None] | None = No
             except subprocess.TimeoutExpired:
                 errors.append(f"{detector.name}: no answer within {DETECTOR_TIMEOUT_S:.0f} s")
                 continue
-            if done.returncode in detector.caught_codes:
+            if detector.caught(done):
                 return Verdict(m.name, detector.name, time.perf_counter() - started, _reproducer(done), errors)
             if done.returncode != 0:
                 last = (done.stderr.strip() or done.stdout.strip()).splitlines()[-1:] or ["?"]
@@ -173,8 +193,8 @@ def _reproducer(done: subprocess.CompletedProcess[str]) -> str:
     try:
         data = json.loads(done.stdout)
     except json.JSONDecodeError:
-        failed = [line for line in done.stdout.splitlines() if line.startswith("FAILED ")]
-        return failed[0][len("FAILED "):][:160] if failed else "(a test failed)"
+        failed = [line for line in done.stdout.splitlines() if _a_test(line)]
+        return failed[0].split(" ", 1)[1][:160] if failed else "(a test failed)"
     reproducers = data.get("reproducers") or []
     if not reproducers:
         return "(no reproducer: only incomplete verdicts)"

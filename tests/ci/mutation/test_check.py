@@ -7,11 +7,12 @@ import argparse
 import datetime
 import math
 import re
+import subprocess
 from pathlib import Path
 
 import pytest
 
-from ci.mutation.check import ROOT, apply, main, rotation
+from ci.mutation.check import ROOT, Detector, _pytest, apply, main, rotation
 from ci.mutation.mutants import MUTANTS, Mutant, mutant
 from spec.errors import OptionError
 
@@ -70,3 +71,19 @@ def test_bad_mutation_input_is_exit_two(capsys: pytest.CaptureFixture[str]) -> N
     assert len(lines) == 4 and "no-such-mutant" in lines[0] and "--date" in lines[2] and "--count" in lines[-1]
     with pytest.raises(OptionError):
         mutant("nope")
+
+
+@pytest.mark.parametrize(("body", "caught"), [
+    ("def test_a():\n    assert 0\n\ndef test_b():\n    pass\n", True),  # xdist stops at the failure: exit 2
+    ("import pytest\n\n@pytest.fixture\ndef broken():\n    raise RuntimeError\n\ndef test_a(broken):\n    pass\n",
+     True),  # a fixture's error, as pytest on one core counts it
+    ("def test_a():\n    pass\n", False),
+    ("import no_such_module_here\n\ndef test_a():\n    pass\n", False),  # a collection error is no catch
+])
+def test_a_test_detector_on_every_core_catches_a_failure_and_nothing_else(body: str, caught: bool,
+                                                                           tmp_path: Path) -> None:
+    (tmp_path / "test_planted.py").write_text(body)
+    detector = Detector("planted", lambda m, work: _pytest(str(tmp_path / "test_planted.py")), (1,), tests=True)
+    done = subprocess.run(detector.command(MUTANTS[0], tmp_path), cwd=tmp_path, capture_output=True, text=True,
+                          timeout=120)
+    assert detector.caught(done) is caught, done.stdout[-500:]
