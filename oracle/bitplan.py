@@ -230,10 +230,12 @@ def live_positions(problem: Problem, firsts: Collection[Action]) -> tuple[Callab
     live = [list(nothing) for _ in layers]
     for k in range(len(layers) - 1, 0, -1):
         onward = list(nothing)
-        if k + 1 < len(layers):
+        if k + 1 < len(layers) and any(live[k + 1]):
             for lc, moves in enumerate(space.moves):
-                for flat in moves:
-                    onward[lc] |= space.preimage(flat, live[k + 1][flat.move.lc_dst])
+                if layers[k][lc]:
+                    for flat in moves:
+                        if live[k + 1][flat.move.lc_dst]:
+                            onward[lc] |= space.preimage(flat, live[k + 1][flat.move.lc_dst])
         live[k] = [x & (g | o) for x, g, o in zip(layers[k], space.goals, onward, strict=True)]
     if not form.track_left:  # the search keeps l at 0 where no left-lane vehicle is tracked: any row stands for it
         live = [[_columns(x, space) for x in layer] for layer in live]

@@ -269,6 +269,12 @@ def split(problem: Problem, actions: Sequence[Action], allowed: Commitment) -> t
         why, end = sequence_refusal(rules, first, actions)
         if why is None and rules.goal_holds(end, problem.goal) and rules.continuation_violation(end) is None:
             return tuple(actions), None
+    state = first
+    for k in range(min(most, len(actions) - 1) - 1):  # a step unsafe before the next plan step ends every longer prefix
+        if rules.step_violation(state, actions[k], actions[k + 1]) is not None:
+            most = k + 1
+            break
+        state = rules.after(state, actions[k])
     for n in range(most, 0, -1):
         prefix = tuple(actions[:n])
         proved = escape_after(rules, first, prefix, allowed.allowed(_lane_after(first.lane, prefix)))
