@@ -114,12 +114,14 @@ def verifier(shape: Shape | sound_model.SoundShape, strategy: Strategy) -> Verif
     """The compiled verifier for ``shape``: from the cache, or compiled once and cached.
 
     The key hashes the rendered template (which holds every rule and number of the shape's
-    model, goal and grid), the grid itself, the compiler flags and the tool versions; for the
+    model, goal and grid), the grid itself, the compiler flags, the tool versions, the server's and this
+    module's source; for the
     sound model also the sound model in full (``SoundShape.key_text``: bounds, safety, tracking,
     start speed, minimal-risk manoeuvre), whose hash is in the shape's name too."""
     source = sound_model.render(shape) if isinstance(shape, sound_model.SoundShape) else render(shape)
     flags = _flags(strategy)
-    key_text = [source, f"cell_m={shape.grid.cell_m}", " ".join(flags), tool_versions(), _server_source()]
+    key_text = [source, f"cell_m={shape.grid.cell_m}", " ".join(flags), tool_versions(), _server_source(),
+                _own_source()]
     if isinstance(shape, sound_model.SoundShape):
         key_text.append(shape.key_text())
     key = hashlib.sha256("\n".join(key_text).encode()).hexdigest()[:24]
@@ -176,6 +178,12 @@ def discard(folder: Path) -> None:
 @cache
 def _server_source() -> str:
     return SERVER_SOURCE.read_text()
+
+
+@cache
+def _own_source() -> str:
+    """This module's text, part of every key: how a verifier is compiled and served lives here."""
+    return Path(__file__).read_text()
 
 
 def _flags(strategy: Strategy) -> list[str]:

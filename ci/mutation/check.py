@@ -1,14 +1,15 @@
 """Mutation check: does what CI runs catch each single-rule fault of ``ci.mutation.mutants``?
 
 Usage: python -m ci.mutation.check [--mutants a,b | --rotate K [--date YYYY-MM-DD]] [--count N]
-                                   [--crossval-only] [--out DIR] [--list]
+                                   [--crossval-only] [--shared-cache] [--out DIR] [--list]
 
 Each mutant is applied to a scratch copy of the checkout (the files git tracks) and the
-detectors ``.ci/run`` runs are tried on it, cheapest first, until one fails: the tests of the
-mutated layer, ``crossval`` on the library, ``crossval`` on CI's exhaustive space, CI's
-hypothesis campaign on the 10.5 m grid (with its coverage target; the day's seed, as CI picks
-it), the same exhaustive space and 10.5 m hypothesis campaign under the sound model (``--model
-sound``), then the whole test suite (``--crossval-only``: the campaigns alone). The report says
+detectors ``.ci/run`` runs are tried on it, cheapest first, until one fails: the test files that
+mirror the mutated module (``tests/<layer>/test_<module>*.py``), the tests of the mutated layer,
+``crossval`` on the library, ``crossval`` on CI's exhaustive space, CI's hypothesis campaign on
+the 10.5 m grid (with its coverage target; the day's seed, as CI picks it), the same exhaustive
+space and 10.5 m hypothesis campaign under the sound model (``--model sound``), then the whole
+test suite (``--crossval-only``: the campaigns alone); the tests on every core. The report says
 which detector caught each mutant, after how many seconds,
 and how small its reproducer is (vehicles and horizon of the shrunk scenario, or the first
 failing test). ``--rotate K`` checks K mutants chosen by the date (every mutant at least once
@@ -34,6 +35,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from ci.mutation.mutants import MUTANTS, Mutant, mutant
+from promela.runner import cache_dir
 from spec.errors import ExitCode, OptionError, SuiteError
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -96,7 +98,15 @@ SELF_CHECK = "--ignore=tests/ci/mutation/test_check.py"
 #: A campaign's exits that fail CI's run of it: a property failed, or one could not be decided (it claims nothing).
 FAILS_CI = (ExitCode.DISAGREE, ExitCode.INCOMPLETE)
 
+def _module_tests(m: Mutant) -> list[str]:
+    """The test files that mirror the mutated module (``tests/<layer>/test_<module>*.py``), as the run's targets."""
+    path = Path(m.path)
+    return sorted(str(p.relative_to(ROOT)) for p in (ROOT / "tests" / path.parent).glob(f"test_{path.stem}*.py"))
+
+
 DETECTORS: tuple[Detector, ...] = (
+    Detector("tests of the mutated module", lambda m, work: _pytest(*targets) if (targets := _module_tests(m)) else [],
+             (1,), tests=True),
     Detector("tests of the mutated layer", lambda m, work: _pytest(f"tests/{m.path.split('/')[0]}", SELF_CHECK),
              (1,), tests=True),
     Detector("crossval library", lambda m, work: _crossval(work / "library", "--source", "library"),
@@ -171,10 +181,13 @@ def check(m: Mutant, cache: Path, on_detector: Callable[[str], None] | None = No
         work = Path(scratch) / "work"
         env = {**os.environ, "PYTHONPATH": str(tree), "OVERTAKE_CACHE": str(cache), "HYPOTHESIS_PROFILE": "dev"}
         for detector in detectors:
+            command = detector.command(m, work)
+            if not command:
+                continue  # nothing of it applies to this mutant (no test file mirrors its module)
             if on_detector:
                 on_detector(detector.name)
             try:
-                done = subprocess.run(detector.command(m, work), cwd=tree, env={**env, **dict(detector.env)},
+                done = subprocess.run(command, cwd=tree, env={**env, **dict(detector.env)},
                                       capture_output=True, text=True, timeout=DETECTOR_TIMEOUT_S)
             except subprocess.TimeoutExpired:
                 errors.append(f"{detector.name}: no answer within {DETECTOR_TIMEOUT_S:.0f} s")
@@ -212,6 +225,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--list", action="store_true")
     parser.add_argument("--crossval-only", action="store_true",
                         help="only the cross-validation campaigns as detectors (does crossval alone catch each?)")
+    parser.add_argument("--shared-cache", action="store_true",
+                        help="Spin verifiers from the suite's cache (promela.runner.cache_dir: what the campaigns "
+                             "before it compiled), not a fresh one: a key holds the rendered model, the flags, the "
+                             "tools and the runner's own source, so a mutant that changes any of them compiles anew")
     args = parser.parse_args(argv)
     detectors = CROSSVAL if args.crossval_only else DETECTORS
     try:
@@ -228,7 +245,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"mutation: {len(chosen)} of {len(MUTANTS)} mutants; detectors: {', '.join(d.name for d in detectors)}",
           file=sys.stderr)
     verdicts = []
-    with tempfile.TemporaryDirectory(prefix="mutation-cache-") as cache:
+    with tempfile.TemporaryDirectory(prefix="mutation-cache-") as fresh:
+        cache = str(cache_dir()) if args.shared_cache else fresh
         try:
             for n, m in enumerate(chosen, start=1):
                 print(f"mutation: [{n}/{len(chosen)}] {m.name}: {m.what}", file=sys.stderr)

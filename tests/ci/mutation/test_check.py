@@ -87,3 +87,12 @@ def test_a_test_detector_on_every_core_catches_a_failure_and_nothing_else(body: 
     done = subprocess.run(detector.command(MUTANTS[0], tmp_path), cwd=tmp_path, capture_output=True, text=True,
                           timeout=120)
     assert detector.caught(done) is caught, done.stdout[-500:]
+
+
+def test_the_first_detector_runs_the_tests_that_mirror_the_mutated_module() -> None:
+    from ci.mutation.check import DETECTORS, _module_tests
+
+    assert _module_tests(mutant("commit-one-action-past-its-escape")) == ["tests/oracle/test_commit.py"]
+    assert "tests/sim/test_safety_by_hand.py" in _module_tests(mutant("safety-closing-reversed"))
+    unmirrored = Mutant("x", "sim/simulator.py", "a", "b", "no test file mirrors sim/simulator.py")
+    assert DETECTORS[0].command(unmirrored, Path(".")) == []
