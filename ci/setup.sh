@@ -21,7 +21,8 @@ fi
 # checkout's last install (.setup-stamp, not tracked): a contributor's repeated test runs do not pay for pip (15 s).
 stamp=".setup-stamp"
 want="$(cat pyproject.toml ci/constraints.txt | sha256sum | cut -d' ' -f1) $(command -v python3)"
-here="$(python3 -c 'import pathlib, spec; print(pathlib.Path(spec.__file__).resolve().parents[1])' 2>/dev/null || true)"
+# (asked from / : from here Python would import this checkout's spec/ whatever the install points at)
+here="$(cd / && python3 -c 'import pathlib, spec; print(pathlib.Path(spec.__file__).resolve().parents[1])' 2>/dev/null || true)"
 if [ "$here" = "$(pwd -P)" ] && [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
   exit 0
 fi
