@@ -75,18 +75,28 @@ def test_bad_mutation_input_is_exit_two(capsys: pytest.CaptureFixture[str]) -> N
 
 @pytest.mark.parametrize(("body", "caught"), [
     ("def test_a():\n    assert 0\n\ndef test_b():\n    pass\n", True),  # xdist stops at the failure: exit 2
-    ("import pytest\n\n@pytest.fixture\ndef broken():\n    raise RuntimeError\n\ndef test_a(broken):\n    pass\n",
-     True),  # a fixture's error, as pytest on one core counts it
-    ("def test_a():\n    pass\n", False),
     ("import no_such_module_here\n\ndef test_a():\n    pass\n", False),  # a collection error is no catch
 ])
-def test_a_test_detector_on_every_core_catches_a_failure_and_nothing_else(body: str, caught: bool,
-                                                                           tmp_path: Path) -> None:
+def test_a_test_detector_on_every_core_catches_a_failure_and_not_a_module_that_does_not_import(
+        body: str, caught: bool, tmp_path: Path) -> None:
+    """The detector's own command on a planted file: pytest-xdist's stop at the first failure, as it prints it."""
     (tmp_path / "test_planted.py").write_text(body)
     detector = Detector("planted", lambda m, work: _pytest(str(tmp_path / "test_planted.py")), (1,), tests=True)
     done = subprocess.run(detector.command(MUTANTS[0], tmp_path), cwd=tmp_path, capture_output=True, text=True,
                           timeout=120)
     assert detector.caught(done) is caught, done.stdout[-500:]
+
+
+@pytest.mark.parametrize(("code", "summary", "caught"), [
+    (2, "ERROR t.py::test_a - RuntimeError\n!!! stopping after 1 failures !!!", True),  # a fixture's error
+    (1, "FAILED t.py::test_a - assert 0", True),  # pytest on one core
+    (0, "1 passed", False),
+    (2, "FAILED t.py::test_a - assert 0\n!!! Interrupted: 1 error during collection !!!", False),  # not xdist's stop
+])
+def test_what_a_test_detector_counts_as_a_catch(code: int, summary: str, caught: bool) -> None:
+    detector = Detector("planted", lambda m, work: _pytest("t.py"), (1,), tests=True)
+    done = subprocess.CompletedProcess(["pytest"], code, stdout=summary, stderr="")
+    assert detector.caught(done) is caught
 
 
 def test_the_first_detector_runs_the_tests_that_mirror_the_mutated_module() -> None:
