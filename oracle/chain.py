@@ -204,11 +204,8 @@ def drive(world: World, sound: Sound, grid: Grid, policy: Policy, end_s: float, 
                 next_decision = t0 + path.bounds_s[decided.committed]
                 tau = 0.0
         lanes, entering = path.occupancy(tau)
-        if was_entering and not entering:
-            followers = {i for i, c in enumerate(cars) if c.lane is Lane.LEFT and pos[i] < x}
+        followers = reach.followers_now(followers, was_entering, entering, lanes, cars, pos, x)
         was_entering = entering
-        if Lane.LEFT not in lanes:
-            followers = set()
         speeds = [_speed(world.same_speeds if c.lane is Lane.LEFT else world.oncoming_speeds, t) for c in cars]
         rear = rear_binds(b, v)
         found = reach.instant_breach(sound, f"chain ({world.describe()})", t, x, v, lanes, entering, rear, cars, pos,

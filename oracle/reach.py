@@ -366,6 +366,15 @@ def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, c
     return out
 
 
+def followers_now(followers: set[int], was_entering: bool, entering: bool, lanes: frozenset[Lane],
+                  cars: Sequence[Vehicle], pos: Sequence[float], x_m: float) -> set[int]:
+    """The same-direction vehicles that follow the AV at this instant: those behind it once it has finished moving
+    into the left lane (a lane keeps its order), the same ones while it stays there, none while it is out of it."""
+    if was_entering and not entering:
+        followers = {i for i, c in enumerate(cars) if c.lane is Lane.LEFT and pos[i] < x_m}
+    return followers if Lane.LEFT in lanes else set()
+
+
 def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, goal: GoalRule | None = None,
                dt_s: float = MOTION_DT_S) -> Breach | None:
     """Drive one motion through the plan and the continuation; the first breach of the specification, or of
@@ -396,11 +405,8 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
             rate = 0.0
         x, v = path.position(t) + dev, path.speed(t) + rate
         lanes, entering = path.occupancy(t)
-        if was_entering and not entering:
-            followers = {i for i, c in enumerate(cars) if c.lane is Lane.LEFT and pos[i] < x}
+        followers = followers_now(followers, was_entering, entering, lanes, cars, pos, x)
         was_entering = entering
-        if Lane.LEFT not in lanes:
-            followers = set()
         speeds = []
         for i in range(len(cars)):
             sched = motion.speeds[i]
