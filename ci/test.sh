@@ -2,8 +2,8 @@
 # Set up, then run the fast tests on every core (pytest-xdist: -n auto; give -n 0 to run in this process) under the
 # `dev` hypothesis profile, the ten slowest printed (tests that share a module's costly fixture carry an xdist_group:
 # --dist loadgroup runs them on one worker, which builds it once). .ci/run runs the same under the `ci` profile
-# (HYPOTHESIS_PROFILE=ci: more examples, whole sweeps) and the `slow` tests apart (pytest -m slow: campaigns, kilometres
-# of drives, every command the docs show). Extra arguments go to pytest.
+# (HYPOTHESIS_PROFILE=ci: more examples, whole sweeps) with the `slow` tests in the same session (-m "slow or not slow":
+# campaigns, kilometres of drives, every command the docs show). Extra arguments go to pytest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash ci/setup.sh

@@ -176,7 +176,7 @@ def _sizes(argv: list[str]) -> list[str]:
     return out + [word for option, value in added.items() if option not in argv for word in (option, value)]
 
 
-@pytest.mark.slow  # about 25 worker-minutes in all: run by .ci/run beside the test command (``pytest -m slow``)
+@pytest.mark.slow  # about 25 worker-minutes in all: run by .ci/run with the test command (``-m "slow or not slow"``)
 @pytest.mark.parametrize(("page", "argv"), _docs_commands(), ids=_command_id)
 def test_every_docs_command_runs_as_printed(page: str, argv: list[str], tmp_path: Path) -> None:
     """Each command docs/ prints runs as a user would copy it (from a folder with the checkout's ``spec/`` beside

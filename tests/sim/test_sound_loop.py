@@ -191,7 +191,7 @@ def test_the_fallbacks_closing_speeds_take_the_avs_own_speed_changes_out_and_fol
     assert plain.closing_now_mps(9.0) == 2.0 and plain.own_mps(9.0) == 7.0
 
 
-@pytest.mark.slow  # 42 km of drives with the paper's faults and tracking: .ci/run runs it (pytest -m slow)
+@pytest.mark.slow  # 42 km of drives with the paper's faults and tracking: .ci/run runs it (-m "slow or not slow")
 def test_the_fallback_neither_brakes_below_traffic_that_keeps_its_speed_nor_returns_into_it() -> None:
     """The paper's world with its faults and tracking (seeds 4 and 6 of the evaluation): the fallback took over
     after vehicles appeared; braking for a standstill ahead that was not there, it was run into by a follower that
