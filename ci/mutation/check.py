@@ -5,7 +5,7 @@ Usage: python -m ci.mutation.check [--mutants a,b | --rotate K [--date YYYY-MM-D
 
 Each mutant is applied to a scratch copy of the checkout (the files git tracks) and the
 detectors ``.ci/run`` runs are tried on it, cheapest first, until one fails: the test files that
-mirror the mutated module (``tests/<layer>/test_<module>*.py``), the tests of the mutated layer,
+mirror the mutated module (``tests/<layer>/test_<module>*.py``, and those it names), the tests of the mutated layer,
 ``crossval`` on the library, ``crossval`` on CI's exhaustive space, CI's hypothesis campaign on
 the 10.5 m grid (with its coverage target; the day's seed, as CI picks it), the same exhaustive
 space and 10.5 m hypothesis campaign under the sound model (``--model sound``), then the whole
@@ -99,9 +99,11 @@ SELF_CHECK = "--ignore=tests/ci/mutation/test_check.py"
 FAILS_CI = (ExitCode.DISAGREE, ExitCode.INCOMPLETE)
 
 def _module_tests(m: Mutant) -> list[str]:
-    """The test files that mirror the mutated module (``tests/<layer>/test_<module>*.py``), as the run's targets."""
+    """The test files that mirror the mutated module (``tests/<layer>/test_<module>*.py``) and those the mutant names
+    as written for it, as the run's targets."""
     path = Path(m.path)
-    return sorted(str(p.relative_to(ROOT)) for p in (ROOT / "tests" / path.parent).glob(f"test_{path.stem}*.py"))
+    mirrored = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "tests" / path.parent).glob(f"test_{path.stem}*.py"))
+    return mirrored + [t for t in m.tests if t not in mirrored]
 
 
 DETECTORS: tuple[Detector, ...] = (

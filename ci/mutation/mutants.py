@@ -31,6 +31,7 @@ class Mutant:
     old: str
     new: str
     what: str
+    tests: tuple[str, ...] = ()  # test files written for it outside its module's mirror, tried with that mirror first
 
 
 MUTANTS: tuple[Mutant, ...] = (
@@ -139,7 +140,8 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("spec-oncoming-odds-first-two-swapped", "spec/physical.py",
            "(Fraction(1, 8), Fraction(1, 4), Fraction(1, 4), Fraction(3, 8))",
            "(Fraction(1, 4), Fraction(1, 8), Fraction(1, 4), Fraction(3, 8))",
-           "the paper's oncoming odds stated wrongly in spec/ (the sampler and the old tests read the same numbers)"),
+           "the paper's oncoming odds stated wrongly in spec/ (the sampler and the old tests read the same numbers)",
+           ("tests/sim/test_spawn_odds.py",)),
     Mutant("traffic-initial-run-one-short", "sim/traffic.py",
            "            self.run = self.run + 1 if gap == 1 else 1  # the vehicle just placed",
            "            self.run = self.run + 1 if gap == 1 else 0  # the vehicle just placed",
