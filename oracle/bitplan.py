@@ -210,10 +210,10 @@ def shortest(problem: Problem) -> SearchResult:
     return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), explored, f"no plan within {problem.horizon} actions")
 
 
-def live_positions(problem: Problem, firsts: Collection[Action]) -> tuple[Callable[[int, int, int, int], bool], int]:
+def live_positions(problem: Problem, firsts: Collection[Action]) -> Callable[[int, int, int, int], bool]:
     """Which offsets ``(lane changes, l, o)`` after ``steps`` actions still reach the goal within the horizon on a
     plan whose first action is one of ``firsts`` (reached that way, and the goal or a step towards it), as a test
-    ``live(lc, l, o, steps)``, and how many positions the forward layers held. A search that skips every other
+    ``live(lc, l, o, steps)``. A search that skips every other
     successor finds the same first plan as one that explores them: they hold no goal, and none is on its way. No
     position is live when no such plan exists."""
     form = offsets_of(problem)
@@ -226,7 +226,6 @@ def live_positions(problem: Problem, firsts: Collection[Action]) -> tuple[Callab
     layers = [[space.start(), *nothing[1:]], layer]
     for _ in range(problem.horizon - 1):
         layers.append(space.advance(layers[-1]) if any(layers[-1]) else list(nothing))
-    explored = sum(x.bit_count() for layer in layers for x in layer)
     live = [list(nothing) for _ in layers]
     for k in range(len(layers) - 1, 0, -1):
         onward = list(nothing)
@@ -244,7 +243,7 @@ def live_positions(problem: Problem, firsts: Collection[Action]) -> tuple[Callab
     def is_live(lc: int, l_off: int, o: int, steps: int) -> bool:
         return bool(live[steps][lc] >> ((l_off - low) * width + o) & 1) if 0 < steps < len(live) else steps == 0
 
-    return is_live, explored
+    return is_live
 
 
 def _columns(x: int, space: BitSpace) -> int:

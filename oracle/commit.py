@@ -143,7 +143,7 @@ def predict(problem: Problem, strategy: Strategy, firsts: Collection[Action], li
     common speed from its cell, the paper's collisions and goals), its first action one of ``firsts`` (the ones the
     sound model commits to), at least one action long. ``sensible``: depth first in the action order; ``shortest``:
     the first shortest in the action order; ``optimal``: the least ``spec.cost``."""
-    live, _ = bitplan.live_positions(problem, firsts)
+    live = bitplan.live_positions(problem, firsts)
     search = OffsetSearch(problem)
     form = search.form
 
