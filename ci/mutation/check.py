@@ -98,6 +98,7 @@ SELF_CHECK = "--ignore=tests/ci/mutation/test_check.py"
 #: A campaign's exits that fail CI's run of it: a property failed, or one could not be decided (it claims nothing).
 FAILS_CI = (ExitCode.DISAGREE, ExitCode.INCOMPLETE)
 
+
 def _module_tests(m: Mutant) -> list[str]:
     """The test files that mirror the mutated module (``tests/<layer>/test_<module>*.py``) and those the mutant names
     as written for it, as the run's targets."""
