@@ -1,14 +1,18 @@
-"""How tight the sound model is (issue #23, point 8): is every action it refuses broken by some motion within the
-bounds, or refused only because a cell was rounded outwards?
+"""How tight the sound model is (issue #23, point 8; #58, point 6): is every step it refuses broken by some motion
+within the bounds, or refused only because a cell was rounded outwards?
 
 Usage: python -m ci.conformance.tightness [--count 60] [--seed 2026] [--space left=2@8..20,right=1@12..30,lanes=both]
-                              [--jobs 2] [--max-states 20000] [--show 3]
+                              [--jobs 2] [--max-states 20000] [--show 3] [--semantics commit|whole]
 
 For a seeded sample of the conformance example sweep (paper grid; the same traffic cut finer for
 10.5, 7 and 5.25 m cells, ``ci.shared.gen.refined``), under the ``paper`` and the ``default`` profile,
-and for each problem of the pipeline, every sound state reachable within the horizon by enabled,
-safe actions is walked (no search prune, not stopping at the goal: every state a search could
-visit), and every refusal is classified:
+and for each problem of the pipeline, every refusal is classified. Under the **commitment semantics** (the
+default, ``spec.escapes``): the start, when it already breaks the specification, and each enabled first action the
+model does not commit to, checked under **every escape** the commitment allows after it (the action and the escape
+as one sequence, then the minimal-risk manoeuvre: that escape's first refusal); each later step is another
+snapshot's decision. Under the **whole-plan semantics** (``--semantics whole``) every sound state reachable within
+the horizon by enabled, safe actions is walked (no search prune, not stopping at the goal: every state a search
+could visit), and each refusal met is one:
 
 - a **step** refusal: an enabled action whose ``step_violation`` is not None;
 - a **start** refusal: the initial state's ``start_violation``;
@@ -51,9 +55,10 @@ from ci.shared.machine import machine
 from oracle.planner import plan
 from oracle.reach import MAX_DT_S, TOLERANCE_M, Path
 from oracle.sound import _paper, rules_for, start
-from spec.actions import Action
+from spec.actions import ACTION_RULES, Action
 from spec.answers import Status, Strategy
 from spec.assumptions import profile
+from spec.escapes import COMMIT, Escape, Semantics
 from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
 from spec.models import ModelKind, models_for
@@ -511,6 +516,108 @@ def classify(problem: Problem, refusal: Refusal) -> Verdict:
     return Verdict(Tightness.NEITHER, finding=diagnose(sc, refusal, path))
 
 
+# -- the commitment semantics: refused first steps, each under every escape ---------------------------------------
+def escape_refusal(rules: SoundRules, first: SoundState, action: Action, escape: Escape) -> Refusal | None:
+    """The sound model's first refusal of ``action`` then ``escape`` as one sequence (``oracle.commit``: each step's
+    window ending where the ramp into the next starts), or None when they are proved: a step's (the state before it
+    and the actions before it), or the end's (safe for ever under the minimal-risk manoeuvre)."""
+    sequence = (action, *escape.actions)
+    state = first
+    for k, step in enumerate(sequence):
+        following = sequence[k + 1] if k + 1 < len(sequence) else None
+        found = rules.step_violation(state, step, following)
+        if found is not None:
+            return Refusal(Where.STEP, state, sequence[:k], step, found)
+        state = rules.after(state, step)
+    end = rules.continuation_violation(state)
+    return None if end is None else Refusal(Where.END, state, sequence, None, end)
+
+
+def classify_escape(problem: Problem, first: SoundState, action: Action, escape: Escape,
+                    refusal: Refusal) -> Verdict:
+    """One escape's refusal after ``action``, classified as ``classify`` does a plan's, on the AV's reference through
+    the action, the escape and the minimal-risk manoeuvre after it (what the AV would drive): exhibited by a motion in
+    the refused window, else rounding only (the binding sensed vehicle one cell farther in its favour, and the action
+    and this escape are proved), else neither (diagnosed)."""
+    sc = problem.scenario
+    assert sc.sound is not None
+    sequence = (action, *escape.actions)
+    path = Path(sequence, sc.sound, sc.grid, sc.lane)
+    corner = corner_witness(sc, refusal, path)
+    found = corner or witness(sc, refusal, path=path)
+    if found is not None:
+        return Verdict(Tightness.EXHIBITED, found, corner is not None)
+    v, cell = refusal.violation, problem.grid.cell
+    if v.vehicle.index is not None and v.required_m - v.gap_m <= cell + 1e-9:
+        shifted = shifted_rules(problem, v.vehicle, -cell if v.conflict in (Conflict.CUT_IN, Conflict.BEHIND)
+                                else cell)
+        if escape_refusal(shifted, first, action, escape) is None:
+            return Verdict(Tightness.ROUNDING)
+    return Verdict(Tightness.NEITHER, finding=diagnose(sc, refusal, path))
+
+
+#: A refused step's class is its least justified escape's: exhibited only if every escape is, neither if any is.
+_ORDER = (Tightness.EXHIBITED, Tightness.ROUNDING, Tightness.NEITHER)
+
+
+def measure_commit(scenario: Scenario, keep: int = 3) -> Counts:
+    """Under the commitment semantics (``spec.escapes``), every refusal the AV meets at this snapshot, classified:
+    the start, when it already breaks the specification (``unsafe_start``); else each enabled first action the sound
+    model does not commit to (``oracle.commit.committable``), justified only if every escape the commitment allows
+    after it is: a motion inside the bounds that breaks the specification in that escape's refused window, or
+    rounding. Later steps are decided again from later snapshots (each one a scenario of its own), so a first action
+    is the whole of what one decision refuses. Also whether the answer moves and overtakes."""
+    counts = Counts(scenarios=1)
+    assert scenario.sound is not None
+    allowed = scenario.sound.commitment or COMMIT
+    seen: dict[tuple[object, ...], Verdict] = {}
+    for kind in models_for(scenario.model):
+        problem = problem_for(scenario, kind)
+        rules, first = sound_rules(problem), start(problem)
+        counts.problems += 1
+        counts.states += 1
+        hit = rules.start_violation(first)
+        if hit is not None:
+            counts.by_where[Where.START][classify(problem, Refusal(Where.START, first, (), None, hit)).tightness] += 1
+            continue
+        for action in Action:
+            if disabled_guard(_paper(first), action, problem.rules) is not None:
+                continue
+            counts.enabled += 1
+            escapes = allowed.allowed(_lane_after(first.lane, action))
+            found = [(e, escape_refusal(rules, first, action, e)) for e in escapes]
+            if not escapes or any(r is None for _, r in found):
+                counts.committable += int(bool(escapes))
+                counts.no_escape += int(not escapes)
+                continue
+            verdicts = []
+            for escape, r in found:
+                assert r is not None
+                key = (action, escape, r.where, r.state.key())
+                verdict = seen.get(key)
+                if verdict is None:
+                    verdict = seen[key] = classify_escape(problem, first, action, escape, r)
+                    shown = verdict.witness
+                    counts.late += int(shown is not None and not verdict.corner)
+                    counts.thin += int(shown is not None and shown.required_m - shown.gap_m < 1e-3)
+                    if verdict.finding is not None and len(counts.examples[verdict.finding]) < keep:
+                        counts.examples[verdict.finding].append(
+                            f"{scenario_name(scenario)}, {scenario.sound.bounds.name}, {kind.value} model: "
+                            f"{action.value} with escape {escape.kind.value} "
+                            f"({', '.join(a.value for a in escape.actions) or 'in lane'}): {r.describe()}")
+                    if verdict.finding is not None:
+                        counts.findings[verdict.finding][r.where] += 1
+                counts.escapes[verdict.tightness] += 1
+                verdicts.append(verdict.tightness)
+            counts.by_where[Where.STEP][max(verdicts, key=_ORDER.index)] += 1
+    _answer(scenario, counts)
+    return counts
+
+
+def _lane_after(lane: Lane, action: Action) -> Lane:
+    return ACTION_RULES[action].to_lane or lane
+
+
 # -- the measurement ----------------------------------------------------------------------------------------------
 @dataclass
 class Counts:
@@ -530,6 +637,10 @@ class Counts:
     capped: int = 0  # problems whose walk stopped at the state limit
     thin: int = 0  # exhibited refusals whose witness breaks the specification by less than a millimetre
     late: int = 0  # exhibited refusals the corner motion at the violation's own time does not exhibit
+    enabled: int = 0  # commitment semantics: enabled first actions
+    committable: int = 0  # commitment semantics: first actions committed to (safe, an escape proved after them)
+    no_escape: int = 0  # commitment semantics: first actions into a lane the commitment allows no escape from
+    escapes: dict[Tightness, int] = field(default_factory=lambda: dict.fromkeys(Tightness, 0))  # per escape tried
 
     def add(self, other: Counts, keep: int) -> None:
         """Add ``other``'s tallies, keeping at most ``keep`` examples per finding."""
@@ -540,8 +651,10 @@ class Counts:
                 self.findings[f][w] += other.findings[f][w]
         for f in Finding:
             self.examples[f] = (self.examples[f] + other.examples[f])[:keep]
+        for k in Tightness:
+            self.escapes[k] += other.escapes[k]
         for name in ("with_targets", "overtakes", "moves", "scenarios", "problems", "states", "capped", "thin",
-                     "late"):
+                     "late", "enabled", "committable", "no_escape"):
             setattr(self, name, getattr(self, name) + getattr(other, name))
 
 
@@ -580,26 +693,34 @@ def measure(scenario: Scenario, max_states: int = MAX_STATES, keep: int = 3) -> 
             counts.by_where[r.where][verdict.tightness] += 1
             if verdict.finding is not None:
                 counts.findings[verdict.finding][r.where] += 1
+    _answer(scenario, counts)
+    return counts
+
+
+def _answer(scenario: Scenario, counts: Counts) -> None:
+    """Count whether the scenario's answer (the pipeline's, shortest) moves, and whether it overtakes."""
     answer = plan(scenario, Strategy.SHORTEST)
     moved = answer.status is Status.PLAN and bool(answer.actions)
     counts.moves += int(moved)
     if scenario.targets:
         counts.with_targets += 1
         counts.overtakes += int(moved and answer.model is ModelKind.FINAL)
-    return counts
 
 
-def _work(item: tuple[Scenario, Fraction, str, int, int]) -> tuple[Fraction, str, Counts]:
-    base, cell, name, max_states, keep = item
+def _work(item: tuple[Scenario, Fraction, str, Semantics, int, int]) -> tuple[Fraction, str, Counts]:
+    base, cell, name, semantics, max_states, keep = item
     grid = Grid(cell)
     scenario = base if grid == PAPER_GRID else refined(base, grid)
+    if semantics is Semantics.COMMIT:
+        return cell, name, measure_commit(replace(scenario, sound=Sound(profile(name), commitment=COMMIT)), keep)
     return cell, name, measure(replace(scenario, sound=Sound(profile(name))), max_states, keep)
 
 
-def run(sample: Sequence[Scenario], jobs: int, max_states: int = MAX_STATES, keep: int = 3) -> dict[
-        tuple[Fraction, str], Counts]:
-    """The tallies per (cell, profile) over ``sample``, in ``jobs`` processes."""
-    items = [(s, cell, name, max_states, keep) for cell in STANDARD_CELLS_M for name in PROFILES for s in sample]
+def run(sample: Sequence[Scenario], jobs: int, max_states: int = MAX_STATES, keep: int = 3,
+        semantics: Semantics = Semantics.COMMIT) -> dict[tuple[Fraction, str], Counts]:
+    """The tallies per (cell, profile) over ``sample`` under ``semantics``, in ``jobs`` processes."""
+    items = [(s, cell, name, semantics, max_states, keep) for cell in STANDARD_CELLS_M for name in PROFILES
+             for s in sample]
     rows = {(cell, name): Counts() for cell in STANDARD_CELLS_M for name in PROFILES}
     if jobs <= 1:
         for cell, name, counts in map(_work, items):
@@ -638,6 +759,29 @@ def table(rows: dict[tuple[Fraction, str], Counts]) -> Table:
     return out
 
 
+def commit_table(rows: dict[tuple[Fraction, str], Counts]) -> Table:
+    """The measured table under the commitment semantics: each snapshot's enabled first actions, those committed to,
+    the refused ones by class (the least justified of their escapes), the escapes' own classes, unsafe starts, and
+    the answers."""
+    out = Table(title="sound model, commitment semantics: is every refused first step justified under every escape?",
+                caption="first actions: enabled at the snapshot (both problems of the pipeline); committed: with a "
+                        "proved escape; refused, by class: exhibited under every escape / rounding / neither; "
+                        "escapes: each refused step's escapes as exhibited/rounding/neither; unsafe start: starts "
+                        "already breaking the specification, exhibited/rounding/neither; overtakes: non-empty answers "
+                        "of the final model / scenarios with targets; moving: non-empty answers / scenarios")
+    for col in ("cell", "profile", "first actions", "committed", "refused", "exhibited", "rounding", "neither",
+                "escapes", "unsafe start", "overtakes", "moving"):
+        out.add_column(col, justify="left" if col in ("cell", "profile") else "right", no_wrap=True)
+    for (cell, name), c in rows.items():
+        steps = c.by_where[Where.STEP]
+        total = sum(steps.values())
+        out.add_row(f"{float(cell):g} m", name, str(c.enabled), str(c.committable), str(total),
+                    _share(steps[Tightness.EXHIBITED], total), _share(steps[Tightness.ROUNDING], total),
+                    str(steps[Tightness.NEITHER]), _split(c.escapes), _split(c.by_where[Where.START]),
+                    f"{c.overtakes}/{c.with_targets}", f"{c.moves}/{c.scenarios}")
+    return out
+
+
 def findings_table(rows: dict[tuple[Fraction, str], Counts]) -> Table:
     """The refusals no motion justifies, by diagnosis: step, end and start refusals per row."""
     out = Table(title="'neither' by diagnosis (step/end/start)")
@@ -660,23 +804,34 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1))
     parser.add_argument("--max-states", type=int, default=MAX_STATES, help="states walked per problem at most")
     parser.add_argument("--show", type=int, default=3, help="examples printed per diagnosis of 'neither'")
+    parser.add_argument("--semantics", type=Semantics, choices=list(Semantics), default=Semantics.COMMIT,
+                        metavar="{" + ",".join(m.value for m in Semantics) + "}",
+                        help="commit (the default): each snapshot's refused first steps, under every escape; whole: "
+                             "every refusal of the whole-plan model, over every state within the horizon")
     args = parser.parse_args(argv)
-    console = Console(width=120)
+    console = Console(width=150 if args.semantics is Semantics.COMMIT else 120)
     everything = list(parse_space(args.space, PAPER_GRID).scenarios(PAPER_GRID, None))
     n = len(everything) if args.count <= 0 else min(args.count, len(everything))
     sample = everything if n == len(everything) else random.Random(args.seed).sample(everything, n)
     console.print(f"seed {args.seed}; {len(sample)} of the {len(everything)} scenarios of {args.space}; the same "
                   f"traffic at {', '.join(f'{float(c):g}' for c in STANDARD_CELLS_M)} m; profiles "
-                  f"{', '.join(PROFILES)}; every problem of the pipeline; {args.jobs} process(es); {machine()}")
+                  f"{', '.join(PROFILES)}; every problem of the pipeline; {args.semantics.value} semantics; "
+                  f"{args.jobs} process(es); {machine()}")
     started = time.perf_counter()
-    rows = run(sample, args.jobs, args.max_states, args.show)
-    console.print(table(rows))
+    rows = run(sample, args.jobs, args.max_states, args.show, args.semantics)
     total = Counts()
     for c in rows.values():
         total.add(c, args.show)
-    console.print(f"{total.problems} problems, {total.states:,} states walked, {total.capped} stopped at "
-                  f"{args.max_states:,} states; exhibited: {total.late:,} only off the violation's own corner "
-                  f"motion, {total.thin} by less than 1 mm; {time.perf_counter() - started:.0f} s")
+    if args.semantics is Semantics.COMMIT:
+        console.print(commit_table(rows))
+        none = f", {total.no_escape} first actions with no escape allowed" if total.no_escape else ""
+        walked = f"{total.problems} problems{none}"
+    else:
+        console.print(table(rows))
+        walked = (f"{total.problems} problems, {total.states:,} states walked, {total.capped} stopped at "
+                  f"{args.max_states:,} states")
+    console.print(f"{walked}; exhibited: {total.late:,} only off the violation's own corner motion, {total.thin} by "
+                  f"less than 1 mm; {time.perf_counter() - started:.0f} s")
     if any(total.findings[f][w] for f in Finding for w in Where):
         console.print(findings_table(rows))
         for f in Finding:

@@ -11,6 +11,8 @@ from ci.conformance.tightness import Refusal, Tightness, Where
 from oracle.sound import _paper, rules_for, start
 from spec.actions import Action
 from spec.assumptions import profile
+from spec.escapes import COMMIT, ESCAPES
+from spec.grid import grid_for
 from spec.lanes import Lane
 from spec.models import ModelKind, models_for
 from spec.rules import disabled_guard
@@ -151,3 +153,62 @@ def test_a_plan_may_end_with_a_follower_clear_ahead_of_a_braking_av() -> None:
         state = rules.after(state, action)
     assert state.followers is not None and 0 in state.followers and rules.same[0].name.startswith("left_lane[0]")
     assert rules.continuation_violation(state) is None
+
+
+# -- the commitment semantics --------------------------------------------------------------------------------------
+def _committing(scenario: Scenario) -> Scenario:
+    assert scenario.sound is not None
+    return replace(scenario, sound=replace(scenario.sound, commitment=COMMIT))
+
+
+def test_every_refused_first_step_is_exhibited_under_every_escape() -> None:
+    """Under the commitment semantics each enabled first action is committed or refused, and a refused one is
+    justified under each escape allowed after it (both sample scenarios: every one exhibited by a motion)."""
+    for scenario in (OVERTAKE, RETURN, RETURN_REACTING):
+        counts = tightness.measure_commit(_committing(scenario))
+        steps = counts.by_where[Where.STEP]
+        assert counts.enabled == counts.committable + sum(steps.values()) and counts.no_escape == 0
+        assert sum(steps.values()) > 0 and counts.committable > 0  # refuses some, commits to some: not vacuous
+        assert steps[Tightness.EXHIBITED] == sum(steps.values()), scenario
+        assert counts.escapes[Tightness.EXHIBITED] == sum(counts.escapes.values()) >= sum(steps.values())
+        assert counts.thin == 0
+
+
+def test_an_escape_refusal_with_its_vehicle_moved_far_away_is_exhibited_by_no_motion() -> None:
+    """The witness under an escape is found on the AV's reference through the action and the escape, and only for
+    a vehicle that can reach it."""
+    scenario = _committing(OVERTAKE)
+    problem = problem_for(scenario, ModelKind.FINAL)
+    rules, first = rules_for(problem), start(problem)
+    tried = 0
+    for action in Action:
+        if disabled_guard(_paper(first), action, problem.rules) is not None:
+            continue
+        for escape in COMMIT.allowed(tightness._lane_after(first.lane, action)):
+            r = tightness.escape_refusal(rules, first, action, escape)
+            if r is None:
+                continue
+            verdict = tightness.classify_escape(problem, first, action, escape, r)
+            assert verdict.tightness is Tightness.EXHIBITED and verdict.witness is not None
+            v = r.violation
+            away = -1e4 if v.conflict in (Conflict.CUT_IN, Conflict.BEHIND) else 1e4
+            far = replace(r, violation=replace(v, vehicle=replace(v.vehicle, lo_m=v.vehicle.lo_m + away,
+                                                                   hi_m=v.vehicle.hi_m + away)))
+            path = tightness.Path((action, *escape.actions), scenario.sound, scenario.grid, scenario.lane)
+            assert tightness.witness(scenario, far, path=path) is None, r.describe()
+            tried += 1
+    assert tried >= 3
+
+
+def test_the_step_checked_whole_refused_is_committed_under_the_commitment_semantics() -> None:
+    """The over-conservative refusal of the whole-plan model (#58: at 5.25 m, ``accelerate`` refused as if held to
+    its end) is a refusal the whole-plan walk meets and the commitment semantics does not: the step commits, with an
+    escape proved after it."""
+    base = replace(make_scenario("left", [48, 76], [], 2, grid=grid_for(5.25)), sound=Sound(profile("default")))
+    problem = problem_for(base, ModelKind.FINAL)
+    rules, first = rules_for(problem), start(problem)
+    assert rules.step_violation(first, Action.ACCELERATE) is not None
+    escapes = [e for e in ESCAPES if e.from_lane is Lane.LEFT]
+    assert any(tightness.escape_refusal(rules, first, Action.ACCELERATE, e) is None for e in escapes)
+    counts = tightness.measure_commit(_committing(base))
+    assert counts.committable >= 1 and counts.by_where[Where.STEP][Tightness.NEITHER] == 0
