@@ -11,6 +11,7 @@ engines built on it only search.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.lanes import Lane
@@ -93,6 +94,8 @@ class Offsets:
 EMPTY: Interval = (1, 0)
 
 
+@lru_cache(maxsize=64)  # a pipeline's stages ask for the same problem's form several times; a campaign must not keep
+# every one
 def offsets_of(problem: Problem) -> Offsets:
     """The offset form of ``problem``: each rule of ``spec.rules`` translated once."""
     scenario, rules, goal, grid = problem.scenario, problem.rules, problem.goal, problem.grid

@@ -14,7 +14,7 @@ no plan exists at all; otherwise only "none within the horizon" is claimed.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from oracle.abstraction import Move, Offsets, offsets_of
@@ -98,7 +98,8 @@ class BitSpace:
         form = self.form
         if lc not in form.goal_lcs:
             return 0
-        mask = self._rows(lambda off: form.goal(lc, off, form.o_saturation))
+        sat = self.sat
+        mask = self._rows(lambda off: form.goal(lc, off, sat))
         if form.o_at_least is not None:
             mask &= self._cols([o >= form.o_at_least for o in range(self.width)])
         return mask & ~self.over
@@ -154,9 +155,19 @@ class BitSpace:
 
     def preimage(self, flat: _Flat, y: int) -> int:
         """The positions from which ``flat`` lands in ``y`` (bounded grid only)."""
+        return self.preimage_unsaturated(flat, self.unsaturated(y))
+
+    def unsaturated(self, y: int) -> int:
+        """``y`` with each saturated position also standing for the ones past it that saturate to it (what a move
+        lands on before ``finish``)."""
         at_sat = y & self.col_sat
         for k in range(1, self.max_ticks + 1):
             y |= at_sat << k
+        return y
+
+    @staticmethod
+    def preimage_unsaturated(flat: _Flat, y: int) -> int:
+        """``preimage`` of a set already ``unsaturated``."""
         y &= flat.safe
         return y >> flat.shift if flat.shift >= 0 else y << -flat.shift
 
@@ -210,32 +221,30 @@ def shortest(problem: Problem) -> SearchResult:
     return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), explored, f"no plan within {problem.horizon} actions")
 
 
-def live_positions(problem: Problem, firsts: Collection[Action]) -> Callable[[int, int, int, int], bool]:
-    """Which offsets ``(lane changes, l, o)`` after ``steps`` actions still reach the goal within the horizon on a
-    plan whose first action is one of ``firsts`` (reached that way, and the goal or a step towards it), as a test
-    ``live(lc, l, o, steps)``. A search that skips every other
-    successor finds the same first plan as one that explores them: they hold no goal, and none is on its way. No
-    position is live when no such plan exists."""
+def live_positions(problem: Problem) -> Callable[[int, int, int, int], bool]:
+    """Which offsets ``(lane changes, l, o)`` after ``steps`` actions (at least one) still reach the goal within the
+    horizon (the goal, or a step towards it), as a test ``live(lc, l, o, steps)``; every position at step 0. A
+    search that skips every other successor finds the same first plan as one that explores them: they hold no goal,
+    and none is on its way. Computed backwards from the goals over the whole grid: a position the search reaches
+    has its successors among the positions the search reaches, so no forward pass is needed."""
     form = offsets_of(problem)
     space = BitSpace(problem, *_l_range(form, problem.horizon), form=form)
     width, nothing = space.width, [0] * len(space.lanes)
-    layer = list(nothing)
-    for flat in space.moves[0]:
-        if flat.move.action in firsts:
-            layer[flat.move.lc_dst] |= space.image(flat, space.start())
-    layers = [[space.start(), *nothing[1:]], layer]
-    for _ in range(problem.horizon - 1):
-        layers.append(space.advance(layers[-1]) if any(layers[-1]) else list(nothing))
-    live = [list(nothing) for _ in layers]
-    for k in range(len(layers) - 1, 0, -1):
+    real = ~space.over & ((1 << (space.rows * width)) - 1)  # saturated columns only: a shift back across a row's
+    # edge lands past the saturation column, where no state is
+    live = [list(nothing) for _ in range(problem.horizon + 1)]
+    for k in range(problem.horizon, 0, -1):
         onward = list(nothing)
-        if k + 1 < len(layers) and any(live[k + 1]):
+        if k < problem.horizon and any(live[k + 1]):
+            landing = [space.unsaturated(x) for x in live[k + 1]]
             for lc, moves in enumerate(space.moves):
-                if layers[k][lc]:
-                    for flat in moves:
-                        if live[k + 1][flat.move.lc_dst]:
-                            onward[lc] |= space.preimage(flat, live[k + 1][flat.move.lc_dst])
-        live[k] = [x & (g | o) for x, g, o in zip(layers[k], space.goals, onward, strict=True)]
+                for flat in moves:
+                    if landing[flat.move.lc_dst]:
+                        onward[lc] |= space.preimage_unsaturated(flat, landing[flat.move.lc_dst])
+        live[k] = [(g | o) & real for g, o in zip(space.goals, onward, strict=True)]
+        if k + 1 < problem.horizon and live[k] == live[k + 1]:  # a fixed point: one more step left changes nothing
+            live[1:k] = [live[k]] * (k - 1)
+            break
     if not form.track_left:  # the search keeps l at 0 where no left-lane vehicle is tracked: any row stands for it
         live = [[_columns(x, space) for x in layer] for layer in live]
     low = space.l_low

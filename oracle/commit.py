@@ -20,8 +20,9 @@ The pipeline (``oracle.planner``) asks the final model, then the preparations mo
 from __future__ import annotations
 
 import heapq
-from collections.abc import Collection, Sequence
+from collections.abc import Container, Iterable, Sequence
 from dataclasses import dataclass, replace
+from functools import lru_cache
 
 from oracle import bitplan, sound
 from oracle.interpreter import problem_goal, problem_step
@@ -115,6 +116,27 @@ def _short(found: Refusal) -> str:
             else found.describe())
 
 
+def _first(rules: SoundRules, allowed: Commitment, state: SoundState, action: Action) -> Proved | None:
+    """The escape proved after ``action`` as the first committed one from ``state``, if any."""
+    return escape_after(rules, state, (action,), allowed.allowed(_lane_after(state.lane, (action,))))
+
+
+class Firsts:
+    """The committable first actions from ``state`` as a set a search asks about: each one proved the first time it
+    is asked (a depth-first search asks only until the first live one that commits)."""
+
+    def __init__(self, problem: Problem, state: SoundState) -> None:
+        self.rules, self.allowed, self.state = _sound_rules(problem), commitment(problem), state
+        self.proved: dict[Action, Proved | None] = {}
+
+    def __contains__(self, action: object) -> bool:
+        if not isinstance(action, Action):
+            return False
+        if action not in self.proved:
+            self.proved[action] = _first(self.rules, self.allowed, self.state, action)
+        return self.proved[action] is not None
+
+
 def committable(problem: Problem, state: SoundState) -> tuple[dict[Action, Proved], dict[Action, str]]:
     """The first actions from the start that the sound model commits to (safe, with a proved escape after them),
     and for every other enabled action why not."""
@@ -125,7 +147,7 @@ def committable(problem: Problem, state: SoundState) -> tuple[dict[Action, Prove
         if disabled_reason(State(state.lane, (), (), state.lane_changes, 0), action, problem.rules) is not None:
             continue
         escapes = allowed.allowed(_lane_after(state.lane, (action,)))
-        proved = escape_after(rules, state, (action,), escapes)
+        proved = _first(rules, allowed, state, action)
         if proved is not None:
             ok[action] = proved
             continue
@@ -138,18 +160,21 @@ def committable(problem: Problem, state: SoundState) -> tuple[dict[Action, Prove
 Key = tuple[int, int, int, int]  # the paper's offset form: lane changes, left offset, oncoming ticks, steps
 
 
-def predict(problem: Problem, strategy: Strategy, firsts: Collection[Action], limits: Limits) -> SearchResult:
+def predict(problem: Problem, strategy: Strategy, firsts: Container[Action], limits: Limits) -> SearchResult:
     """The predicted plan: the strategy's plan under the paper's rules (``oracle.offsets``: every vehicle at the
     common speed from its cell, the paper's collisions and goals), its first action one of ``firsts`` (the ones the
     sound model commits to), at least one action long. ``sensible``: depth first in the action order; ``shortest``:
     the first shortest in the action order; ``optimal``: the least ``spec.cost``."""
-    live = bitplan.live_positions(problem, firsts)
+    live = bitplan.live_positions(problem)
     search = OffsetSearch(problem)
     form = search.form
 
-    def successors(key: Key) -> list[tuple[Action, Key]]:
-        """Only towards the goal (``bitplan.live_positions``): the same first plan, without its dead ends."""
-        return [m for m in search.successors(key) if (key[3] > 0 or m[0] in firsts) and live(*m[1])]
+    def successors(key: Key) -> Iterable[tuple[Action, Key]]:
+        """Only towards the goal (``bitplan.live_positions``): the same first plan, without its dead ends; a first
+        action asked about (``firsts``) only once it is live, in order, as the search takes it."""
+        if key[3] > 0:
+            return [m for m in search.successors(key) if live(*m[1])]
+        return (m for m in search.successors(key) if live(*m[1]) and m[0] in firsts)
 
     begin: Key = (0, 0, 0, 0)
     if strategy is Strategy.SENSIBLE:
@@ -219,13 +244,13 @@ def solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult:
     if rules.goal_holds(first, problem.goal) and rules.continuation_violation(first) is None:
         return SearchResult(Status.PLAN, (), 1, "goal holds in the initial state, safe for ever",
                             (sound.display(problem, first),), commit=Commit((), None, ()))
-    ok, refused = committable(problem, first)
-    if not ok:
-        why = "; ".join(f"{a.value}: {r}" for a, r in refused.items())
-        return SearchResult(Status.NO_PLAN, (), 1, f"no committed step is provable (the AV keeps its minimal-risk "
-                            f"manoeuvre): {why}")
-    predicted = predict(problem, strategy, ok, limits)
+    predicted = predict(problem, strategy, Firsts(problem, first), limits)
     if predicted.status is not Status.PLAN:
+        ok, refused = committable(problem, first)
+        if not ok:
+            why = "; ".join(f"{a.value}: {r}" for a, r in refused.items())
+            return SearchResult(Status.NO_PLAN, (), 1, f"no committed step is provable (the AV keeps its "
+                                f"minimal-risk manoeuvre): {why}")
         if predicted.status is Status.NO_PLAN_WITHIN_HORIZON and bitplan.beyond_horizon(problem).status is \
                 Status.NO_PLAN:
             return SearchResult(Status.NO_PLAN, (), predicted.states_explored, "the paper's rules prove that no "
@@ -262,7 +287,14 @@ def split(problem: Problem, actions: Sequence[Action], allowed: Commitment) -> t
     """The committed part of a predicted plan and its escape: the whole plan when the sound model proves it (safe at
     every instant, the goal for every position at its end, safe for ever after) within ``most_actions``; else its
     longest prefix of at most ``most_actions`` actions after which an escape is proved (at least its first action,
-    which the search made committable)."""
+    which the search made committable). Remembered for the last few problems: the pipeline's validation of an
+    answer asks again."""
+    return _split(problem, tuple(actions), allowed)
+
+
+@lru_cache(maxsize=64)
+def _split(problem: Problem, actions: tuple[Action, ...], allowed: Commitment) -> tuple[tuple[Action, ...],
+                                                                                       Escape | None]:
     rules, first = _sound_rules(problem), start(problem)
     most = len(actions) if allowed.most_actions is None else min(allowed.most_actions, len(actions))
     if most == len(actions):

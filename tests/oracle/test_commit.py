@@ -67,7 +67,7 @@ def test_the_live_positions_are_exactly_those_that_still_reach_the_goal_in_time(
     """``bitplan.live_positions`` against every offset the prediction's search can reach, judged by recursion over
     its successors: the pruned search skips exactly the dead ends."""
     problem = problem_for(scenario, kind)
-    live = bitplan.live_positions(problem, firsts)
+    live = bitplan.live_positions(problem)
     search = OffsetSearch(problem)
     judged: dict[tuple[int, int, int, int], bool] = {}
 
