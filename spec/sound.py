@@ -460,6 +460,7 @@ class SoundRules:
         self.fastest_mps = max(max(self.speeds.values()), self.start_mps)
         self._goal_m: tuple[GoalRule | None, float | None] = (None, None)
         self._steps: dict[tuple[tuple[object, ...], Action, Action | None], Violation | None] = {}
+        self._ends: dict[tuple[object, ...], Violation | None] = {}  # continuation_violation, by state key
         self._at_boundary: dict[tuple[int, int, float | None, float | None], float] = {}
         self._relative = _shapes(sound, grid)
         self._start_followers: frozenset[int] | None = None
@@ -769,7 +770,17 @@ class SoundRules:
     def continuation_violation(self, state: SoundState) -> Violation | None:
         """A plan's last state must be safe for ever: the minimal-risk manoeuvre (brake in lane to the hold speed)
         over its ramp, and after it no conflict may close in (an oncoming vehicle not yet past an AV in the right
-        lane always does; a follower that keeps its speed does when the hold speed is below it)."""
+        lane always does; a follower that keeps its speed does when the hold speed is below it). Each state's
+        answered once (a commitment's escapes, its split and its validation ask again)."""
+        asked = state.key()
+        if asked in self._ends:
+            return self._ends[asked]
+        if len(self._ends) >= MEMO_ENTRIES:
+            self._ends.clear()
+        found = self._ends[asked] = self._continuation(state)
+        return found
+
+    def _continuation(self, state: SoundState) -> Violation | None:
         followers = self.followers(state, None)
         ((seg, pieces),) = self.window(state, None)
         found = self.check_segment(seg, pieces, followers)
