@@ -156,6 +156,13 @@ MUTANTS: tuple[Mutant, ...] = (
            "the safety monitor's closing speed to the vehicle ahead reversed"),
     Mutant("tolerance-doubled", "sim/tolerance.py", "ViolationKind.STEP if added > self.step_tolerance",
            "ViolationKind.STEP if added > 2 * self.step_tolerance", "the step tolerance check twice as lax"),
+    Mutant("tracking-beyond-gate-a-dt", "sim/tracking.py",
+           "CAR.max_accel_mps2 * dt_s * dt_s", "CAR.max_accel_mps2 * dt_s",
+           "the tracker follows a reading ahead of its vehicle's interval by a x dt, not a x dt^2, as that vehicle"),
+    Mutant("tracking-entering-without-sensing-error", "sim/tracking.py",
+           "self.bounds.speeds(lane).high_mps) * dt_s + e_m", "self.bounds.speeds(lane).high_mps) * dt_s",
+           "a new reading near a range edge explained as entering only within a sweep's travel, the sensing error "
+           "left out"),
     # -- the sound model (every engine would share these declarations: the continuous-motion checks must see them)
     # -- the sound model's translations, one engine each (caught by crossval --model sound) ------------
     Mutant("spin-sound-widening-a-tick-late", "promela/sound.py",
