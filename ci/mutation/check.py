@@ -14,8 +14,9 @@ which detector caught each mutant, after how many seconds,
 and how small its reproducer is (vehicles and horizon of the shrunk scenario, or the first
 failing test). ``--rotate K`` checks K mutants chosen by the date (every mutant at least once
 in ``ceil(n / K)`` days: CI's daily share); ``--count N`` the first N of those chosen (a quick
-look). Exit 0 when every mutant checked was caught, 6 when
-one survived, 2 on bad input.
+look). A detector that ends without a verdict (a collection error, bad input, a crash) catches nothing: the next one
+is tried, and a mutant nothing catches after such an ending has no verdict. Exit 0 when every mutant checked was
+caught, 6 when one survived, 3 when none survived but one has no verdict, 2 on bad input.
 """
 
 from __future__ import annotations
@@ -144,6 +145,10 @@ class Verdict:
     seconds: float
     reproducer: str
     errors: list[str]
+    undecided: bool = False  # nothing caught it, and a detector crashed: neither caught nor survived
+
+    def outcome(self) -> str:
+        return self.caught_by or ("NO VERDICT (a detector crashed)" if self.undecided else "SURVIVED")
 
 
 def rotation(count: int, on: datetime.date) -> list[Mutant]:
@@ -197,11 +202,11 @@ def check(m: Mutant, cache: Path, on_detector: Callable[[str], None] | None = No
                 continue
             if detector.caught(done):
                 return Verdict(m.name, detector.name, time.perf_counter() - started, _reproducer(done), errors)
-            if done.returncode != 0:
+            if done.returncode != 0:  # no verdict from this one (a collection error, bad input, a crash): go on
                 last = (done.stderr.strip() or done.stdout.strip()).splitlines()[-1:] or ["?"]
-                errors.append(f"{detector.name}: exit {done.returncode}: {last[0][:200]}")
-                return Verdict(m.name, f"{detector.name} (crashed)", time.perf_counter() - started, "", errors)
-    return Verdict(m.name, None, time.perf_counter() - started, "", errors)
+                errors.append(f"{detector.name}: crashed, exit {done.returncode}: {last[0][:200]}")
+    crashed = any(": crashed, exit " in e for e in errors)
+    return Verdict(m.name, None, time.perf_counter() - started, "", errors, undecided=crashed)
 
 
 def _reproducer(done: subprocess.CompletedProcess[str]) -> str:
@@ -256,17 +261,22 @@ def main(argv: list[str] | None = None) -> int:
                 verdict = check(m, Path(cache), lambda name: print(f"  trying {name} ...", file=sys.stderr),
                                 detectors)
                 verdicts.append(verdict)
-                print(f"  -> {verdict.caught_by or 'SURVIVED'} after {verdict.seconds:.0f} s {verdict.reproducer}",
-                      file=sys.stderr)
+                print(f"  -> {verdict.outcome()} after {verdict.seconds:.0f} s {verdict.reproducer}", file=sys.stderr)
+                for line in verdict.errors:
+                    print(f"     {line}", file=sys.stderr)
         except KeyboardInterrupt:
             print("mutation: interrupted", file=sys.stderr)
             _write(verdicts, out)
             return ExitCode.INTERRUPTED
     _write(verdicts, out)
-    survived = [v.mutant for v in verdicts if v.caught_by is None]
-    print(f"mutation: {len(verdicts) - len(survived)} of {len(verdicts)} caught"
-          + (f"; survived: {', '.join(survived)}" if survived else ""))
-    return ExitCode.DISAGREE if survived else ExitCode.OK
+    survived = [v.mutant for v in verdicts if v.caught_by is None and not v.undecided]
+    undecided = [v.mutant for v in verdicts if v.undecided]
+    caught = len(verdicts) - len(survived) - len(undecided)
+    print(f"mutation: {caught} of {len(verdicts)} caught" + (f"; survived: {', '.join(survived)}" if survived else "")
+          + (f"; no verdict (a detector crashed, none caught it): {', '.join(undecided)}" if undecided else ""))
+    if survived:
+        return ExitCode.DISAGREE
+    return ExitCode.INCOMPLETE if undecided else ExitCode.OK
 
 
 def _chosen(args: argparse.Namespace) -> list[Mutant]:
@@ -295,7 +305,8 @@ def _selection(args: argparse.Namespace) -> list[Mutant]:
 
 def _write(verdicts: list[Verdict], out: Path) -> None:
     rows = ["| mutant | caught by | seconds | reproducer |", "|---|---|---|---|"]
-    rows += [f"| {v.mutant} | {v.caught_by or '**survived**'} | {v.seconds:.0f} | {v.reproducer} |" for v in verdicts]
+    rows += [f"| {v.mutant} | {v.caught_by or f'**{v.outcome().lower()}**'} | {v.seconds:.0f} | {v.reproducer} |"
+             for v in verdicts]
     (out / "mutation.md").write_text("# Mutation check\n\n" + "\n".join(rows) + "\n")
     (out / "mutation.json").write_text(json.dumps([asdict(v) for v in verdicts], indent=1))
 

@@ -294,7 +294,8 @@ def mutation_section(folder: Path, key: str) -> Section:
                                 + ("" if len(caught) == len(data) else ": missed " + ", ".join(
                                     v["mutant"] for v in data if not v["caught_by"])))
         section.tables.append(Table("mutants", ("mutant", "caught by", "seconds", "first failing check"), tuple(
-            (v["mutant"], v["caught_by"] or "NOT CAUGHT", f"{v['seconds']:.0f}", v["reproducer"] or "-")
+            (v["mutant"], v["caught_by"] or ("NO VERDICT (a detector crashed)" if v.get("undecided") else "NOT CAUGHT"),
+             f"{v['seconds']:.0f}", v["reproducer"] or "-")
             for v in data)))
     except (KeyError, TypeError, ValueError, AttributeError) as error:
         raise Unreadable(f"mutation.json: not a mutation check ({type(error).__name__}: {error})") from None

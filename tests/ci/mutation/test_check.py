@@ -8,11 +8,12 @@ import datetime
 import math
 import re
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
-from ci.mutation.check import ROOT, Detector, _pytest, apply, main, rotation
+from ci.mutation.check import ROOT, Detector, _pytest, apply, check, main, rotation
 from ci.mutation.mutants import MUTANTS, Mutant, mutant
 from spec.errors import OptionError
 
@@ -108,3 +109,18 @@ def test_the_first_detector_runs_the_tests_that_mirror_the_mutated_module() -> N
     assert "tests/sim/test_safety_by_hand.py" in _module_tests(mutant("safety-closing-reversed"))
     unmirrored = Mutant("x", "sim/simulator.py", "a", "b", "no test file mirrors sim/simulator.py")
     assert DETECTORS[0].command(unmirrored, Path(".")) == []
+
+
+def _exits(code: int) -> Detector:
+    return Detector(f"exits {code}", lambda m, work: [sys.executable, "-c", f"import sys; sys.exit({code})"], (6,))
+
+
+def test_a_detector_that_crashes_catches_nothing_and_the_next_one_is_tried(tmp_path: Path) -> None:
+    """A crash (here exit 5: a collection error, bad input, a missing file would do the same) is no verdict: a later
+    detector may catch the mutant; when none does, the mutant has none either (neither caught nor survived)."""
+    caught = check(MUTANTS[0], tmp_path, detectors=(_exits(5), _exits(6)))
+    assert caught.caught_by == "exits 6" and any("exits 5: crashed, exit 5" in e for e in caught.errors)
+    undecided = check(MUTANTS[0], tmp_path, detectors=(_exits(5), _exits(0)))
+    assert undecided.caught_by is None and undecided.undecided and "NO VERDICT" in undecided.outcome()
+    survived = check(MUTANTS[0], tmp_path, detectors=(_exits(0),))
+    assert survived.caught_by is None and not survived.undecided and survived.outcome() == "SURVIVED"
