@@ -116,9 +116,9 @@ def verifier(shape: Shape | sound_model.SoundShape, strategy: Strategy) -> Verif
 
     The key hashes the rendered template (which holds every rule and number of the shape's
     model, goal and grid), the grid itself, the compiler flags, the tool versions, the server's and this
-    module's source; for the
-    sound model also the sound model in full (``SoundShape.key_text``: bounds, safety, tracking,
-    start speed, minimal-risk manoeuvre), whose hash is in the shape's name too."""
+    module's source; for the sound model also its shape in full (``SoundShape.key_text``: rules, goal, grid, the
+    phantoms' lanes, the followers' words). The sound model's numbers are not compiled in: each search names its
+    table (``table_file``)."""
     source = sound_model.render(shape) if isinstance(shape, sound_model.SoundShape) else render(shape)
     flags = _flags(strategy)
     key_text = [source, f"cell_m={shape.grid.cell_m}", " ".join(flags), tool_versions(), _server_source(),
@@ -145,6 +145,7 @@ def verifier(shape: Shape | sound_model.SoundShape, strategy: Strategy) -> Verif
 
 
 _VERIFIED: dict[Path, tuple[int, int]] = {}  # pan -> (size, mtime) when its checksum last matched
+_WRITTEN: set[Path] = set()  # the sound models' tables this process wrote or found whole (table_file)
 
 
 def _healthy(folder: Path) -> bool:
@@ -169,8 +170,10 @@ def _sha256(path: Path) -> str:
 
 
 def discard(folder: Path) -> None:
-    """Remove a cached verifier (it is built again on next use), and stop its servers."""
+    """Remove a cached verifier (it is built again on next use), and stop its servers; every table is looked at
+    again on next use."""
     _VERIFIED.pop(folder / "pan", None)
+    _WRITTEN.clear()
     for key in [k for k in _SERVERS if k[0] == folder / "pan"]:
         _SERVERS.pop(key).close()
     shutil.rmtree(folder, ignore_errors=True)
@@ -234,8 +237,40 @@ def search(problem: Problem, strategy: Strategy, timeout_s: float | None = None,
     raise AssertionError("unreachable")
 
 
-def _search_with(built: Verifier, problem: Problem, timeout_s: float, started: float, serve: bool) -> SearchResult:
+def table_file(problem: Problem) -> Path:
+    """The sound model's table for ``problem`` (``promela.sound.table_text``), in the cache and named by the hash of
+    its text: written once (atomically: a concurrent writer of the same text wins or loses whole), found whole
+    after, rewritten when damaged. Its path goes to the verifier with the scenario."""
+    text = sound_model.table_text(sound_model.table_sound(problem), problem.grid)
+    data = text.encode()
+    path = cache_dir() / "sound-tables" / f"{hashlib.sha256(data).hexdigest()[:24]}.txt"
+    if path in _WRITTEN:
+        return path
+    if any(c in str(path) for c in "\t\n\r"):
+        raise EngineError(f"the verifier cache's path {str(cache_dir())!r} holds a tab or a line break (the served "
+                          "verifiers read one request per line, tab separated): set OVERTAKE_CACHE to another")
+    try:
+        whole = path.read_bytes() == data
+    except OSError:
+        whole = False
+    if not whole:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=path.parent, prefix=".table-", delete=False) as out:
+            out.write(data)
+        os.replace(out.name, path)
+    _WRITTEN.add(path)
+    return path
+
+
+def injected(problem: Problem) -> str:
+    """What a verifier reads when it starts (``OVERTAKE_SCENARIO``): the scenario's values; under the sound model
+    then ``|`` and the path of its table."""
     values = scenario_values(problem)
+    return values if problem.scenario.sound is None else f"{values} | {table_file(problem)}"
+
+
+def _search_with(built: Verifier, problem: Problem, timeout_s: float, started: float, serve: bool) -> SearchResult:
+    values = injected(problem)
     replay_args = ["-r", f"-w{HASH_BITS}", f"-m{problem.horizon + DEPTH_MARGIN}", f"{MODEL_FILE}.trail"]
     if serve:
         server = _server(built.path)

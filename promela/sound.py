@@ -15,18 +15,19 @@ line (the display state: left cells ``c + t - d``, right cells ``c - t - d``) an
 refused one has no successors; one where the plan may already end violates the assertion (the
 empty plan).
 
-What does not depend on the scenario is compiled in from spec/: the windows of
-``spec.windows.sound_table`` (shapes, early windows, start windows, gains, speeds), the required gap
-at each instant a condition binds (``SafetySpec.required_gap_m`` of the closing speed this module
-forms from the instant's speed, the speed error and the lane's bound), the bounds, the envelope,
-``EPS_M``, whether each window's end closes in (``MinimalRisk.closes_in``), the phantoms' lanes and
-each cell's extent (``spec.cells``). The C code does the rest itself: the vehicles' intervals
-(extents widened by the sensing error, then the phantoms from their edges), their growth over time,
-the conditions of ``spec.windows``'s docstring, the followers, the goal and the continuation. The
-scenario (AV lane, cells, targets, horizon, the phantoms' edges: where a snapshot's view ended) is
-read from ``OVERTAKE_SCENARIO`` when the verifier starts (``promela.render.scenario_values``), so
-one compiled verifier serves every scenario of its (sound model less the snapshot's view, model,
-goal, grid).
+What is compiled in is the verifier's shape (``SoundShape``): the model's rules, its goal, the grid
+(each cell's extent, ``spec.cells``), the phantoms' lanes, the followers' words, ``EPS_M``. The sound
+model's numbers are data, read from its table file when the verifier starts (``table_text``, from
+``spec.windows.sound_table``): the windows (shapes, early windows, start windows, gains, speeds), the
+required gap at each instant a condition binds (``SafetySpec.required_gap_m`` of the closing speed
+this module forms from the instant's speed, the speed error and the lane's bound), the bounds, the
+envelope, whether each window's end closes in (``MinimalRisk.closes_in``). The C code does the rest
+itself: the vehicles' intervals (extents widened by the sensing error, then the phantoms from their
+edges), their growth over time, the conditions of ``spec.windows``'s docstring, the followers, the
+goal and the continuation. The scenario (AV lane, cells, targets, horizon, the phantoms' edges:
+where a snapshot's view ended) and the table's path are read from ``OVERTAKE_SCENARIO`` when the
+verifier starts (``promela.render.scenario_values``, then ``| path``), so one compiled verifier
+serves every scenario, profile and measured start speed of its shape.
 
 Spin refuses a ``c_expr`` that calls a function (it cannot tell a pure one), so each step's test
 stores its answer in the C global ``sound_ok`` and the ``c_expr`` reads it.
@@ -35,9 +36,7 @@ stores its answer in the C global ``sound_ok`` and the ``c_expr`` reads it.
 from __future__ import annotations
 
 import functools
-import hashlib
 import math
-import re
 from dataclasses import dataclass, replace
 
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
@@ -49,46 +48,44 @@ from spec.lanes import Lane
 from spec.models import GoalRule, ModelRules
 from spec.scenario import Problem
 from spec.sound import EPS_M, Checks, Sound, follower_limit_m, rear_binds
-from spec.windows import NO_SPEED, Binding, Instant, SoundTable, Window, sound_table
+from spec.windows import NO_SPEED, Binding, Instant, Window, sound_table
 
 ENV_VAR = "OVERTAKE_SCENARIO"
 LANE_CODE = {Lane.LEFT: 0, Lane.RIGHT: 1}
 MOVED_CODE = {None: 0, Lane.LEFT: 1, Lane.RIGHT: 2}
 CONTINUATION = len(ACTION_ORDER)  # the action code of the minimal-risk continuation (action None)
 WORD_BITS = 32
+TABLE_FORMAT = 1  # the table file's layout (table_text): a verifier reads only its own
+TABLE_END = 271828  # the table's last number: a file cut short is refused
 
 
 @dataclass(frozen=True, slots=True)
 class SoundShape:
-    """What a compiled verifier of the sound model is specialised for: the sound model (bounds, safety, tracking,
-    start speed, minimal-risk manoeuvre), the model's rules, its goal, the grid, and the words of the followers'
-    bitmask."""
+    """What a compiled verifier of the sound model is specialised for: the model's rules, its goal, the grid, the
+    phantoms' lanes (in the order the scenario gives their edges) and the words of the followers' bitmask. The sound
+    model's numbers (bounds, safety, tracking, start speed, minimal-risk manoeuvre) are read at the start from its
+    table file (``table_text``): one verifier serves every profile and measured speed of its shape."""
 
-    sound: Sound
     rules: ModelRules
     goal: GoalRule
     grid: Grid
+    phantoms: tuple[Lane, ...]
     words: int = 1
 
     @property
-    def profile(self) -> str:
-        """The bounds' name, as a file name may hold it."""
-        return re.sub(r"[^a-z0-9]+", "_", self.sound.bounds.name.lower()).strip("_") or "bounds"
-
-    @property
     def name(self) -> str:
-        """``sound-<profile>-model-goal[-cell]-f<words>-<hash of the sound model>``: file and cache names."""
+        """``sound-model-goal[-cell]-p<phantoms' lanes>-f<words>``: file and cache names."""
         cell = "" if self.grid.is_paper else f"-{float(self.grid.cell_m):g}m"
-        return (f"sound-{self.profile}-{self.rules.kind.value}-{self.goal.kind.value}{cell}-f{self.words}-"
-                f"{hashlib.sha256(self.key_text().encode()).hexdigest()[:8]}")
+        lanes = "".join(lane.value[0] for lane in self.phantoms) or "none"
+        return f"sound-{self.rules.kind.value}-{self.goal.kind.value}{cell}-p{lanes}-f{self.words}"
 
     def key_text(self) -> str:
-        """The sound model in full, for the verifier cache's key (the rendered source holds its numbers too)."""
-        return repr(self.sound)
+        """The shape in full, for the verifier cache's key."""
+        return repr(self)
 
     @property
     def left_phantoms(self) -> int:
-        return sum(1 for p in self.sound.bounds.phantom_vehicles() if p.lane is Lane.LEFT)
+        return sum(1 for lane in self.phantoms if lane is Lane.LEFT)
 
     @property
     def max_same(self) -> int:
@@ -102,20 +99,27 @@ def full_words(grid: Grid, sound: Sound) -> int:
     return -(-(grid.road_cells + 1 + left_phantoms) // WORD_BITS)
 
 
+def table_sound(problem: Problem) -> Sound:
+    """The sound model a verifier's table holds for ``problem``: its own, less the snapshot's view (the phantoms'
+    edges are read with the scenario)."""
+    sound = problem.scenario.sound
+    if sound is None:
+        raise ValueError("the problem's scenario has no sound model")
+    return replace(sound, oncoming_view_m=None)
+
+
 def shape_of(problem: Problem) -> SoundShape:
     """The verifier shape that serves ``problem``: one word of followers when its same-direction list fits, else as
     many as a full road needs. The identity check's paper cell rules (``Checks.PAPER_CELLS``) are the interpreter's
     only: an engine error."""
-    sound = problem.scenario.sound
-    if sound is None:
-        raise ValueError("the problem's scenario has no sound model")
+    sound = table_sound(problem)
     if sound.checks is not Checks.PHYSICAL:
         raise EngineError(f"spin answers the sound model's physical checks only, not {sound.checks.value!r} (the "
                           "identity check is the interpreter's)")
-    sound = replace(sound, oncoming_view_m=None)  # the phantoms' edges are read with the scenario: one verifier
-    shape = SoundShape(sound, problem.rules, problem.goal, problem.grid, 1)
+    lanes = tuple(p.lane for p in sound.bounds.phantom_vehicles())
+    shape = SoundShape(problem.rules, problem.goal, problem.grid, lanes, 1)
     if len(problem.scenario.left_lane) + shape.left_phantoms > WORD_BITS:
-        shape = SoundShape(sound, problem.rules, problem.goal, problem.grid, full_words(problem.grid, sound))
+        shape = SoundShape(problem.rules, problem.goal, problem.grid, lanes, full_words(problem.grid, sound))
     return shape
 
 
@@ -129,7 +133,7 @@ def _f(x: float) -> str:
 
 
 def _at(inst: Instant, gap_m: float) -> str:
-    return f"{{{_f(inst.t_s)}, {_f(inst.x_m)}, {_f(gap_m)}}}"
+    return f"{_f(inst.t_s)} {_f(inst.x_m)} {_f(gap_m)}"
 
 
 def _piece(b: Binding, sound: Sound) -> str:
@@ -139,112 +143,113 @@ def _piece(b: Binding, sound: Sound) -> str:
     ahead = s.required_gap_m(b.ahead.v_mps + e_v - same.low_mps)
     oncoming = s.required_gap_m(b.oncoming.v_mps + e_v + onc.high_mps)
     behind = s.required_gap_m(same.high_mps - b.behind.v_mps + e_v)
-    return (f"{{{_f(b.start.t_s)}, {_f(b.start.x_m)}, {_at(b.ahead, ahead)}, {_at(b.oncoming, oncoming)}, "
-            f"{_at(b.behind, behind)}, {int(b.rear)}}}")
+    return (f"   {_f(b.start.t_s)} {_f(b.start.x_m)}  {_at(b.ahead, ahead)}  {_at(b.oncoming, oncoming)}  "
+            f"{_at(b.behind, behind)}  {int(b.rear)}")
 
 
-def _window(w: Window, sound: Sound, name: str) -> str:
-    stretches = []
-    for s in w.stretches:
-        pieces = ", ".join(_piece(b, sound) for b in s.pieces)
-        stretches.append(f"{{{int(s.left)}, {int(s.right)}, {int(s.entering)}, {int(s.at_start)}, {len(s.pieces)}, "
-                         f"{{{pieces}}}}}")
-    return (f"  /* {name} */\n  {{{len(w.stretches)}, {{{', '.join(stretches)}}}, {_f(w.boundary.t_s)}, "
-            f"{_f(w.boundary.x_m)}, {_f(w.end.t_s)}, {_f(w.end.x_m)}, "
-            f"{int(sound.minimal_risk.closes_in(w.end.v_mps, sound.bounds.same_mps.low_mps))}, "
-            f"{int(rear_binds(sound.bounds, w.end.v_mps))}}}")
+def _window(w: Window, sound: Sound) -> list[str]:
+    """A window: its stretches, boundary, end and whether the minimal-risk manoeuvre from its end closes in; then
+    each stretch (its occupancy's lanes and its pieces), a line each."""
+    lines = [f" {len(w.stretches)} {_f(w.boundary.t_s)} {_f(w.boundary.x_m)} {_f(w.end.t_s)} {_f(w.end.x_m)} "
+             f"{int(sound.minimal_risk.closes_in(w.end.v_mps, sound.bounds.same_mps.low_mps))} "
+             f"{int(rear_binds(sound.bounds, w.end.v_mps))}"]
+    for st in w.stretches:
+        lines.append(f"  {int(st.left)} {int(st.right)} {int(st.entering)} {int(st.at_start)} {len(st.pieces)}")
+        lines += [_piece(b, sound) for b in st.pieces]
+    return lines
 
 
 def _action_code(action: Action | None) -> int:
     return CONTINUATION if action is None else ACTION_ORDER.index(action)
 
 
-def _action_name(action: Action | None) -> str:
-    return "continuation" if action is None else action.value
-
-
-def _tables(shape: SoundShape, table: SoundTable) -> str:
-    """Every scenario-independent number, as C constants and static arrays."""
-    sound, grid = shape.sound, shape.grid
+@functools.lru_cache(maxsize=64)
+def table_text(sound: Sound, grid: Grid) -> str:
+    """Every number of the sound model a verifier reads when it starts (``sound_load_table``), from
+    ``spec.windows.sound_table``: the bounds, the envelope, each window (shapes, early windows, start windows) with
+    the gap required at each instant a condition binds (``SafetySpec.required_gap_m`` of the closing speed this
+    module forms from the instant's speed, the speed error and the lane's bound), the speeds and gains. Its first
+    line names it; its second checks it against the verifier (format, road cells, actions, the phantoms' lanes); a
+    sentinel ends it. Doubles as Python's ``repr`` writes them: ``strtod`` reads each back exactly."""
+    table = sound_table(sound, grid)
     b, s, tr = sound.bounds, sound.safety, sound.tracking
-    windows: list[str] = []
+    start = "" if sound.start_mps is None else f", measured start speed {sound.start_mps:g} m/s"
+    phantoms = [LANE_CODE[p.lane] for p in b.phantom_vehicles()]
+    lines = [f"# overtake-mc sound table: {sound.describe()}{start}; {grid.describe()}; rendered from spec/",
+             " ".join(map(str, [TABLE_FORMAT, grid.road_cells, CONTINUATION, len(phantoms), *phantoms])),
+             " ".join(_f(x) for x in (table.unit_s, table.cell_m, tr.position_m, s.vehicle_length_m,
+                                      follower_limit_m(0.0, s, tr), b.same_mps.low_mps, b.same_mps.high_mps,
+                                      b.oncoming_mps.low_mps, b.oncoming_mps.high_mps, sound.start_error_m)),
+             f"{len(table.speeds_mps)} {table.start_speed}",
+             " ".join(map(_f, table.speeds_mps)),
+             " ".join(map(_f, table.gain_m)),
+             " ".join(str(table.action_speed[a]) for a in ACTION_ORDER)]
+    windows: list[list[str]] = []
     relative = [[[[-1] * 3 for _ in Lane] for _ in range(CONTINUATION + 1)] for _ in table.speeds_mps]
     for (before, action, lane, moved), w in sorted(table.relative.items(), key=lambda kv: (
             kv[0][0], _action_code(kv[0][1]), LANE_CODE[kv[0][2]], MOVED_CODE[kv[0][3]])):
         relative[before][_action_code(action)][LANE_CODE[lane]][MOVED_CODE[moved]] = len(windows)
-        windows.append(_window(w, sound, f"shape: before speed {before}, {_action_name(action)}, {lane.value} lane, "
-                                         f"moved {moved.value if moved else 'none'}"))
+        windows.append(_window(w, sound))
     early = []
     for (lane, t, d, first, last, moved, action), w in sorted(table.early.items(), key=lambda kv: (
             LANE_CODE[kv[0][0]], *kv[0][1:5], MOVED_CODE[kv[0][5]], _action_code(kv[0][6]))):
-        early.append(f"  {{{LANE_CODE[lane]}, {t}, {d}, {first}, {last}, {MOVED_CODE[moved]}, {_action_code(action)}, "
-                     f"{len(windows)}}}")
-        windows.append(_window(w, sound, f"early: {lane.value} lane, t {t}, d {d}, first {first}, last {last}, "
-                                         f"moved {moved.value if moved else 'none'}, {_action_name(action)}"))
-    start = []
+        early.append(f"{LANE_CODE[lane]} {t} {d} {first} {last} {MOVED_CODE[moved]} {_action_code(action)} "
+                     f"{len(windows)}")
+        windows.append(_window(w, sound))
+    starts = []
     for lane in Lane:
-        start.append(str(len(windows)))
-        windows.append(_window(table.start[lane], sound, f"start in the {lane.value} lane"))
-    rel_rows = ",\n".join(
-        "  {" + ", ".join("{" + ", ".join("{" + ", ".join(map(str, m)) + "}" for m in by_lane) + "}"
-                          for by_lane in by_action) + "}" for by_action in relative)
-    phantoms = [f"{{{LANE_CODE[p.lane]}, 0.0}}" for p in b.phantom_vehicles()] or ["{0, 0.0}"]
+        starts.append(str(len(windows)))
+        windows.append(_window(table.start[lane], sound))
+    lines.append(str(len(windows)))
+    lines += [line for w in windows for line in w]
+    lines += [" ".join(str(k) for by_action in by_speed for by_lane in by_action for k in by_lane)
+              for by_speed in relative]
+    lines += [str(len(early)), *early, " ".join(starts), str(TABLE_END)]
+    return "\n".join(lines) + "\n"
+
+
+def _tables(shape: SoundShape) -> str:
+    """The verifier's constants (grid, phantoms' lanes, cell extents) and the table's variables, set when the table
+    is read (``sound_load_table``)."""
+    grid = shape.grid
+    phantoms = [f"{{{LANE_CODE[lane]}, 0.0}}" for lane in shape.phantoms] or ["{0, 0.0}"]
     left_ext = ",\n".join(
         "  {" + ", ".join(f"{{{_f(lo)}, {_f(hi)}}}" for lo, hi in (left_extent_m(c, lane, grid)
                                                                  for c in range(grid.road_cells + 1))) + "}"
         for lane in Lane)
     onc_ext = ", ".join(f"{{{_f(lo)}, {_f(hi)}}}" for lo, hi in (oncoming_extent_m(c, grid)
                                                                 for c in range(grid.road_cells + 1)))
-    max_stretches = max(len(w.stretches) for w in (*table.relative.values(), *table.early.values(),
-                                                   *table.start.values()))
-    max_pieces = max(len(st.pieces) for w in (*table.relative.values(), *table.early.values(),
-                                              *table.start.values()) for st in w.stretches)
-    action_speed = ", ".join(str(table.action_speed[a]) for a in ACTION_ORDER)
     into_left = ", ".join(str(int(ACTION_RULES[a].to_lane is Lane.LEFT)) for a in ACTION_ORDER)
+    right_phantoms = len(shape.phantoms) - shape.left_phantoms
     return "\n".join([
-        f"#define N_SPEEDS {len(table.speeds_mps)}",
-        f"#define N_WINDOWS {len(windows)}",
-        f"#define N_EARLY {len(early)}",
-        f"#define N_PHANTOMS {len(b.phantom_vehicles())}",
-        f"#define MAX_STRETCHES {max_stretches}",
-        f"#define MAX_PIECES {max_pieces}",
+        f"#define TABLE_FORMAT {TABLE_FORMAT}",
+        f"#define TABLE_END {TABLE_END}",
+        f"#define NO_SPEED {NO_SPEED}",
+        f"#define N_PHANTOMS {len(shape.phantoms)}",
         f"#define ROAD_CELLS {grid.road_cells}",
         f"#define MAX_SAME {shape.max_same}",
-        f"#define MAX_ONC {grid.road_cells + 1 + sum(1 for p in b.phantom_vehicles() if p.lane is Lane.RIGHT)}",
+        f"#define MAX_ONC {grid.road_cells + 1 + right_phantoms}",
         f"#define MAX_HORIZON {MAX_HORIZON}",
         f"#define CONTINUATION {CONTINUATION}",
         "c_decl {",
         "typedef struct { double t, x, gap; } SoundAt;  /* an instant of the reference, the gap required there */",
         "typedef struct { double t0, x0; SoundAt ahead, oncoming, behind; int rear; } SoundPiece;",
-        "typedef struct { int left, right, entering, at_start, n; SoundPiece p[MAX_PIECES]; } SoundStretch;",
-        "typedef struct { int n; SoundStretch s[MAX_STRETCHES]; double bt, bx, et, ex; int closes, rear_closes; }"
-        " SoundWindow;",
+        "typedef struct { int left, right, entering, at_start, n; SoundPiece *p; } SoundStretch;",
+        "typedef struct { int n; SoundStretch *s; double bt, bx, et, ex; int closes, rear_closes; } SoundWindow;",
         "typedef struct { int lane, t, d, first, last, moved, action, window; } SoundEarly;",
         "typedef struct { int lane; double dx; } SoundPhantom;  /* dx: read with the scenario (its view) */",
-        f"static const double UNIT_S = {_f(table.unit_s)}, CELL_M = {_f(table.cell_m)};",
-        f"static const double E_X = {_f(tr.position_m)}, E_V = {_f(tr.speed_mps)}, LEN = {_f(s.vehicle_length_m)};",
         f"static const double EPS_M = {_f(EPS_M)};",
-        f"static const double FOLLOWER_M = {_f(follower_limit_m(0.0, s, tr))};  /* spec.sound.follower_limit_m */",
-        f"static const double SAME_LOW = {_f(b.same_mps.low_mps)}, SAME_HIGH = {_f(b.same_mps.high_mps)};",
-        f"static const double ONC_LOW = {_f(b.oncoming_mps.low_mps)}, ONC_HIGH = {_f(b.oncoming_mps.high_mps)};",
-        f"static const double START_ERROR_M = {_f(sound.start_error_m)};  /* sensing error + age */",
-        f"static const double SPEEDS_MPS[N_SPEEDS] = {{{', '.join(map(_f, table.speeds_mps))}}};  /* for reading */",
-        f"static const double GAIN_M[N_SPEEDS] = {{{', '.join(map(_f, table.gain_m))}}};",
-        f"static const int ACTION_SPEED[CONTINUATION] = {{{action_speed}}};",
+        "/* the sound model's numbers, read from its table when the verifier starts (sound_load_table) */",
+        "static double UNIT_S, CELL_M, E_X, LEN, FOLLOWER_M, SAME_LOW, SAME_HIGH, ONC_LOW, ONC_HIGH;",
+        "static double START_ERROR_M;  /* sensing error + age */",
+        "static int N_SPEEDS, START_SPEED, N_WINDOWS, N_EARLY, START_WINDOW[2], ACTION_SPEED[CONTINUATION];",
+        "static double *SPEEDS_MPS, *GAIN_M;",
+        "static SoundWindow *WINDOWS;",
+        "static SoundEarly *EARLY;",
+        "/* the shapes: the window (-1: none) by speed before, action (CONTINUATION: none), lane, moved */",
+        "static short *RELATIVE_;",
+        "#define RELATIVE(b, a, l, m) RELATIVE_[(((b) * (CONTINUATION + 1) + (a)) * 2 + (l)) * 3 + (m)]",
         f"static const int INTO_LEFT[CONTINUATION] = {{{into_left}}};",
-        f"static const int START_SPEED = {table.start_speed};",
-        "static const SoundWindow WINDOWS[N_WINDOWS] = {",
-        ",\n".join(windows),
-        "};",
-        "/* the shapes: by speed before the boundary, action (CONTINUATION: none), lane, moved */",
-        "static const short RELATIVE[N_SPEEDS][CONTINUATION + 1][2][3] = {",
-        rel_rows,
-        "};",
-        "/* lane, t, d, first, last, moved, action, window */",
-        "static const SoundEarly EARLY[N_EARLY + 1] = {",
-        ",\n".join([*early, "  {-1, -1, -1, -1, -1, -1, -1, -1}"]),
-        "};",
-        f"static const int START_WINDOW[2] = {{{', '.join(start)}}};",
         f"static SoundPhantom PHANTOMS[N_PHANTOMS + 1] = {{{', '.join(phantoms)}}};",
         "/* where a vehicle in a cell can be, metres ahead of the AV: same direction (by the AV lane), oncoming */",
         "static const double LEFT_EXTENT[2][ROAD_CELLS + 1][2] = {",
@@ -351,7 +356,7 @@ static const SoundWindow *sound_window(int action, double *dt, double *dx)
 	}	}
 	if (first < 0) { first = action == CONTINUATION ? START_SPEED : ACTION_SPEED[action]; }
 	before = now.last < 0 ? first : now.last;
-	k = RELATIVE[before][action][now.lane][now.moved];
+	k = RELATIVE(before, action, now.lane, now.moved);
 	if (k < 0)
 	{	fprintf(stderr, "overtake: no window for action %d from lane %d, moved %d\n", action, now.lane, now.moved);
 		exit(3);
@@ -376,6 +381,12 @@ static int sound_step_ok(int action)
 	{	if (sound_stretch_refused(&w->s[k], dt, dx, step_fol)) { return 0; }
 	}
 	return 1;
+}
+
+/* an action's speed index: the first one of the plan and the last one */
+static void sound_speeds(int action)
+{	if (now.first == NO_SPEED) { now.first = ACTION_SPEED[action]; }
+	now.last = ACTION_SPEED[action];
 }
 
 static void sound_take_followers(void)
@@ -436,15 +447,133 @@ static void sound_malformed(const char *why)
 	exit(2);
 }
 
+static const char *table_path;
+static char *table_at;
+
+static void sound_bad_table(const char *why)
+{	fprintf(stderr, "overtake: the sound model's table %s is not this verifier's (%s)\n", table_path, why);
+	exit(2);
+}
+
+static double table_number(void)
+{	char *end;
+	double x = strtod(table_at, &end);
+	if (end == table_at) { sound_bad_table("too few numbers"); }
+	table_at = end;
+	return x;
+}
+
+static int table_int(int lo, int hi, const char *what)
+{	double x = table_number();
+	if (!(x >= lo && x <= hi) || x != (double) (int) x) { sound_bad_table(what); }
+	return (int) x;
+}
+
+static void *table_alloc(int n, size_t size)
+{	void *p = calloc(n > 0 ? (size_t) n : 1, size);
+	if (!p) { fprintf(stderr, "overtake: out of memory reading the sound model's table\n"); exit(2); }
+	return p;
+}
+
+static void table_at_instant(SoundAt *a)
+{	a->t = table_number(); a->x = table_number(); a->gap = table_number();
+}
+
+/* the sound model's numbers (promela.sound.table_text): the header checked against this verifier, the bounds and
+   the envelope, the speeds, every window, the shapes, the early windows, the start windows, the end */
+static void sound_load_table(const char *path)
+{	FILE *f;
+	long size;
+	char *text;
+	int i, j, k, n;
+	SoundWindow *w;
+	SoundStretch *st;
+	SoundPiece *p;
+	table_path = path;
+	f = fopen(path, "rb");
+	if (!f) { fprintf(stderr, "overtake: cannot read the sound model's table %s\n", path); exit(2); }
+	if (fseek(f, 0, SEEK_END) != 0 || (size = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0)
+	{	sound_bad_table("unreadable");
+	}
+	text = table_alloc((int) size + 1, 1);
+	if (fread(text, 1, (size_t) size, f) != (size_t) size) { sound_bad_table("unreadable"); }
+	fclose(f);
+	text[size] = 0;
+	table_at = text;
+	if (*table_at == '#') { while (*table_at && *table_at != '\n') { table_at++; } }  /* its name */
+	if (table_int(0, 1000000, "format") != TABLE_FORMAT) { sound_bad_table("another format"); }
+	if (table_int(0, 1000000, "road cells") != ROAD_CELLS) { sound_bad_table("another grid"); }
+	if (table_int(0, 1000000, "actions") != CONTINUATION) { sound_bad_table("other actions"); }
+	if (table_int(0, 1000000, "phantoms") != N_PHANTOMS) { sound_bad_table("other phantoms"); }
+	for (j = 0; j < N_PHANTOMS; j++)
+	{	if (table_int(0, 1, "a phantom's lane") != PHANTOMS[j].lane) { sound_bad_table("other phantoms"); }
+	}
+	UNIT_S = table_number(); CELL_M = table_number(); E_X = table_number(); LEN = table_number();
+	FOLLOWER_M = table_number(); SAME_LOW = table_number(); SAME_HIGH = table_number();
+	ONC_LOW = table_number(); ONC_HIGH = table_number(); START_ERROR_M = table_number();
+	N_SPEEDS = table_int(1, 1000, "speeds");
+	START_SPEED = table_int(0, N_SPEEDS - 1, "the start speed");
+	SPEEDS_MPS = table_alloc(N_SPEEDS, sizeof(double));
+	GAIN_M = table_alloc(N_SPEEDS, sizeof(double));
+	for (i = 0; i < N_SPEEDS; i++) { SPEEDS_MPS[i] = table_number(); }
+	for (i = 0; i < N_SPEEDS; i++) { GAIN_M[i] = table_number(); }
+	for (i = 0; i < CONTINUATION; i++) { ACTION_SPEED[i] = table_int(0, N_SPEEDS - 1, "an action's speed"); }
+	N_WINDOWS = table_int(1, 10000000, "windows");
+	WINDOWS = table_alloc(N_WINDOWS, sizeof(SoundWindow));
+	for (k = 0; k < N_WINDOWS; k++)
+	{	w = &WINDOWS[k];
+		w->n = table_int(0, 1000, "a window's stretches");
+		w->bt = table_number(); w->bx = table_number(); w->et = table_number(); w->ex = table_number();
+		w->closes = table_int(0, 1, "closes"); w->rear_closes = table_int(0, 1, "rear closes");
+		w->s = table_alloc(w->n, sizeof(SoundStretch));
+		for (i = 0; i < w->n; i++)
+		{	st = &w->s[i];
+			st->left = table_int(0, 1, "left"); st->right = table_int(0, 1, "right");
+			st->entering = table_int(0, 1, "entering"); st->at_start = table_int(0, 1, "at start");
+			st->n = table_int(1, 1000, "a stretch's pieces");
+			st->p = table_alloc(st->n, sizeof(SoundPiece));
+			for (j = 0; j < st->n; j++)
+			{	p = &st->p[j];
+				p->t0 = table_number(); p->x0 = table_number();
+				table_at_instant(&p->ahead); table_at_instant(&p->oncoming); table_at_instant(&p->behind);
+				p->rear = table_int(0, 1, "rear");
+	}	}	}
+	n = N_SPEEDS * (CONTINUATION + 1) * 2 * 3;
+	RELATIVE_ = table_alloc(n, sizeof(short));
+	for (i = 0; i < n; i++) { RELATIVE_[i] = (short) table_int(-1, N_WINDOWS - 1, "a shape's window"); }
+	N_EARLY = table_int(0, 10000000, "early windows");
+	EARLY = table_alloc(N_EARLY, sizeof(SoundEarly));
+	for (k = 0; k < N_EARLY; k++)
+	{	EARLY[k].lane = table_int(0, 1, "an early window's lane");
+		EARLY[k].t = table_int(0, 1000000, "an early window's time");
+		EARLY[k].d = table_int(-1000000, 1000000, "an early window's advance");
+		EARLY[k].first = table_int(NO_SPEED, N_SPEEDS - 1, "an early window's first speed");
+		EARLY[k].last = table_int(NO_SPEED, N_SPEEDS - 1, "an early window's last speed");
+		EARLY[k].moved = table_int(0, 2, "an early window's lane moved into");
+		EARLY[k].action = table_int(0, CONTINUATION, "an early window's action");
+		EARLY[k].window = table_int(0, N_WINDOWS - 1, "an early window's window");
+	}
+	START_WINDOW[0] = table_int(0, N_WINDOWS - 1, "a start window");
+	START_WINDOW[1] = table_int(0, N_WINDOWS - 1, "a start window");
+	if (table_int(TABLE_END, TABLE_END, "its end") != TABLE_END) { sound_bad_table("its end"); }
+	while (*table_at == ' ' || *table_at == '\n' || *table_at == '\t' || *table_at == '\r') { table_at++; }
+	if (*table_at) { sound_bad_table("more after its end"); }
+}
+
 /* the scenario: lane nl cells... nr cells... nt ft horizon, each phantom's edge (dx: where its sensor's view ends),
-   then 0, or 1 and each vehicle's sensed interval (lo hi, same-direction then oncoming); the vehicles as intervals
-   (those, or their cells' extents), then the phantoms */
+   then 0, or 1 and each vehicle's sensed interval (lo hi, same-direction then oncoming), then | and the path of the
+   sound model's table; the vehicles as intervals (those, or their cells' extents), then the phantoms */
 static void sound_load(void)
-{	char *text = getenv("ENV_NAME"), *end;
+{	char *text = getenv("ENV_NAME"), *end, *bar;
 	double v[6 * (ROAD_CELLS + 1) + N_PHANTOMS + 16];
 	int n = 0, at = 0, j, lane, cell, measured;
 	double lo, hi;
 	if (!text) { fprintf(stderr, "overtake: ENV_NAME is not set\n"); exit(2); }
+	bar = strchr(text, '|');
+	if (!bar) { sound_malformed("no table: | and its path at the end"); }
+	end = bar + 1;
+	while (*end == ' ') { end++; }
+	sound_load_table(end);
 	while (n < 6 * (ROAD_CELLS + 1) + N_PHANTOMS + 16)
 	{	v[n] = strtod(text, &end);
 		if (end == text) { break; }
@@ -508,7 +637,7 @@ static void sound_load(void)
 }"""
 
 
-def _option(action: Action, grid: Grid, table: SoundTable) -> str:
+def _option(action: Action, grid: Grid) -> str:
     """One decision step as one atomic transition: guard, safety test, effect, STEP line, goal."""
     rule = ACTION_RULES[action]
     code = ACTION_ORDER.index(action)
@@ -522,11 +651,9 @@ def _option(action: Action, grid: Grid, table: SoundTable) -> str:
         effect.append("c_code { sound_take_followers(); }")
     if rule.to_lane is not None:
         effect += [f"lane = {rule.to_lane.name}", "lc++"]
-    speed = table.action_speed[action]
     units = grid.units(action)
     effect += ["steps++", f"t = t + {units}", f"d = d + {units - grid.left_shift(action)}",
-               f"first = (first == {NO_SPEED} -> {speed} : first)", f"last = {speed}",
-               f"moved = {MOVED_CODE[rule.to_lane]}",
+               f"c_code {{ sound_speeds({code}); }}", f"moved = {MOVED_CODE[rule.to_lane]}",
                f'c_code {{ sound_show("STEP {action.value}"); now.reached = sound_done(); }}', "assert(!reached)"]
     return (f"  :: d_step {{ {' && '.join(guard)} ->\n"
             f"       c_code {{ sound_ok = sound_step_ok({code}); }};\n"
@@ -541,17 +668,17 @@ def _option(action: Action, grid: Grid, table: SoundTable) -> str:
 def render(shape: SoundShape) -> str:
     """The sound model's Promela+C model of ``shape``, the scenario injected at run time (rendered once per shape: the
     verifier's cache key hashes it on every search)."""
-    table = sound_table(shape.sound, shape.grid)
     rules, goal, grid = shape.rules, shape.goal, shape.grid
-    start = "" if shape.sound.start_mps is None else f", measured start speed {shape.sound.start_mps:g} m/s"
-    what = f"{shape.sound.describe()}{start}; {rules.kind.value} model, goal {goal.kind.value}, {grid.describe()}"
+    lanes = ", ".join(lane.value for lane in shape.phantoms) or "none"
+    what = (f"the sound model (its numbers read from its table at the start), phantoms' lanes {lanes}; "
+            f"{rules.kind.value} model, goal {goal.kind.value}, {grid.describe()}")
     parts = [
         f"/* overtake-mc: {what}; rendered from spec/, do not edit */",
         f"#define MAX_LC {rules.max_lane_changes}",
         "#define LEFT 0",
         "#define RIGHT 1",
         f"#define FW {shape.words}",
-        _tables(shape, table),
+        _tables(shape),
         "",
         "bit lane; byte lc; byte steps; short t; short d;  /* time units, cells of nominal advance */",
         f"short first = {NO_SPEED}; short last = {NO_SPEED};  /* speed indices */",
@@ -567,7 +694,7 @@ def render(shape: SoundShape) -> str:
         '           if :: !refused -> c_code { sound_show("INIT"); now.reached = sound_done(); } :: else -> skip fi;',
         "           assert(!reached) }",
         "  do",
-        *(_option(action, grid, table) for action in ACTION_ORDER),
+        *(_option(action, grid) for action in ACTION_ORDER),
         "  od",
         "}",
     ]

@@ -196,12 +196,13 @@ def promela(file: str, model: str | None, horizon: int | None, cell_m: float | N
 
 
 def _sound_promela(problem: Problem) -> str:
-    """The sound model's Promela for ``problem``: its verifier reads the scenario when it starts (the line to run it
-    with heads the file)."""
-    from promela.render import ENV_VAR, scenario_values
+    """The sound model's Promela for ``problem``: its verifier reads the scenario and the sound model's table (written
+    into the verifier cache) when it starts (the line to run it with heads the file)."""
+    from promela.render import ENV_VAR
+    from promela.runner import injected
     from promela.sound import render, shape_of
 
-    run = f'{ENV_VAR}="{scenario_values(problem)}" ./pan -E'
+    run = f'{ENV_VAR}="{injected(problem)}" ./pan -E'
     return f"/* the sound model: spin -a FILE; gcc -DSAFETY -o pan pan.c; {run} */\n" + render(shape_of(problem))
 
 

@@ -15,7 +15,9 @@ import statistics
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
 
@@ -133,36 +135,70 @@ def test_pinned_scenarios_agree(case: tuple[float, str, float, str, tuple[int, .
         _agree(replace(scenario, sound=Sound(profile(name), start_mps=start_mps)), strategy)
 
 
-# -- one verifier per sound model ------------------------------------------------------------------------------
-#: A scenario whose sensible plan differs between the profiles: each verifier must answer with its own bounds.
+# -- one verifier per shape, a table per sound model -----------------------------------------------------------
+#: A scenario whose sensible plan differs between the profiles: each must be answered with its own bounds.
 DIFFERS = ("right", (12,), (), 1)
 
 
-def test_two_profiles_give_two_verifiers_each_answering_with_its_own_bounds() -> None:
+def test_two_profiles_share_one_verifier_each_answering_with_its_own_table() -> None:
     lane, left, right, targets = DIFFERS
     base = make_scenario(lane, list(left), list(right), targets, horizon=30)
-    answers, paths = {}, {}
+    answers, paths, tables = {}, {}, {}
     for name in ("default", "paper"):
         scenario = replace(base, sound=Sound(profile(name)))
         problem = problem_for(scenario, ModelKind.FINAL)
         shape = sound_model.shape_of(problem)
-        assert shape.name.startswith(f"sound-{name}-final-overtake-f1-")
+        assert shape.name.startswith("sound-final-overtake-p")
         paths[name] = runner.verifier(shape, Strategy.SENSIBLE).path
+        tables[name] = runner.table_file(problem)
         spin = runner.search(problem, Strategy.SENSIBLE)
         ours = sound.solve(problem, Strategy.SENSIBLE, Limits())
         assert (spin.status, spin.actions, spin.states) == (ours.status, ours.actions, ours.states)
         answers[name] = (spin.status, spin.actions)
-    assert paths["default"] != paths["paper"]
+    assert paths["default"] == paths["paper"]
+    assert tables["default"] != tables["paper"]
     assert answers["default"] != answers["paper"]
 
 
-def test_the_sound_model_in_full_is_in_the_verifiers_name_and_key() -> None:
+def test_the_sound_model_in_full_is_in_its_table_and_only_the_shape_in_the_verifier() -> None:
     problem = problem_for(replace(make_scenario("right", [12], [], 1), sound=Sound(profile("default"))),
                           ModelKind.FINAL)
-    shape = sound_model.shape_of(problem)
-    measured = replace(shape, sound=replace(shape.sound, start_mps=3.0))
-    assert shape.key_text() == repr(shape.sound) and "start_mps=3.0" in measured.key_text()
-    assert shape.name != measured.name and shape.name.rsplit("-", 1)[0] == measured.name.rsplit("-", 1)[0]
+    measured = replace(problem, scenario=replace(problem.scenario, sound=Sound(profile("default"), start_mps=3.0)))
+    assert sound_model.shape_of(problem) == sound_model.shape_of(measured)
+    text, other = (sound_model.table_text(sound_model.table_sound(p), p.grid) for p in (problem, measured))
+    assert text != other and "measured start speed 3 m/s" in other.splitlines()[0]
+    assert runner.table_file(problem) != runner.table_file(measured)
+
+
+def test_a_table_damaged_in_the_cache_is_written_again(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("OVERTAKE_CACHE", str(tmp_path))
+    problem = problem_for(replace(make_scenario("right", [12], [], 1), sound=Sound(profile("paper"))),
+                          ModelKind.FINAL)
+    path = runner.table_file(problem)
+    whole = path.read_text()
+    path.write_text(whole[: len(whole) // 2])
+    runner.discard(tmp_path / "none")  # what a failed search does: every table is looked at again
+    assert runner.table_file(problem) == path and path.read_text() == whole
+
+
+@pytest.mark.parametrize(("cut", "why"), [
+    (lambda t: t[: len(t) // 2], "too few numbers"),
+    (lambda t: t.replace("271828", "271829"), "its end"),
+    (lambda t: t + "1\n", "more after its end"),
+    (lambda t: t.replace("\n", "\n99 ", 1), "another format"),
+])
+def test_a_table_that_is_not_the_verifiers_is_refused_in_one_line(
+        tmp_path: Path, cut: Callable[[str], str], why: str) -> None:
+    """Read by hand (not through the cache): the verifier exits 2 naming the table and the reason, never a plan."""
+    problem = problem_for(replace(make_scenario("right", [12], [], 1), sound=Sound(profile("paper"))),
+                          ModelKind.FINAL)
+    built = runner.verifier(sound_model.shape_of(problem), Strategy.SENSIBLE)
+    table = tmp_path / "table.txt"
+    table.write_text(cut(sound_model.table_text(sound_model.table_sound(problem), problem.grid)))
+    env = {**os.environ, "OVERTAKE_SCENARIO": f"{runner.scenario_values(problem)} | {table}"}
+    done = subprocess.run([str(built.path), "-E"], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2
+    assert done.stderr.strip() == f"overtake: the sound model's table {table} is not this verifier's ({why})"
 
 
 # -- the start, the identity check, a full road ----------------------------------------------------------------
@@ -224,10 +260,11 @@ def test_rendering_is_the_same_in_another_process_with_another_hash_seed() -> No
             "profile; from spec.models import ModelKind; from spec.scenario import make_scenario, problem_for; "
             "from spec.sound import Sound; sc = replace(make_scenario('right', [24], [], 1, cell_m=10.5), "
             "sound=Sound(profile('default'), start_mps=3.0)); "
-            "sys.stdout.write(sound.render(sound.shape_of(problem_for(sc, ModelKind.PREPARATIONS))))")
+            "p = problem_for(sc, ModelKind.PREPARATIONS); "
+            "sys.stdout.write(sound.render(sound.shape_of(p)) + sound.table_text(sound.table_sound(p), p.grid))")
     texts = {subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                             env={**os.environ, "PYTHONHASHSEED": seed}).stdout for seed in ("1", "2")}
-    assert len(texts) == 1 and "static const SoundEarly EARLY" in texts.pop()
+    assert len(texts) == 1 and "static SoundEarly *EARLY" in texts.pop()
 
 
 
