@@ -43,7 +43,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, lru_cache
 from pathlib import Path
 from typing import IO
 
@@ -52,8 +52,10 @@ from promela.render import ENV_VAR, Shape, render, render_for, scenario_values, 
 from spec.actions import Action
 from spec.answers import SearchResult, Status, Strategy
 from spec.errors import EngineError, ToolMissing
+from spec.grid import Grid
 from spec.lanes import Lane
 from spec.scenario import Problem
+from spec.sound import Sound
 from spec.state import State
 
 MODEL_FILE = "model.pml"
@@ -241,9 +243,8 @@ def table_file(problem: Problem) -> Path:
     """The sound model's table for ``problem`` (``promela.sound.table_text``), in the cache and named by the hash of
     its text: written once (atomically: a concurrent writer of the same text wins or loses whole), found whole
     after, rewritten when damaged. Its path goes to the verifier with the scenario."""
-    text = sound_model.table_text(sound_model.table_sound(problem), problem.grid)
-    data = text.encode()
-    path = cache_dir() / "sound-tables" / f"{hashlib.sha256(data).hexdigest()[:24]}.txt"
+    data, name = _table_data(sound_model.table_sound(problem), problem.grid)
+    path = cache_dir() / "sound-tables" / name
     if path in _WRITTEN:
         return path
     if any(c in str(path) for c in "\t\n\r"):
@@ -260,6 +261,14 @@ def table_file(problem: Problem) -> Path:
         os.replace(out.name, path)
     _WRITTEN.add(path)
     return path
+
+
+@lru_cache(maxsize=64)
+def _table_data(sound: Sound, grid: Grid) -> tuple[bytes, str]:
+    """A sound model's table as bytes and its file's name (the hash of its text), made once per process: every
+    search of the closed loop asks again."""
+    data = sound_model.table_text(sound, grid).encode()
+    return data, f"{hashlib.sha256(data).hexdigest()[:24]}.txt"
 
 
 def injected(problem: Problem) -> str:

@@ -169,8 +169,9 @@ def table_text(sound: Sound, grid: Grid) -> str:
     ``spec.windows.sound_table``: the bounds, the envelope, each window (shapes, early windows, start windows) with
     the gap required at each instant a condition binds (``SafetySpec.required_gap_m`` of the closing speed this
     module forms from the instant's speed, the speed error and the lane's bound), the speeds and gains. Its first
-    line names it; its second checks it against the verifier (format, road cells, actions, the phantoms' lanes); a
-    sentinel ends it. Doubles as Python's ``repr`` writes them: ``strtod`` reads each back exactly."""
+    line names it; its second checks it against the verifier (format, road cells, actions, the phantoms' lanes), as
+    do the grid's time unit and cell that open the third; a sentinel ends it. Doubles as Python's ``repr`` writes
+    them: ``strtod`` reads each back exactly."""
     table = sound_table(sound, grid)
     b, s, tr = sound.bounds, sound.safety, sound.tracking
     start = "" if sound.start_mps is None else f", measured start speed {sound.start_mps:g} m/s"
@@ -240,7 +241,8 @@ def _tables(shape: SoundShape) -> str:
         "typedef struct { int lane; double dx; } SoundPhantom;  /* dx: read with the scenario (its view) */",
         f"static const double EPS_M = {_f(EPS_M)};",
         "/* the sound model's numbers, read from its table when the verifier starts (sound_load_table) */",
-        "static double UNIT_S, CELL_M, E_X, LEN, FOLLOWER_M, SAME_LOW, SAME_HIGH, ONC_LOW, ONC_HIGH;",
+        f"static const double UNIT_S = {_f(float(grid.time_unit_s))}, CELL_M = {_f(grid.cell)};  /* the grid's */",
+        "static double E_X, LEN, FOLLOWER_M, SAME_LOW, SAME_HIGH, ONC_LOW, ONC_HIGH;",
         "static double START_ERROR_M;  /* sensing error + age */",
         "static int N_SPEEDS, START_SPEED, N_WINDOWS, N_EARLY, START_WINDOW[2], ACTION_SPEED[CONTINUATION];",
         "static double *SPEEDS_MPS, *GAIN_M;",
@@ -508,7 +510,8 @@ static void sound_load_table(const char *path)
 	for (j = 0; j < N_PHANTOMS; j++)
 	{	if (table_int(0, 1, "a phantom's lane") != PHANTOMS[j].lane) { sound_bad_table("other phantoms"); }
 	}
-	UNIT_S = table_number(); CELL_M = table_number(); E_X = table_number(); LEN = table_number();
+	if (table_number() != UNIT_S || table_number() != CELL_M) { sound_bad_table("another grid"); }
+	E_X = table_number(); LEN = table_number();
 	FOLLOWER_M = table_number(); SAME_LOW = table_number(); SAME_HIGH = table_number();
 	ONC_LOW = table_number(); ONC_HIGH = table_number(); START_ERROR_M = table_number();
 	N_SPEEDS = table_int(1, 1000, "speeds");

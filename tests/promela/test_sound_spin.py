@@ -186,6 +186,7 @@ def test_a_table_damaged_in_the_cache_is_written_again(tmp_path: Path, monkeypat
     (lambda t: t.replace("271828", "271829"), "its end"),
     (lambda t: t + "1\n", "more after its end"),
     (lambda t: t.replace("\n", "\n99 ", 1), "another format"),
+    (lambda t: "\n".join(f"2.5 {line}" if k == 2 else line for k, line in enumerate(t.split("\n"))), "another grid"),
 ])
 def test_a_table_that_is_not_the_verifiers_is_refused_in_one_line(
         tmp_path: Path, cut: Callable[[str], str], why: str) -> None:
