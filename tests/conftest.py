@@ -31,7 +31,10 @@ CI_PROFILE = os.environ.get("HYPOTHESIS_PROFILE", "dev") == "ci"
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Skip tests marked requires_spin when spin or gcc is missing (CI installs both)."""
+    """The slow tests first (each takes minutes: started last, one of them would keep a core busy long after the
+    other is idle; ``ci/test.sh`` hands tests to its workers in this order), the rest in their own order; skip tests
+    marked requires_spin when spin or gcc is missing (CI installs both)."""
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)  # stable: each part keeps its order
     missing = [tool for tool in ("spin", "gcc") if shutil.which(tool) is None]
     if not missing:
         return

@@ -153,16 +153,19 @@ def test_every_docs_command_parses_as_printed(page: str, argv: list[str], tmp_pa
 
 #: What a docs/ command is run with where it does not print these options (its defaults are campaigns of minutes to
 #: hours: every cell size, traffic and sensing model, every mutant, a profile's examples): each program's own small
-#: sizes, added; where it prints one, ``OVERRIDES`` sets it. Only --km, --runs and --count, as for the README.
+#: sizes, added; where it prints one, ``OVERRIDES`` sets it. Sizes only (--km, --runs, counts) and Z3's time limit,
+#: which makes an undecided run end sooner and changes nothing else the command does.
 ADDED = {"overtake audit": {"--km": "0.3", "--runs": "1"},
          "overtake simulate": {"--km": "0.3", "--runs": "1"},
          "overtake crossval": {"--count": "5"},
          "python -m ci.bench.audit": {"--km": "0.3"},
-         "python -m ci.bench.physics": {"--km": "0.05"},  # in one process over the whole grid: 48 short drives
+         "python -m ci.bench.physics": {"--km": "0.05"},
+         "python -m ci.bench.speeds": {"--km": "0.3"},  # in one process over the whole grid: 48 short drives
          "python -m ci.bench.sound": {"--count": "5"},
          "python -m ci.bench.commit": {"--count": "5"},
-         "python -m ci.bench.engines_sound": {"--count": "5"},
-         "python -m ci.conformance.tightness": {"--count": "5"},
+         "python -m ci.bench.engines_sound": {"--count": "5", "--timeout": "1"},  # Z3's undecided runs end sooner
+         "python -m ci.bench.crossval": {"--sweep-count": "20"},
+         "python -m ci.conformance.tightness": {"--count": "2"},  # every cell size, profile and model: 32 problems
          "python -m ci.mutation.check": {"--count": "1"}}
 
 
