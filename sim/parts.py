@@ -25,7 +25,7 @@ from sim.sensors import NoisySensor, RaySensor, Reading, SensorModel
 from sim.traffic import FollowingTraffic, PaperTraffic, SpreadTraffic, TrafficModel
 from sim.vehicle import WheeledCar
 from spec.answers import Answer, Strategy
-from spec.assumptions import Bounds, world_bounds
+from spec.assumptions import Bounds, speed_error_mps, world_bounds
 from spec.engines import Engine, check_strategy, get_engine, load_engines, parse_strategy
 from spec.errors import OptionError, check_number
 from spec.faults import DEFAULT_STEERING_OFFSET_DEG, NO_FAULTS, FaultKind, FaultSpec, parse_faults
@@ -98,6 +98,7 @@ class Parts:
     bounds: Bounds | None = None  # the assumptions containment is measured against (None: not measured)
     faults: FaultSpec = NO_FAULTS  # what the fault injectors do to the sensors and the steering (``sim.faults``)
     tracking: bool = False  # the tracking layer between the sensors and the discretiser (``sim.tracking``)
+    speed_error_mps: float = 0.0  # the range-rate readings' error bound, for the tracker's speed intervals
 
 
 @dataclass(frozen=True, slots=True)
@@ -185,7 +186,8 @@ class DriveConfig:
         if self.sensor != "exact":
             sensor = functools.partial(sensor, noise=self.noise)  # type: ignore[call-arg]
         return Parts(planner, traffic=traffic, sensor=sensor, observers=observers, bounds=self.bounds,
-                     faults=self.fault_spec, tracking=self.tracking)
+                     faults=self.fault_spec, tracking=self.tracking,
+                     speed_error_mps=speed_error_mps(self.sensor, self.noise.range_rate_sd_mps))
 
     def to_json(self) -> dict[str, Any]:
         """The configuration as records keep it; event and noise parameters only where the models use them, so that

@@ -31,6 +31,7 @@ class Reading:
     body: int
     dx_m: float
     spread_m: tuple[float, float] = (0.0, 0.0)  # (below, above) dx_m: the vehicle is within [dx - below, dx + above]
+    rate_mps: float | None = None  # the range rate (how fast dx_m grows: a radar's Doppler reading); None: not read
 
     @property
     def interval_m(self) -> tuple[float, float]:
@@ -96,12 +97,14 @@ class Truth:
 
 
 def in_range(av_x_m: float, av_y_m: float, left: list[KinematicCar], oncoming: list[KinematicCar],
-             spec: SensorSpec = SENSORS) -> Truth:
-    """The ground truth: every vehicle in range of its lane's sensor."""
+             spec: SensorSpec = SENSORS, av_speed_mps: float | None = None) -> Truth:
+    """The ground truth: every vehicle in range of its lane's sensor, with its range rate when the AV's own speed
+    along the road is given."""
     candidates = [(Lane.LEFT, car) for car in left if abs(car.x_m - av_x_m) <= spec.left_range_m]
     candidates += [(Lane.RIGHT, car) for car in oncoming
                    if -spec.side_range_m <= car.x_m - av_x_m <= spec.right_range_m]
-    return Truth(tuple(Reading(lane, car.body, car.x_m - av_x_m) for lane, car in candidates),
+    return Truth(tuple(Reading(lane, car.body, car.x_m - av_x_m, rate_mps=None if av_speed_mps is None
+                               else car.velocity_mps - av_speed_mps) for lane, car in candidates),
                  tuple((car.x_m, car.y_m) for _, car in candidates), av_x_m, av_y_m)
 
 
@@ -131,12 +134,15 @@ class RaySensor:
 
 class NoisySensor(RaySensor):
     """The paper's sensors with range noise and missed detections (``spec.physical.NoiseSpec``): each reading the
-    rays report is dropped with probability ``miss_rate``, else its distance gets Gaussian noise."""
+    rays report is dropped with probability ``miss_rate``, else its distance gets Gaussian noise, and its range rate
+    (when read) Gaussian noise of its own, drawn from a generator spawned for it (the range's draws stay those of
+    the seed)."""
 
     def __init__(self, scene: Scene, rng: np.random.Generator, spec: SensorSpec = SENSORS,
                  noise: NoiseSpec = NOISE) -> None:
         super().__init__(scene, rng, spec)
         self.noise = noise
+        self.rate_rng = rng.spawn(1)[0]
 
     def read(self, truth: Truth) -> tuple[Reading, ...]:
         seen = []
@@ -144,5 +150,8 @@ class NoisySensor(RaySensor):
             missed = self.rng.random() < self.noise.miss_rate
             error_m = float(self.rng.normal(0.0, self.noise.range_sd_m))
             if not missed:
-                seen.append(replace(reading, dx_m=reading.dx_m + error_m))
+                rate = reading.rate_mps
+                if rate is not None:
+                    rate += float(self.rate_rng.normal(0.0, self.noise.range_rate_sd_mps))
+                seen.append(replace(reading, dx_m=reading.dx_m + error_m, rate_mps=rate))
         return tuple(seen)

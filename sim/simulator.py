@@ -40,7 +40,7 @@ from sim.safety import SafetyMonitor
 from sim.sensors import RaySensor, Reading, SensorModel, in_range, oncoming_view_m
 from sim.summary import Failure, RunSummary, Takeover
 from sim.tolerance import ToleranceReport, Violation
-from sim.tracking import Detection, Tracker
+from sim.tracking import Detection, Track, Tracker
 from sim.vehicle import KinematicCar, Pose, first_contact
 from spec.actions import ACTION_RULES, Action
 from spec.answers import Answer, Status
@@ -143,8 +143,12 @@ class Simulator:
         self._room: bool = False  # whether the fallback opens the gap ahead (``_room_needed``), and on which sweep
         self._room_sweep: tuple[Reading, ...] | None = None
         # with tracking, the planner sees the tracker's vehicles (``sim.tracking``); bodies only for bookkeeping
-        self.tracker = Tracker(self.parts.bounds) if self.parts.tracking and self.parts.bounds is not None else None
+        self.tracker = (Tracker(self.parts.bounds, speed_error_mps=self.parts.speed_error_mps)
+                        if self.parts.tracking and self.parts.bounds is not None else None)
         self.track_body: dict[int, int] = {}  # track -> the body of the reading last assigned to it (bookkeeping)
+        #: when a list (set by a measurement, ``ci.bench.speeds``): every sweep's confirmed tracks read this sweep, each
+        #: as (seconds since first read, its speed interval, its vehicle's true speed along its direction of travel)
+        self.speed_log: list[tuple[float, tuple[float, float], float]] | None = None
         self.unresolved: frozenset[Lane] = frozenset()  # lanes where the tracker holds a contradiction
         self.controls = 0  # control steps since the scene was assembled: the sensors sweep on every ``sweep_every``-th
         self._on_sweep()
@@ -383,17 +387,26 @@ class Simulator:
         snapshot is never older than the car's pose."""
         return self.controls % self.sweep_every == 0
 
+    def _log_speeds(self, tracks: tuple[Track, ...]) -> None:
+        """Each track read this sweep beside its vehicle's true speed (the measurement's only look at the truth)."""
+        speeds = {car.body: abs(car.velocity_mps) for car in (*self.traffic.left, *self.traffic.oncoming)}
+        assert self.speed_log is not None
+        self.speed_log += [(self.summary.sim_time_s - t.since_s, t.speed_mps, speeds[self.track_body[t.id]])
+                           for t in tracks if t.read_m is not None and self.track_body.get(t.id) in speeds]
+
     def _on_sweep(self) -> None:
         """A sweep: the sensors read the truth (through any fault injectors), and the steering fault moves on."""
         pose = self.car.pose()
         self.summary.sweeps += 1
         self.swept_at = (self.origin_km * 1000 + pose.x_m, self.summary.sim_time_s)
-        raw = self.sensor.read(in_range(pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming))
+        raw = self.sensor.read(in_range(pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming,
+                                        av_speed_mps=pose.speed_mps))
         if self.tracker is None:
             self.sweep = raw
         else:
             view = self.tracker.update(self.summary.sim_time_s, pose.x_m, pose.speed_mps,
-                                       None if raw is None else [Detection(r.lane, r.dx_m) for r in raw], pose.y_m)
+                                       None if raw is None else [Detection(r.lane, r.dx_m, r.rate_mps) for r in raw],
+                                       pose.y_m)
             for track in (*view.planned, *view.held):
                 if raw is not None and track.detection is not None:
                     self.track_body[track.id] = raw[track.detection].body
@@ -405,6 +418,8 @@ class Simulator:
                                        (0.0, 0.0) if t.read_m is not None else (t.place_m - t.lo_m, t.hi_m - t.place_m))
                                for t in told)
             self.unresolved = view.unresolved
+            if self.speed_log is not None:
+                self._log_speeds(view.planned)
         self._sense_breach(pose)
         if self.takeover is not None:
             self._remember_faults()  # the fallback acts on every sweep, not only on a decision's

@@ -21,10 +21,23 @@ from spec.assumptions import Bounds
 from spec.lanes import Lane
 from spec.physical import CAR, SENSORS, SensorSpec
 from spec.sound import Vehicle, reach_m
-from spec.tracking import CONFIRM_SWEEPS, GATE_EPS_M, Explained, TrackState
+from spec.tracking import (
+    CONFIRM_SWEEPS,
+    GATE_EPS_M,
+    UNKNOWN_SPEED,
+    VEHICLE_SPEED_CHANGE,
+    Explained,
+    Speed,
+    SpeedChange,
+    TrackState,
+    grown_speed_mps,
+    narrowed_speed_mps,
+    read_speed_mps,
+)
 
 FORBIDDEN = 1e12  # the cost of a pair the gates do not allow
 BEYOND = 1e6  # added to the cost of a reading beyond a track's interval (its vehicle breaking its bounds)
+SPEED_SLACK_MPS = 1e-6  # floating-point slack on a range rate's error bound (exact readings have none)
 HELD = 1e3  # added to the cost of a reading for a held appearance: a confirmed track whose interval holds it wins
 
 
@@ -45,10 +58,12 @@ def hides(av_y_m: float, lane: Lane, dx_m: float, other_lane: Lane, other_dx_m: 
 
 @dataclass(frozen=True, slots=True)
 class Detection:
-    """One reading as the tracker gets it: a lane and a distance ahead of the AV; no vehicle identity."""
+    """One reading as the tracker gets it: a lane, a distance ahead of the AV and, when read, how fast that distance
+    grows (the range rate); no vehicle identity."""
 
     lane: Lane
     dx_m: float
+    rate_mps: float | None = None
 
 
 @dataclass(slots=True)
@@ -67,6 +82,10 @@ class Track:
     born: Explained = Explained.ENTERED
     read_m: float | None = None  # this sweep's reading, if one was assigned (road coordinates)
     detection: int | None = None  # the index of that reading in the sweep (for the simulator's bookkeeping only)
+    #: its speed along its direction of travel (``spec.tracking``: grown by ``SpeedChange``, narrowed by range rates)
+    speed_mps: Speed = UNKNOWN_SPEED
+    speed_broke: bool = False  # this sweep's range rate fell outside the interval: it starts again from the reading
+    since_s: float = 0.0  # when it was first read
 
     @property
     def middle_m(self) -> float:
@@ -89,10 +108,13 @@ class TrackedSweep:
 
 @dataclass
 class Tracker:
-    """Tracks across sweeps under ``bounds`` (the planner's assumptions: the same sets it proves plans against)."""
+    """Tracks across sweeps under ``bounds`` (the planner's assumptions: the same sets it proves plans against); each
+    track's speed interval under ``change``, range-rate readings within ``speed_error_mps``."""
 
     bounds: Bounds
     sensors: SensorSpec = SENSORS
+    speed_error_mps: float = 0.0
+    change: SpeedChange = VEHICLE_SPEED_CHANGE
     tracks: list[Track] = field(default_factory=list)
     t_s: float | None = None
     av_x_m: float = 0.0
@@ -136,6 +158,7 @@ class Tracker:
         for t in self.tracks:
             t.lo_m, t.hi_m = reach_m(Vehicle(t.lane, None, t.lo_m, t.hi_m, ""), self.bounds, dt_s)
             t.read_m = t.detection = None
+            t.speed_mps, t.speed_broke = grown_speed_mps(t.speed_mps, dt_s, self.change), False
         self.t_s = t_s
         if detections is None:
             self.av_x_m = av_x_m
@@ -147,6 +170,7 @@ class Tracker:
         for lane in Lane:  # pass 1: each lane's readings to its tracks
             mine = [t for t in self.tracks if t.lane is lane]
             dets = [(i, av_x_m + d.dx_m) for i, d in enumerate(detections) if d.lane is lane]
+            rates = {i: d.rate_mps for i, d in enumerate(detections) if d.lane is lane}
             assigned = self._assign(lane, mine, dets, dt_s, e_m)
             for a, t in enumerate(mine):
                 if a not in assigned:
@@ -158,6 +182,7 @@ class Tracker:
                 t.lo_m, t.hi_m, t.read_m, t.detection = lo, max(lo, hi), x, index
                 t.hits, t.seen, t.missing = t.hits + 1, t.seen + 1, 0
                 t.state = (TrackState.SEEN if inside else TrackState.BROKE_BOUNDS) if t.confirmed else TrackState.HELD
+                self._read_speed(t, rates[index], av_speed_mps)
             taken = set(assigned.values())
             left_over += [(lane, index, x) for b, (index, x) in enumerate(dets) if b not in taken]
         # pass 2: what hides a vehicle now is a confirmed vehicle read now (an unexplained reading hides nothing)
@@ -183,11 +208,25 @@ class Tracker:
             else:
                 born = Explained.APPEARED
             held = born is Explained.APPEARED
-            self.tracks.append(Track(self.next_id, lane, x - e_m, x + e_m, TrackState.HELD if held else TrackState.SEEN,
-                                     confirmed=not held, born=born, read_m=x, detection=index))
+            track = Track(self.next_id, lane, x - e_m, x + e_m, TrackState.HELD if held else TrackState.SEEN,
+                          confirmed=not held, born=born, read_m=x, detection=index, since_s=t_s)
+            self._read_speed(track, detections[index].rate_mps, av_speed_mps)
+            track.speed_broke = False  # nothing to break yet
+            self.tracks.append(track)
             self.next_id += 1
         self._confirm_and_retire(av_x_m)
         return self._view()
+
+    def _read_speed(self, t: Track, rate_mps: float | None, av_speed_mps: float) -> None:
+        """A range rate read for ``t``: its speed interval narrowed to what the reading allows, or (the two share no
+        speed) started again from the reading, flagged."""
+        if rate_mps is None:
+            return
+        read = read_speed_mps(t.lane, rate_mps, av_speed_mps, self.speed_error_mps + SPEED_SLACK_MPS)
+        narrowed = narrowed_speed_mps(t.speed_mps, read)
+        t.speed_broke = narrowed is None
+        # read driving backwards beyond its error: it breaks its bounds, and is taken as standing
+        t.speed_mps = narrowed if narrowed is not None else (read[0], max(read))
 
     def _assign(self, lane: Lane, mine: list[Track], dets: list[tuple[int, float]], dt_s: float,
                 e_m: float) -> dict[int, int]:

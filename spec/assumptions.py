@@ -147,6 +147,15 @@ SENSING_RULES: dict[str, str] = {"exact": "exact sensing: no error",
                                  "noisy": f"{SENSING_SDS:g} x the noisy sensor's range sd"}
 
 
+def speed_error_mps(sensing: str, range_rate_sd_mps: float = NOISE.range_rate_sd_mps) -> float:
+    """The error bound of a sensing model's range-rate readings (the tracker's speed intervals, ``spec.tracking``), by
+    the range's rule (``SENSING_RULES``): none when exact, ``SENSING_SDS`` times the rate noise's sd when noisy."""
+    if sensing not in SENSING_RULES:
+        raise OptionError("--sensor", sensing,
+                          f"no error rule for this sensing model (known: {', '.join(SENSING_RULES)})")
+    return SENSING_SDS * check_number("range_rate_sd_mps", range_rate_sd_mps) if sensing == "noisy" else 0.0
+
+
 def world_bounds(traffic: str, sensing: str, range_sd_m: float = NOISE.range_sd_m, scale: float = 1.0) -> Bounds:
     """The planner's bounds for a world of ``traffic`` and ``sensing`` (``TRAFFIC_SPEEDS``, ``SENSING_RULES``), phantoms
     on; ``scale`` multiplies each speed interval's half-width about its middle (never below a standstill) and the

@@ -163,6 +163,15 @@ MUTANTS: tuple[Mutant, ...] = (
            "self.bounds.speeds(lane).high_mps) * dt_s + e_m", "self.bounds.speeds(lane).high_mps) * dt_s",
            "a new reading near a range edge explained as entering only within a sweep's travel, the sensing error "
            "left out"),
+    Mutant("tracking-speed-braking-dt-squared", "spec/tracking.py",
+           "max(0.0, speed[0] - change.brake_mps2 * dt_s)", "max(0.0, speed[0] - change.brake_mps2 * dt_s * dt_s)",
+           "a track's speed interval grown between sweeps by b x dt^2, not b x dt: a vehicle braking hard leaves it",
+           ("tests/sim/test_tracking_speed.py",)),
+    Mutant("tracking-speed-reading-half-its-error", "spec/tracking.py",
+           "return max(0.0, speed_mps - error_mps), speed_mps + error_mps",
+           "return max(0.0, speed_mps - error_mps / 2), speed_mps + error_mps",
+           "a range-rate reading taken as allowing half its error bound below it",
+           ("tests/sim/test_tracking_speed.py",)),
     # -- the sound model (every engine would share these declarations: the continuous-motion checks must see them)
     # -- the sound model's translations, one engine each (caught by crossval --model sound) ------------
     Mutant("spin-sound-widening-a-tick-late", "promela/sound.py",

@@ -82,7 +82,7 @@ def true(truth: Truth) -> list[tuple[str, float]]:
 
 
 def test_the_tracker_reads_no_vehicle_identity() -> None:
-    assert [f.name for f in dataclasses.fields(Detection)] == ["lane", "dx_m"]
+    assert [f.name for f in dataclasses.fields(Detection)] == ["lane", "dx_m", "rate_mps"]
 
 
 def test_without_faults_every_vehicle_is_planned_where_it_is_and_nothing_is_flagged() -> None:
