@@ -163,6 +163,10 @@ MUTANTS: tuple[Mutant, ...] = (
            "self.bounds.speeds(lane).high_mps) * dt_s + e_m", "self.bounds.speeds(lane).high_mps) * dt_s",
            "a new reading near a range edge explained as entering only within a sweep's travel, the sensing error "
            "left out"),
+    Mutant("containment-reading-error-doubled", "sim/containment.py",
+           "    error_m, (lo, hi) = bounds.sensing_error_m, r.interval_m",
+           "    error_m, (lo, hi) = 2 * bounds.sensing_error_m, r.interval_m",
+           "the AV's monitor allows a reading twice its own sensing error: it senses a breach 1.5 m late"),
     Mutant("tracking-speed-braking-dt-squared", "spec/tracking.py",
            "max(0.0, speed[0] - change.brake_mps2 * dt_s)", "max(0.0, speed[0] - change.brake_mps2 * dt_s * dt_s)",
            "a track's speed interval grown between sweeps by b x dt^2, not b x dt: a vehicle braking hard leaves it",
