@@ -233,7 +233,8 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("sound-goal-oncoming-nearest-end", "spec/sound.py",
            "not self.passed(v, x_m, t_s) for v in self.oncoming if v.index is not None))",
            "self.oncoming_low(v, t_s) + length > x_m for v in self.oncoming if v.index is not None))",
-           "an oncoming vehicle counted past the AV when its nearest position is (not every position)"),
+           "an oncoming vehicle counted past the AV when its nearest position is (not every position)",
+           ("tests/oracle/test_bmc_sound.py",)),  # Z3's goal, translated apart, disagrees: 246 s later by crossval
     Mutant("sound-phantoms-dropped", "spec/sound.py",
            "    for p in sound.phantoms():  # the whole unseen stretch",
            "    for p in sound.phantoms()[:0]:  # the whole unseen stretch",
