@@ -24,6 +24,7 @@ from spec.sound import Vehicle, reach_m
 from spec.tracking import (
     CONFIRM_SWEEPS,
     GATE_EPS_M,
+    RATE_EPS_MPS,
     UNKNOWN_SPEED,
     VEHICLE_SPEED_CHANGE,
     Explained,
@@ -37,7 +38,6 @@ from spec.tracking import (
 
 FORBIDDEN = 1e12  # the cost of a pair the gates do not allow
 BEYOND = 1e6  # added to the cost of a reading beyond a track's interval (its vehicle breaking its bounds)
-SPEED_SLACK_MPS = 1e-6  # floating-point slack on a range rate's error bound (exact readings have none)
 HELD = 1e3  # added to the cost of a reading for a held appearance: a confirmed track whose interval holds it wins
 
 
@@ -170,7 +170,6 @@ class Tracker:
         for lane in Lane:  # pass 1: each lane's readings to its tracks
             mine = [t for t in self.tracks if t.lane is lane]
             dets = [(i, av_x_m + d.dx_m) for i, d in enumerate(detections) if d.lane is lane]
-            rates = {i: d.rate_mps for i, d in enumerate(detections) if d.lane is lane}
             assigned = self._assign(lane, mine, dets, dt_s, e_m)
             for a, t in enumerate(mine):
                 if a not in assigned:
@@ -182,7 +181,7 @@ class Tracker:
                 t.lo_m, t.hi_m, t.read_m, t.detection = lo, max(lo, hi), x, index
                 t.hits, t.seen, t.missing = t.hits + 1, t.seen + 1, 0
                 t.state = (TrackState.SEEN if inside else TrackState.BROKE_BOUNDS) if t.confirmed else TrackState.HELD
-                self._read_speed(t, rates[index], av_speed_mps)
+                self._read_speed(t, detections[index].rate_mps, av_speed_mps)
             taken = set(assigned.values())
             left_over += [(lane, index, x) for b, (index, x) in enumerate(dets) if b not in taken]
         # pass 2: what hides a vehicle now is a confirmed vehicle read now (an unexplained reading hides nothing)
@@ -222,7 +221,7 @@ class Tracker:
         speed) started again from the reading, flagged."""
         if rate_mps is None:
             return
-        read = read_speed_mps(t.lane, rate_mps, av_speed_mps, self.speed_error_mps + SPEED_SLACK_MPS)
+        read = read_speed_mps(t.lane, rate_mps, av_speed_mps, self.speed_error_mps + RATE_EPS_MPS)
         narrowed = narrowed_speed_mps(t.speed_mps, read)
         t.speed_broke = narrowed is None
         # read driving backwards beyond its error: it breaks its bounds, and is taken as standing

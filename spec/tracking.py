@@ -62,6 +62,9 @@ class TrackState(enum.Enum):
 
 #: Slack on the speed interval's checks (exact readings of a constant speed make intervals of zero width).
 SPEED_EPS_MPS = 1e-9
+#: Floating-point slack on a range-rate reading's error bound, as ``GATE_EPS_M`` on a position's (exact readings have
+#: none).
+RATE_EPS_MPS = 1e-6
 
 
 @dataclass(frozen=True, slots=True)

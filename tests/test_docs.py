@@ -159,8 +159,8 @@ ADDED = {"overtake audit": {"--km": "0.3", "--runs": "1"},
          "overtake simulate": {"--km": "0.3", "--runs": "1"},
          "overtake crossval": {"--count": "5"},
          "python -m ci.bench.audit": {"--km": "0.3"},
-         "python -m ci.bench.physics": {"--km": "0.05"},
-         "python -m ci.bench.speeds": {"--km": "0.3"},  # in one process over the whole grid: 48 short drives
+         "python -m ci.bench.physics": {"--km": "0.05"},  # in one process over the whole grid: 48 short drives
+         "python -m ci.bench.speeds": {"--km": "0.3"},
          "python -m ci.bench.sound": {"--count": "5"},
          "python -m ci.bench.commit": {"--count": "5"},
          "python -m ci.bench.engines_sound": {"--count": "5", "--timeout": "1"},  # Z3's undecided runs end sooner
