@@ -56,5 +56,6 @@ def _beyond(problem: Problem) -> SearchResult:
 
 INTERPRETER = register(
     Engine("interpreter", (Strategy.SENSIBLE, Strategy.SHORTEST, Strategy.OPTIMAL), _solve,
-           "Python reference interpreter and planners", _beyond, sound=True, commit=True)
+           "Python reference interpreter and planners", _beyond, sound=True, commit=True,
+           measured_speeds=True)
 )

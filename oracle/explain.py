@@ -87,7 +87,7 @@ def _solver(scenario: Scenario, kind: ModelKind, literals: dict[Vehicle, z3.Bool
 def keep_only(scenario: Scenario, keep: set[Vehicle]) -> Scenario:
     """The scenario with only the vehicles in ``keep`` (targets: those kept among the original targets; the sound
     model's assumptions, if any, unchanged; what the snapshot measured of each kept vehicle, ``left_m`` and
-    ``right_m``, kept with it: a vehicle read sharper than its cell stays so)."""
+    ``right_m``, and their speeds, kept with it: a vehicle read sharper than its cell stays so)."""
     targets = set(scenario.target_indices)
     left_i = [i for i in range(len(scenario.left_lane)) if (Lane.LEFT, i) in keep]
     right_i = [i for i in range(len(scenario.right_lane)) if (Lane.RIGHT, i) in keep]
@@ -97,6 +97,9 @@ def keep_only(scenario: Scenario, keep: set[Vehicle]) -> Scenario:
                             grid=scenario.grid)
     measured = sensed(reduced, None if scenario.left_m is None else tuple(scenario.left_m[i] for i in left_i),
                       None if scenario.right_m is None else tuple(scenario.right_m[i] for i in right_i))
+    measured = replace(measured, left_mps=None if scenario.left_mps is None else tuple(
+        scenario.left_mps[i] for i in left_i), right_mps=None if scenario.right_mps is None else tuple(
+        scenario.right_mps[i] for i in right_i))
     return replace(measured, sound=scenario.sound)
 
 

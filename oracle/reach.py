@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 from spec.actions import ACTION_RULES, Action
 from spec.cells import left_cell, oncoming_cell, oncoming_extent_m
+from spec.dynamics import Dynamics
 from spec.grid import Grid
 from spec.lanes import Lane
 from spec.models import GoalRule
@@ -34,7 +35,7 @@ from spec.motion import Ramp, action_speed_mps, ramp_s
 from spec.physical import LOOP
 from spec.safety import Conflict
 from spec.scenario import Scenario
-from spec.sound import Sound, Vehicle, follower_limit_m, vehicles
+from spec.sound import Sound, Vehicle, follower_limit_m, measured_dynamics, reach_m, slowest_ahead_mps, vehicles
 
 #: The longest step between two samples of the exact check (the issue's 10 ms).
 MAX_DT_S = 0.01
@@ -70,9 +71,11 @@ class Path:
     """The AV's reference through a plan and the minimal-risk manoeuvre after it: speed, position, lanes."""
 
     def __init__(self, actions: Sequence[Action], sound: Sound, grid: Grid, lane: Lane,
-                 oncoming_far_m: float = 0.0) -> None:
+                 oncoming_far_m: float = 0.0, hold_floor_mps: float | None = None) -> None:
         """``oncoming_far_m``: where the farthest oncoming vehicle may start (a phantom's edge included), for how long
-        a path that ends in the right lane is followed."""
+        a path that ends in the right lane is followed; ``hold_floor_mps``: the slowest a vehicle ahead may come to
+        drive (``spec.sound.slowest_ahead_mps``; None: its lane's slowest), what the manoeuvre brakes to."""
+        floor = sound.bounds.same_mps.low_mps if hold_floor_mps is None else hold_floor_mps
         self.sound, self.grid = sound, grid
         start_mps = grid.speed if sound.start_mps is None else sound.start_mps
         speeds = [action_speed_mps(a, grid) for a in actions]
@@ -90,7 +93,7 @@ class Path:
                 r = ramp_s(speeds[k - 1], speeds[k])
                 ramps.append(Ramp(self.bounds_s[k] - r / 2, r, speeds[k] - speeds[k - 1]))
         last = speeds[-1] if speeds else start_mps
-        hold = sound.minimal_risk.hold_mps(last, sound.bounds.same_mps.low_mps)
+        hold = sound.minimal_risk.hold_mps(last, floor)
         brake = sound.minimal_risk.ramp(t, last, hold)  # the manoeuvre as spec.envelope declares it
         if brake is not None:
             ramps.append(brake)
@@ -165,9 +168,18 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
     path = scenario_path(scenario, actions)
     tr, b, length = sound.tracking, sound.bounds, sound.safety.vehicle_length_m
     cars = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid, sound, scenario.left_m,
-                    scenario.right_m)
-    fastest_vehicle = max(b.same_mps.high_mps, b.oncoming_mps.high_mps)
-    rate = path.max_speed + tr.speed_mps + fastest_vehicle + sound.safety.time_gap_s * path.max_accel
+                    scenario.right_m, scenario.left_mps, scenario.right_mps)
+    measured = [c.dynamics for c in cars if c.dynamics is not None]
+    fastest_vehicle = max([b.same_mps.high_mps, b.oncoming_mps.high_mps] + [d.highest_mps for d in measured])
+    vehicle_accel = max([0.0] + [max(d.change.accel_mps2, d.change.brake_mps2) for d in measured])
+    rate = path.max_speed + tr.speed_mps + fastest_vehicle + sound.safety.time_gap_s * (path.max_accel
+                                                                                       + vehicle_accel)
+
+    def speeds(c: Vehicle, t: float) -> tuple[float, float]:
+        if c.dynamics is not None:
+            return c.dynamics.speeds_mps(t)
+        sp = b.same_mps if c.lane is Lane.LEFT else b.oncoming_mps
+        return sp.low_mps, sp.high_mps
 
     def worst(t: float, lanes: frozenset[Lane], entering: bool, behind: set[int]) -> tuple[float, Breach | None]:
         """The least margin over the conflicts at ``t`` and the breach it would be."""
@@ -176,23 +188,16 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
         rear = not b.followers_react and v < b.same_mps.high_mps - TOLERANCE_M  # followers closing in: BEHIND
         for i, c in enumerate(cars):
             options = []
+            low, high = reach_m(c, b, t)
+            slow, fast = speeds(c, t)
             if rear and c.lane is Lane.LEFT and Lane.LEFT in lanes and i in behind:
-                high = c.hi_m + b.same_mps.high_mps * t
-                options.append((Conflict.BEHIND, (x - tr.position_m) - high - length,
-                                b.same_mps.high_mps - v + tr.speed_mps))
+                options.append((Conflict.BEHIND, (x - tr.position_m) - high - length, fast - v + tr.speed_mps))
             if c.lane is Lane.LEFT and Lane.LEFT in lanes and i not in behind:
-                low = c.lo_m + b.same_mps.low_mps * t
-                options.append((Conflict.AHEAD, low - (x + tr.position_m) - length,
-                                v + tr.speed_mps - b.same_mps.low_mps))
+                options.append((Conflict.AHEAD, low - (x + tr.position_m) - length, v + tr.speed_mps - slow))
                 if entering:
-                    high = c.hi_m + b.same_mps.high_mps * t
-                    options.append((Conflict.CUT_IN, (x - tr.position_m) - high - length,
-                                    b.same_mps.high_mps - v + tr.speed_mps))
-            if c.lane is Lane.RIGHT and Lane.RIGHT in lanes and c.hi_m - b.oncoming_mps.low_mps * t + length > \
-                    x - tr.position_m:
-                low = c.lo_m - b.oncoming_mps.high_mps * t
-                options.append((Conflict.ONCOMING, low - (x + tr.position_m) - length,
-                                v + tr.speed_mps + b.oncoming_mps.high_mps))
+                    options.append((Conflict.CUT_IN, (x - tr.position_m) - high - length, fast - v + tr.speed_mps))
+            if c.lane is Lane.RIGHT and Lane.RIGHT in lanes and high + length > x - tr.position_m:
+                options.append((Conflict.ONCOMING, low - (x + tr.position_m) - length, v + tr.speed_mps + fast))
             if not options:
                 continue
             margins = [(gap - sound.safety.required_gap_m(closing), conflict, gap, closing)
@@ -226,7 +231,7 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
         else:  # in the lane: a vehicle certainly behind follows the AV from now on
             x = path.position(t)
             behind |= {i for i, c in enumerate(cars) if c.lane is Lane.LEFT
-                       and c.hi_m + b.same_mps.high_mps * t + length <= x - tr.position_m}
+                       and reach_m(c, b, t)[1] + length <= x - tr.position_m}
         margin, found = worst(t, lanes, entering, behind)
         if margin < -TOLERANCE_M:
             return found
@@ -245,7 +250,8 @@ def scenario_path(scenario: Scenario, actions: Sequence[Action]) -> Path:
     far = max([oncoming_extent_m(c, scenario.grid)[1] for c in scenario.right_lane]
               + [hi for _, hi in scenario.right_m or ()]
               + [p.dx_m for p in _sound(scenario).phantoms() if p.lane is Lane.RIGHT], default=0.0)
-    return Path(actions, _sound(scenario), scenario.grid, scenario.lane, far)
+    return Path(actions, _sound(scenario), scenario.grid, scenario.lane, far,
+                slowest_ahead_mps(_sound(scenario), _drivers(scenario)))
 
 
 def _sound(scenario: Scenario) -> Sound:
@@ -260,17 +266,26 @@ class Motion:
 
     name: str
     starts_m: tuple[float, ...]  # true start of each vehicle, metres ahead of the AV (phantoms: their edge or beyond)
-    speeds: tuple[tuple[tuple[float, float], ...], ...]  # per vehicle: (from time, speed) steps, first from 0
+    #: per vehicle: (from time, speed) steps, first from 0; for a vehicle with its own dynamics (``Vehicle.dynamics``)
+    #: the speed it heads for from then, at most at its acceleration bounds, from its ``start_mps``
+    speeds: tuple[tuple[tuple[float, float], ...], ...]
     av_offset: tuple[tuple[float, float], ...]  # (from time, deviation rate m/s); the deviation stays within e_x
+    start_mps: tuple[float | None, ...] = ()  # per vehicle: its speed at the start when it has its own dynamics
 
 
 def _drivers(scenario: Scenario) -> tuple[Vehicle, ...]:
     """The vehicles a motion drives, from the declarations alone (not ``spec.sound.vehicles``, whose extents and
     phantoms are what the motions check): the scenario's vehicles (their starts are drawn through the discretiser)
     and a vehicle for each phantom as the snapshot declares them (``motions`` starts it at the edge or beyond)."""
-    cars = [Vehicle(Lane.LEFT, i, math.nan, math.nan, f"left_lane[{i}] (cell {c})")
+    sound = _sound(scenario)
+
+    def own(lane: Lane, i: int) -> Dynamics | None:
+        measured = scenario.left_mps if lane is Lane.LEFT else scenario.right_mps
+        return None if measured is None else measured_dynamics(sound, lane, measured[i]).aged(sound.bounds.latency_s)
+
+    cars = [Vehicle(Lane.LEFT, i, math.nan, math.nan, f"left_lane[{i}] (cell {c})", own(Lane.LEFT, i))
             for i, c in enumerate(scenario.left_lane)]
-    cars += [Vehicle(Lane.RIGHT, i, math.nan, math.nan, f"right_lane[{i}] (cell {c})")
+    cars += [Vehicle(Lane.RIGHT, i, math.nan, math.nan, f"right_lane[{i}] (cell {c})", own(Lane.RIGHT, i))
              for i, c in enumerate(scenario.right_lane)]
     cars += [Vehicle(p.lane, None, p.dx_m, p.dx_m, f"phantom ({p.why}, {p.dx_m:+g} m)")
              for p in _sound(scenario).phantoms()]
@@ -300,8 +315,16 @@ def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, c
     ev = sound.tracking.speed_mps
 
     def interval(c: Vehicle) -> tuple[float, float]:
+        """The speeds a vehicle drives (its lane's), or heads for (its own dynamics: a standstill up to its top)."""
+        if c.dynamics is not None:
+            return 0.0, c.dynamics.highest_mps
         sp = b.same_mps if c.lane is Lane.LEFT else b.oncoming_mps
         return sp.low_mps, sp.high_mps
+
+    def start_speeds(which: int | None) -> tuple[float | None, ...]:
+        """A measured vehicle's speed at the start: the low (0) or high (1) end of its interval, or anywhere."""
+        return tuple(None if c.dynamics is None else (c.dynamics.speed_mps[which] if which is not None
+                                                      else rng.uniform(*c.dynamics.speed_mps)) for c in cars)
 
     # a phantom's vehicle: at its edge, or into its unseen stretch, as far as it can still meet the AV within the plan
     # (closing at most at its lane's top speed and the AV's): a vehicle farther off may meet a later step
@@ -334,16 +357,20 @@ def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, c
 
     ahead, behind = ((0.0, ev),), ((0.0, -ev),)
     mid = path.end_s / 2
-    out = [Motion("corner: slowest, readings low, AV ahead", starts("low"), constant(0), ahead),
-           Motion("corner: fastest, readings high, AV behind", starts("high"), constant(1), behind),
-           Motion("corner: fastest, readings high, AV ahead", starts("high"), constant(1), ahead),
-           Motion("corner: slowest, readings low, AV behind", starts("low"), constant(0), behind),
-           Motion(f"corner: slowest then fastest at {mid:.1f} s", starts("low"), switched(0, mid), ahead),
-           Motion(f"corner: fastest then slowest at {mid:.1f} s", starts("high"), switched(1, mid), ahead)]
+    low, high = start_speeds(0), start_speeds(1)
+    out = [Motion("corner: slowest, readings low, AV ahead", starts("low"), constant(0), ahead, low),
+           Motion("corner: fastest, readings high, AV behind", starts("high"), constant(1), behind, high),
+           Motion("corner: fastest, readings high, AV ahead", starts("high"), constant(1), ahead, high),
+           Motion("corner: slowest, readings low, AV behind", starts("low"), constant(0), behind, low),
+           Motion(f"corner: slowest then fastest at {mid:.1f} s", starts("low"), switched(0, mid), ahead, low),
+           Motion(f"corner: fastest then slowest at {mid:.1f} s", starts("high"), switched(1, mid), ahead, high)]
+    if any(c.dynamics is not None for c in cars):  # braking to a standstill at the worst instants
+        out += [Motion(f"corner: fastest, then braking to a standstill at {k / 4 * path.end_s:.1f} s",
+                       starts("high"), switched(1, k / 4 * path.end_s), ahead, high) for k in range(1, 4)]
     if any(c.index is None for c in cars):
         extremes = (("slowest", "low", 0), ("fastest", "high", 1))
         out += [Motion(f"corner: {name}, phantoms {k}/{HIDDEN_STEPS} into their stretch",
-                       starts(pick, k / HIDDEN_STEPS), constant(which), ahead)
+                       starts(pick, k / HIDDEN_STEPS), constant(which), ahead, start_speeds(which))
                 for k in range(1, HIDDEN_STEPS + 1) for name, pick, which in extremes]
     for k in range(count):
         schedules = []
@@ -362,7 +389,7 @@ def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, c
             if t >= end_s:
                 break
             offs.append((t, rng.uniform(-ev, ev)))
-        out.append(Motion(f"sampled #{k}", starts("any", None), tuple(schedules), tuple(offs)))
+        out.append(Motion(f"sampled #{k}", starts("any", None), tuple(schedules), tuple(offs), start_speeds(None)))
     return out
 
 
@@ -391,6 +418,7 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
     cars = _drivers(scenario)
     length, ex, g_min = sound.safety.vehicle_length_m, sound.tracking.position_m, sound.safety.min_gap_m
     pos, idx = list(motion.starts_m), [0] * len(cars)
+    own = [motion.start_mps[i] if motion.start_mps and c.dynamics is not None else None for i, c in enumerate(cars)]
     dev, dev_k = 0.0, 0
     times = path.times(dt_s)
     # at the start in the left lane: behind with bumpers clear (``follower_limit_m``; nearer is an unsafe start)
@@ -407,12 +435,13 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
         lanes, entering = path.occupancy(t)
         followers = followers_now(followers, was_entering, entering, lanes, cars, pos, x)
         was_entering = entering
-        speeds = []
+        speeds: list[float] = []
         for i in range(len(cars)):
             sched = motion.speeds[i]
             while idx[i] + 1 < len(sched) and sched[idx[i] + 1][0] <= t:
                 idx[i] += 1
-            speeds.append(sched[idx[i]][1])
+            now = own[i]
+            speeds.append(sched[idx[i]][1] if now is None else now)
         if not goal_checked and t >= path.end_s:
             goal_checked = True
             found = _goal_breach(scenario, goal, cars, pos, x, motion.name, t)
@@ -425,11 +454,26 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
         step = (times[k + 1] - t) if k + 1 < len(times) else 0.0
         dev = max(-ex, min(ex, dev + rate * step))
         for i, c in enumerate(cars):
-            move = speeds[i] * step
+            d, now = c.dynamics, own[i]
+            if d is not None and now is not None:
+                move, own[i] = _approach(now, motion.speeds[i][idx[i]][1], step, d.change.accel_mps2,
+                                         d.change.brake_mps2)
+            else:
+                move = speeds[i] * step
             pos[i] = pos[i] + move if c.lane is Lane.LEFT else pos[i] - move
             if i in followers and sound.bounds.followers_react:
                 pos[i] = min(pos[i], path.position(t + step) + dev - length - g_min)
     return None
+
+
+def _approach(speed_mps: float, target_mps: float, dt_s: float, accel_mps2: float,
+              brake_mps2: float) -> tuple[float, float]:
+    """The distance covered in ``dt_s`` and the speed then, heading from ``speed_mps`` for ``target_mps`` at the
+    given rate (exactly: the speed reaches the target within the step and holds it)."""
+    rate = accel_mps2 if target_mps >= speed_mps else -brake_mps2
+    reach_s = min(dt_s, (target_mps - speed_mps) / rate) if rate else 0.0
+    end_mps = speed_mps + rate * reach_s
+    return speed_mps * reach_s + rate * reach_s * reach_s / 2 + end_mps * (dt_s - reach_s), end_mps
 
 
 def instant_breach(sound: Sound, motion: str, t: float, x: float, v: float, lanes: frozenset[Lane], entering: bool,

@@ -68,7 +68,7 @@ def _scenario_rules(sc: Scenario) -> SoundRules:
     that the preparations model's search reuses the answers the final model's found."""
     assert sc.sound is not None  # rules_for checked it
     return SoundRules(sc.sound, sc.lane, sc.left_lane, sc.right_lane, sc.grid, sc.target_indices,
-                      left_m=sc.left_m, right_m=sc.right_m)
+                      left_m=sc.left_m, right_m=sc.right_m, left_mps=sc.left_mps, right_mps=sc.right_mps)
 
 
 class PaperCells:

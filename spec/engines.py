@@ -37,6 +37,9 @@ class Engine:
     sound: bool = False
     #: Whether it answers the sound model's commitment semantics (``spec.escapes``); the others its whole plans only.
     commit: bool = False
+    #: Whether it answers vehicles with their own measured speeds (``Scenario.left_mps``, ``spec.dynamics``); the
+    #: others answer every vehicle at its lane's speeds only.
+    measured_speeds: bool = False
 
     def ready(self) -> None:
         """Check, before any work, that the engine can run here (exit 4 with the install command if not)."""
@@ -100,8 +103,9 @@ def parse_strategy(text: str | Strategy) -> Strategy:
 
 
 def check_model(engine: Engine, scenario: Scenario) -> None:
-    """Raise bad input when ``scenario`` asks for the sound model and ``engine`` answers the paper's rules only, or
-    for the sound model's commitment semantics and ``engine`` answers its whole plans only."""
+    """Raise bad input when ``scenario`` asks for the sound model and ``engine`` answers the paper's rules only, for
+    the sound model's commitment semantics and ``engine`` answers its whole plans only, or gives vehicles their own
+    measured speeds and ``engine`` moves every vehicle at its lane's speeds only."""
     if scenario.sound is not None and not engine.sound:
         able = ", ".join(e.name for e in load_engines().values() if e.sound) or "none"
         raise OptionError("--bounds", scenario.sound.bounds.name, f"engine {engine.name} answers the paper model "
@@ -110,6 +114,11 @@ def check_model(engine: Engine, scenario: Scenario) -> None:
         able = ", ".join(e.name for e in load_engines().values() if e.commit) or "none"
         raise OptionError("--semantics", "commit", f"engine {engine.name} answers the sound model's whole plans only "
                           f"(--semantics whole); committed actions with an escape are answered by: {able}")
+    given = [(k, v) for k, v in (("left_mps", scenario.left_mps), ("right_mps", scenario.right_mps)) if v is not None]
+    if scenario.sound is not None and given and not engine.measured_speeds:
+        able = ", ".join(e.name for e in load_engines().values() if e.measured_speeds) or "none"
+        raise OptionError(given[0][0], [list(s) for s in given[0][1]], f"engine {engine.name} answers every vehicle "
+                          f"at its lane's speeds only; vehicles with their own measured speeds are answered by: {able}")
 
 
 def check_strategy(engine: Engine, strategy: Strategy) -> None:

@@ -11,11 +11,13 @@ from pathlib import Path
 from typing import Any
 
 from spec.errors import BadInput, OptionError, ScenarioError
-from spec.scenario import Scenario, make_scenario, sensed
+from spec.scenario import Scenario, make_scenario, measured_speeds, sensed
 from spec.sound import sound_from_table, sound_to_table
 
 REQUIRED_KEYS = ("lane", "left_lane", "right_lane")
-OPTIONAL_KEYS = ("targets", "model", "horizon", "cell_m", "bounds", "left_m", "right_m")
+OPTIONAL_KEYS = ("targets", "model", "horizon", "cell_m", "bounds", "left_m", "right_m", "left_mps", "right_mps")
+#: The keys given per vehicle of a lane, in the file's order of its cells (the scenario sorts them).
+PER_VEHICLE_KEYS = ("left_m", "right_m", "left_mps", "right_mps")
 SUFFIXES = (".json", ".toml")
 MAX_BYTES = 256 * 1024  # a scenario is a few hundred bytes: anything near this is not one
 
@@ -97,17 +99,20 @@ def scenario_from_dict(data: dict[str, Any]) -> Scenario:
     for key in REQUIRED_KEYS:
         if key not in data:
             raise ScenarioError(key, None, "missing required key")
-    fields = {k: v for k, v in data.items() if k not in ("bounds", "left_m", "right_m")}
+    fields = {k: v for k, v in data.items() if k not in ("bounds", *PER_VEHICLE_KEYS)}
     scenario = make_scenario(**fields)
-    if "left_m" in data or "right_m" in data:  # given in the file's order of its cells; the scenario sorts them
-        left, right = _cell_order(data["left_lane"], data.get("left_m")), _cell_order(data["right_lane"],
-                                                                                     data.get("right_m"))
+    for keys, attach in ((("left_m", "right_m"), sensed), (("left_mps", "right_mps"), measured_speeds)):
+        if not any(k in data for k in keys):
+            continue
+        # given in the file's order of its cells; the scenario sorts them
+        left, right = _cell_order(data["left_lane"], data.get(keys[0])), _cell_order(data["right_lane"],
+                                                                                    data.get(keys[1]))
         try:
-            scenario = sensed(scenario, [data["left_m"][i] for i in left] if left else data.get("left_m"),
-                              [data["right_m"][i] for i in right] if right else data.get("right_m"))
+            scenario = attach(scenario, [data[keys[0]][i] for i in left] if left else data.get(keys[0]),
+                              [data[keys[1]][i] for i in right] if right else data.get(keys[1]))
         except ScenarioError as err:  # name the interval as the file numbers it
             key, _, rest = err.key.partition("[")
-            order = left if key == "left_m" else right
+            order = left if key == keys[0] else right
             if rest and order:
                 raise ScenarioError(f"{key}[{order[int(rest.rstrip(']'))]}]", err.value, err.reason) from None
             raise
@@ -141,4 +146,6 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
         **({"bounds": sound_to_table(scenario.sound)} if scenario.sound is not None else {}),
         **({"left_m": [list(e) for e in scenario.left_m]} if scenario.left_m is not None else {}),
         **({"right_m": [list(e) for e in scenario.right_m]} if scenario.right_m is not None else {}),
+        **({"left_mps": [list(e) for e in scenario.left_mps]} if scenario.left_mps is not None else {}),
+        **({"right_mps": [list(e) for e in scenario.right_mps]} if scenario.right_mps is not None else {}),
     }

@@ -25,6 +25,7 @@ from spec.models import (
 from spec.rules import collision_in, collision_span
 from spec.sound import Extent, Sound
 from spec.state import State
+from spec.tracking import Speed
 
 E = TypeVar("E", bound=enum.Enum)
 
@@ -45,6 +46,11 @@ class Scenario:
     #: lane in order (``sensed``); None: anywhere in its cell. Only the sound model reads them (``spec.sound``).
     left_m: tuple[Extent, ...] | None = None
     right_m: tuple[Extent, ...] | None = None
+    #: Each vehicle's speed interval at the snapshot, m/s along its direction of travel, per vehicle of its lane in
+    #: order (``measured_speeds``); None: its lane's speeds. The sound model moves a measured vehicle by its own
+    #: dynamics (``spec.dynamics``): it may brake to a standstill at any instant.
+    left_mps: tuple[Speed, ...] | None = None
+    right_mps: tuple[Speed, ...] | None = None
 
     @property
     def target_indices(self) -> tuple[int, ...]:
@@ -123,8 +129,9 @@ def refined(scenario: Scenario, grid: Grid) -> Scenario:
     def move(cells: tuple[int, ...]) -> list[int]:
         return [grid.av_cell + (c - av) * k for c in cells]
 
-    return make_scenario(scenario.lane, move(scenario.left_lane), move(scenario.right_lane), scenario.targets,
-                         scenario.model, scenario.horizon, grid=grid)
+    finer = make_scenario(scenario.lane, move(scenario.left_lane), move(scenario.right_lane), scenario.targets,
+                          scenario.model, scenario.horizon, grid=grid)
+    return replace(finer, left_mps=scenario.left_mps, right_mps=scenario.right_mps)
 
 
 def sensed(scenario: Scenario, left_m: object = None, right_m: object = None) -> Scenario:
@@ -156,6 +163,42 @@ def sensed(scenario: Scenario, left_m: object = None, right_m: object = None) ->
             intervals.append((lo, hi))
         out[key] = tuple(intervals)
     return replace(scenario, left_m=out["left_m"], right_m=out["right_m"])
+
+
+#: The fastest speed interval a scenario may state (m/s): above any road vehicle's (a typo, not a measurement).
+MAX_MEASURED_MPS = 100.0
+
+
+def measured_speeds(scenario: Scenario, left_mps: object = None, right_mps: object = None) -> Scenario:
+    """``scenario`` with each vehicle's measured speed interval: per vehicle of a lane (in its cells' order) ``[lo,
+    hi]`` in m/s along its direction of travel, ``0 <= lo <= hi <= MAX_MEASURED_MPS``; None leaves a lane's vehicles
+    at their lane's speeds. Bad input raises ScenarioError naming ``left_mps[i]``."""
+    out: dict[str, tuple[Speed, ...] | None] = {}
+    for key, value, cells in (("left_mps", left_mps, scenario.left_lane), ("right_mps", right_mps,
+                                                                          scenario.right_lane)):
+        if value is None:
+            out[key] = None
+            continue
+        lane = key.replace("_mps", "_lane")
+        if not isinstance(value, (list, tuple)) or len(value) != len(cells):
+            raise ScenarioError(key, value, f"must be a list of {len(cells)} [lo, hi] speed intervals, one per "
+                                            f"vehicle of {lane}")
+        speeds = []
+        for i, pair in enumerate(value):
+            where = f"{key}[{i}]"
+            if not isinstance(pair, (list, tuple)) or len(pair) != 2 or not all(
+                    isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in pair):
+                raise ScenarioError(where, pair, "must be two finite numbers [lo, hi] (m/s along its direction)")
+            lo, hi = float(pair[0]), float(pair[1])
+            if lo < 0:
+                raise ScenarioError(where, pair, "a speed below 0: no vehicle drives backwards")
+            if lo > hi:
+                raise ScenarioError(where, pair, "the lower end is above the upper end")
+            if hi > MAX_MEASURED_MPS:
+                raise ScenarioError(where, pair, f"above {MAX_MEASURED_MPS:g} m/s")
+            speeds.append((lo, hi))
+        out[key] = tuple(speeds)
+    return replace(scenario, left_mps=out["left_mps"], right_mps=out["right_mps"])
 
 
 def _check_enum(kind: type[E], key: str, value: object) -> E:

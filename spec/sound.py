@@ -44,6 +44,7 @@ from typing import NamedTuple
 from spec.actions import ACTION_RULES, Action
 from spec.assumptions import DEFAULT_PROFILE, Bounds, Phantom, check_bounds, parse_speeds, profile
 from spec.cells import left_extent_m, oncoming_extent_m
+from spec.dynamics import Dynamics
 from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING, MinimalRisk, Piece, Reference, Tracking
 from spec.errors import OptionError, check_number
 from spec.escapes import COMMIT, Commitment, Semantics, parse_escape_kinds, parse_most_actions, parse_semantics
@@ -53,6 +54,7 @@ from spec.models import GoalRule
 from spec.motion import Ramp, action_speed_mps, ramp_gain_m, ramp_s
 from spec.physical import SENSORS
 from spec.safety import SAFETY, Conflict, SafetySpec
+from spec.tracking import VEHICLE_SPEED_CHANGE, Speed, SpeedChange
 
 #: Conditions are held to this much slack on the safe side, so that float rounding never makes a gap look large.
 EPS_M = 1e-9
@@ -85,6 +87,9 @@ class Sound:
     #: how an answer is formed (``spec.escapes``): committed actions with a proved escape and a predicted
     #: continuation; None: whole plans, each proved to its end and for ever after
     commitment: Commitment | None = None
+    #: how fast a vehicle whose speed was measured can change it (``spec.dynamics``): the scenario's ``left_mps`` and
+    #: ``right_mps`` give each one's speed interval at the snapshot; a vehicle without one keeps its lane's speeds
+    speed_change: SpeedChange = VEHICLE_SPEED_CHANGE
 
     def phantoms(self) -> tuple[Phantom, ...]:
         """The phantoms of this snapshot: the bounds' own, the oncoming one where the view of that lane ended; each
@@ -120,6 +125,12 @@ class Sound:
         error, plus the snapshot's age (``age_m``). Every engine widens a sensed vehicle's interval by this."""
         return self.bounds.sensing_error_m + self.age_m
 
+    def measured_error_m(self, highest_mps: float) -> float:
+        """``start_error_m`` for a vehicle whose speed was measured and may reach ``highest_mps`` (its own top may be
+        above its lane's): the snapshot's age at the faster of ``closing_mps`` and the AV's top speed and its own."""
+        av_top = AV_TOP_MPS + self.tracking.speed_mps
+        return self.bounds.sensing_error_m + self.bounds.latency_s * max(self.closing_mps, av_top + highest_mps)
+
     def describe(self) -> str:
         b = self.bounds
         if self.checks is Checks.PAPER_CELLS:
@@ -132,12 +143,15 @@ class Sound:
                 f"oncoming {b.oncoming_mps.low_mps:g}..{b.oncoming_mps.high_mps:g} m/s, sensing error "
                 f"{b.sensing_error_m:g} m, phantoms {'on' if b.phantoms else 'off'}{view}, followers "
                 f"{'react' if b.followers_react else 'keep their speed'}"
-                + (f", latency {b.latency_s:g} s (vehicles {self.age_m:.3g} m on)" if b.latency_s else ""))
+                + (f", latency {b.latency_s:g} s (vehicles {self.age_m:.3g} m on)" if b.latency_s else "")
+                + ("" if _rates(self.speed_change) == _rates(VEHICLE_SPEED_CHANGE) else
+                   f", measured vehicles accelerate at most {self.speed_change.accel_mps2:g} and brake at most "
+                   f"{self.speed_change.brake_mps2:g} m/s^2"))
 
 
 #: The keys of a scenario file's ``bounds`` table (and the command line's options of the same names).
 BOUNDS_KEYS = ("profile", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
-               "oncoming_view_m", "latency_s", "semantics", "commit_max", "escapes")
+               "oncoming_view_m", "latency_s", "semantics", "commit_max", "escapes", "accel_mps2", "brake_mps2")
 #: How near the AV an aged phantom may come (``Sound.phantoms``): never onto it (Spin reads a phantom at 0 as none).
 PHANTOM_NEAREST_M = 1e-3
 
@@ -146,7 +160,7 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
                sensing_error_m: object = None, phantoms: bool | None = None, av_speed_mps: object = None,
                where: str = "--", followers_react: bool | None = None, oncoming_view_m: object = None,
                latency_s: object = None, semantics: object = None, commit_max: object = None,
-               escapes: object = None) -> Sound:
+               escapes: object = None, accel_mps2: object = None, brake_mps2: object = None) -> Sound:
     """The sound model from a base (a file's, or None: the default profile, under the commitment semantics), a named
     profile and overrides of its numbers and semantics; every value is checked, and bad input names the option or
     key (``where`` + its name)."""
@@ -191,9 +205,29 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
     if oncoming_view_m is not None:
         view = check_view_m(key("oncoming_view_m"), oncoming_view_m)
     commitment = commitment_from(base.commitment if base is not None else COMMIT, semantics, commit_max, escapes, key)
+    change = speed_change_from(base.speed_change if base is not None else VEHICLE_SPEED_CHANGE, accel_mps2,
+                               brake_mps2, key)
     if base is None:
-        return Sound(bounds, start_mps=start, oncoming_view_m=view, commitment=commitment)
-    return replace(base, bounds=bounds, start_mps=start, oncoming_view_m=view, commitment=commitment)
+        return Sound(bounds, start_mps=start, oncoming_view_m=view, commitment=commitment, speed_change=change)
+    return replace(base, bounds=bounds, start_mps=start, oncoming_view_m=view, commitment=commitment,
+                   speed_change=change)
+
+
+def _rates(change: SpeedChange) -> tuple[float, float]:
+    return change.accel_mps2, change.brake_mps2
+
+
+def speed_change_from(base: SpeedChange, accel_mps2: object, brake_mps2: object,
+                      key: Callable[[str], str]) -> SpeedChange:
+    """``base`` with the acceleration bounds given (each above 0, finite), its source saying which the user set."""
+    if accel_mps2 is None and brake_mps2 is None:
+        return base
+    values = {}
+    for name, value, kept in (("accel_mps2", accel_mps2, base.accel_mps2), ("brake_mps2", brake_mps2,
+                                                                            base.brake_mps2)):
+        values[name] = kept if value is None else check_number(key(name), value, positive=True)
+    changed = ", ".join(n for n, v in (("a_max", accel_mps2), ("b_max", brake_mps2)) if v is not None)
+    return SpeedChange(values["accel_mps2"], values["brake_mps2"], f"{base.source}; {changed} set by the user")
 
 
 def commitment_from(base: Commitment | None, semantics: object, commit_max: object, escapes: object,
@@ -233,7 +267,8 @@ def sound_from_table(table: object, where: str = "bounds") -> Sound:
     return sound_from(None, table.get("profile"), table.get("same_mps"), table.get("oncoming_mps"),
                       table.get("sensing_error_m"), table.get("phantoms"), table.get("av_speed_mps"), f"{where}.",
                       table.get("followers_react"), table.get("oncoming_view_m"), table.get("latency_s"),
-                      table.get("semantics"), table.get("commit_max"), table.get("escapes"))
+                      table.get("semantics"), table.get("commit_max"), table.get("escapes"), table.get("accel_mps2"),
+                      table.get("brake_mps2"))
 
 
 def sound_to_table(sound: Sound) -> dict[str, object]:
@@ -256,6 +291,8 @@ def sound_to_table(sound: Sound) -> dict[str, object]:
         table["commit_max"] = c.most_actions
     if c is not None and c.escapes != COMMIT.escapes:
         table["escapes"] = [k.value for k in c.escapes]
+    if _rates(sound.speed_change) != _rates(VEHICLE_SPEED_CHANGE):
+        table["accel_mps2"], table["brake_mps2"] = sound.speed_change.accel_mps2, sound.speed_change.brake_mps2
     return table
 
 
@@ -268,6 +305,8 @@ class Vehicle:
     lo_m: float
     hi_m: float
     name: str
+    #: its own speed interval and dynamics (``spec.dynamics``), when its speed was measured; None: its lane's speeds
+    dynamics: Dynamics | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -286,20 +325,38 @@ class Violation:
 
 
 def vehicles(lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Grid, sound: Sound,
-             left_m: tuple[Extent, ...] | None = None, right_m: tuple[Extent, ...] | None = None) -> tuple[
+             left_m: tuple[Extent, ...] | None = None, right_m: tuple[Extent, ...] | None = None,
+             left_mps: tuple[Speed, ...] | None = None, right_mps: tuple[Speed, ...] | None = None) -> tuple[
         Vehicle, ...]:
     """Every vehicle of a scenario (the AV starting in ``lane``) as an interval (``sensed_extents`` widened by the
-    sensing error and the snapshot's age: ``Sound.start_error_m``), then the phantoms."""
-    e = sound.start_error_m
+    sensing error and the snapshot's age: ``Sound.start_error_m``), then the phantoms. A vehicle whose speed was
+    measured (``left_mps``, ``right_mps``) moves by its own dynamics (``measured_dynamics``)."""
     out = []
     same, oncoming = sensed_extents(lane, left, right, grid, left_m, right_m)
-    for i, (cell, (lo, hi)) in enumerate(zip(left, same, strict=True)):
-        out.append(Vehicle(Lane.LEFT, i, lo - e, hi + e, f"left_lane[{i}] (cell {cell})"))
-    for i, (cell, (lo, hi)) in enumerate(zip(right, oncoming, strict=True)):
-        out.append(Vehicle(Lane.RIGHT, i, lo - e, hi + e, f"right_lane[{i}] (cell {cell})"))
+    for key, cells, extents, speeds in ((Lane.LEFT, left, same, left_mps), (Lane.RIGHT, right, oncoming, right_mps)):
+        for i, (cell, (lo, hi)) in enumerate(zip(cells, extents, strict=True)):
+            own = None if speeds is None else measured_dynamics(sound, key, speeds[i])
+            e = sound.start_error_m if own is None else sound.measured_error_m(own.highest_mps)
+            out.append(Vehicle(key, i, lo - e, hi + e, f"{key.value}_lane[{i}] (cell {cell})",
+                               None if own is None else own.aged(sound.bounds.latency_s)))
     for p in sound.phantoms():  # the whole unseen stretch: from the view's edge outwards
         out.append(Vehicle(p.lane, None, *p.stretch_m, f"phantom ({p.why}, {p.dx_m:+g} m)"))
     return tuple(out)
+
+
+def measured_dynamics(sound: Sound, lane: Lane, speed_mps: Speed) -> Dynamics:
+    """A vehicle of ``lane`` whose speed was measured in ``speed_mps`` at the snapshot: it may brake to a standstill
+    at any instant and accelerate up to its lane's top speed (``Bounds``' stated one), at ``Sound.speed_change``."""
+    top = (sound.bounds.same_mps if lane is Lane.LEFT else sound.bounds.oncoming_mps).high_mps
+    return Dynamics(speed_mps, top, sound.speed_change)
+
+
+def slowest_ahead_mps(sound: Sound, vehicles: tuple[Vehicle, ...]) -> float:
+    """The slowest a same-direction vehicle may come to drive, the speed the minimal-risk manoeuvre holds: a
+    standstill where one's speed was measured (it may brake to a stop at any instant), else its lane's slowest."""
+    if any(v.dynamics is not None for v in vehicles if v.lane is Lane.LEFT):
+        return 0.0
+    return sound.bounds.same_mps.low_mps
 
 
 def rear_binds(bounds: Bounds, slowest_mps: float) -> bool:
@@ -338,8 +395,12 @@ def sensed_extents(lane: Lane, left: tuple[int, ...], right: tuple[int, ...], gr
 
 
 def reach_m(v: Vehicle, bounds: Bounds, t_s: float) -> tuple[float, float]:
-    """Where ``v`` can be ``t_s`` after the snapshot under ``bounds``: its start interval grown by its lane's speeds
-    (what ``SoundRules.same_low`` and its three twins compute on the hot path, one end at a time)."""
+    """Where ``v`` can be ``t_s`` after the snapshot under ``bounds``: its start interval grown by its lane's speeds,
+    or by its own dynamics (what ``SoundRules.same_low`` and its three twins compute on the hot path, one end at a
+    time)."""
+    if v.dynamics is not None:
+        least, most = v.dynamics.travel_m(t_s)
+        return (v.lo_m + least, v.hi_m + most) if v.lane is Lane.LEFT else (v.lo_m - most, v.hi_m - least)
     if v.lane is Lane.LEFT:
         same = bounds.same_mps
         return v.lo_m + same.low_mps * t_s, v.hi_m + same.high_mps * t_s
@@ -418,9 +479,10 @@ Shapes = dict[tuple[float, Action | None, Lane, Lane | None], list[tuple[Segment
 
 
 @functools.lru_cache(maxsize=16)
-def _shapes(sound: Sound, grid: Grid) -> Shapes:
-    """The windows' shapes (``SoundRules.window``), shared by every scenario under the same assumptions and grid: a
-    shape depends on the speeds, the action, the lane and the move before it, never on the vehicles."""
+def _shapes(sound: Sound, grid: Grid, hold_floor_mps: float) -> Shapes:
+    """The windows' shapes (``SoundRules.window``), shared by every scenario under the same assumptions, grid and
+    minimal-risk hold speed (``slowest_ahead_mps``): a shape depends on the speeds, the action, the lane and the move
+    before it, never on the vehicles."""
     return {}
 
 
@@ -429,11 +491,14 @@ class SoundRules:
 
     def __init__(self, sound: Sound, lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Grid,
                  targets: tuple[int, ...], given: tuple[Vehicle, ...] | None = None,
-                 left_m: tuple[Extent, ...] | None = None, right_m: tuple[Extent, ...] | None = None) -> None:
+                 left_m: tuple[Extent, ...] | None = None, right_m: tuple[Extent, ...] | None = None,
+                 left_mps: tuple[Speed, ...] | None = None, right_mps: tuple[Speed, ...] | None = None) -> None:
         """``given``: the vehicles as intervals, when not the scenario's own (``vehicles``, of the cells or of what
-        the snapshot measured, ``left_m`` and ``right_m``); a measurement that moves one of them passes them here."""
+        the snapshot measured, ``left_m`` and ``right_m``, and their speeds, ``left_mps`` and ``right_mps``); a
+        measurement that moves one of them passes them here."""
         self.sound, self.grid, self.targets = sound, grid, targets
-        self.vehicles = vehicles(lane, left, right, grid, sound, left_m, right_m) if given is None else given
+        self.vehicles = vehicles(lane, left, right, grid, sound, left_m, right_m, left_mps, right_mps) \
+            if given is None else given
         self.same = tuple(v for v in self.vehicles if v.lane is Lane.LEFT)
         self.oncoming = tuple(v for v in self.vehicles if v.lane is Lane.RIGHT)
         self.sensed_same = {v.index: v for v in self.same if v.index is not None}
@@ -446,7 +511,12 @@ class SoundRules:
                          if v1 > v2)
         #: The most the AV's nominal advance can gain on a same-direction vehicle at its highest speed in one action,
         #: and the most the first ramp can add to it (``beyond_reach``).
-        high = sound.bounds.same_mps.high_mps
+        #: The speed the minimal-risk manoeuvre brakes to (``slowest_ahead_mps``).
+        self.hold_floor_mps = slowest_ahead_mps(sound, self.vehicles)
+        #: The least speed a same-direction vehicle's fastest motion ever drives at (its lane's top; a measured one's
+        #: highest measured speed, from which it only speeds up).
+        high = min([sound.bounds.same_mps.high_mps] + [v.dynamics.speed_mps[1] for v in self.vehicles
+                                                          if v.lane is Lane.LEFT and v.dynamics is not None])
         self.gain_per_action_m = max((grid.units(a) - grid.left_shift(a)) * self.cell_m
                                      - high * grid.units(a) * self.unit_s for a in Action)
         self.first_ramp_m = {v: abs(ramp_gain_m(self.start_mps, v)) for v in self.speeds.values()}
@@ -463,7 +533,7 @@ class SoundRules:
         self._steps: dict[tuple[tuple[object, ...], Action, Action | None], Violation | None] = {}
         self._ends: dict[tuple[object, ...], Violation | None] = {}  # continuation_violation, by state key
         self._at_boundary: dict[tuple[int, int, float | None, float | None], float] = {}
-        self._relative = _shapes(sound, grid)
+        self._relative = _shapes(sound, grid, self.hold_floor_mps)
         self._start_followers: frozenset[int] | None = None
 
     def key(self, state: SoundState) -> tuple[object, ...]:
@@ -500,7 +570,7 @@ class SoundRules:
             first_mps = self.speeds[action] if action is not None else start_mps
         before = last_mps if last_mps is not None else first_mps
         if action is None:
-            hold = self.sound.minimal_risk.hold_mps(before, self.sound.bounds.same_mps.low_mps)
+            hold = self.sound.minimal_risk.hold_mps(before, self.hold_floor_mps)
             ramp = self.sound.minimal_risk.ramp(t_s, before, hold)
         elif last_mps is None or self.speeds[action] == before:
             ramp = None
@@ -598,15 +668,23 @@ class SoundRules:
 
     # -- positions -------------------------------------------------------------------------------------------
     def same_low(self, v: Vehicle, t_s: float) -> float:
+        if v.dynamics is not None:
+            return v.lo_m + v.dynamics.travel_m(t_s)[0]
         return v.lo_m + self.sound.bounds.same_mps.low_mps * t_s
 
     def same_high(self, v: Vehicle, t_s: float) -> float:
+        if v.dynamics is not None:
+            return v.hi_m + v.dynamics.travel_m(t_s)[1]
         return v.hi_m + self.sound.bounds.same_mps.high_mps * t_s
 
     def oncoming_low(self, v: Vehicle, t_s: float) -> float:
+        if v.dynamics is not None:
+            return v.lo_m - v.dynamics.travel_m(t_s)[1]
         return v.lo_m - self.sound.bounds.oncoming_mps.high_mps * t_s
 
     def oncoming_high(self, v: Vehicle, t_s: float) -> float:
+        if v.dynamics is not None:
+            return v.hi_m - v.dynamics.travel_m(t_s)[0]
         return v.hi_m - self.sound.bounds.oncoming_mps.low_mps * t_s
 
     def held_ahead(self, v: Vehicle, ref_x: float, t_s: float) -> bool:
@@ -622,20 +700,64 @@ class SoundRules:
             <= ref_x - self.sound.tracking.position_m - EPS_M
 
     # -- checks ---------------------------------------------------------------------------------------------
-    def _required(self, conflict: Conflict, p: Piece, t_s: float) -> float:
+    def _required(self, conflict: Conflict, p: Piece, t_s: float, vehicle: Vehicle | None = None) -> float:
         s, tr, b = self.sound.safety, self.sound.tracking, self.sound.bounds
         v = p.v(t_s)
-        closing = {Conflict.AHEAD: v + tr.speed_mps - b.same_mps.low_mps,
-                   Conflict.ONCOMING: v + tr.speed_mps + b.oncoming_mps.high_mps,
-                   Conflict.CUT_IN: b.same_mps.high_mps - v + tr.speed_mps,
-                   Conflict.BEHIND: b.same_mps.high_mps - v + tr.speed_mps}[conflict]
+        if vehicle is not None and vehicle.dynamics is not None:
+            low, high = vehicle.dynamics.speeds_mps(t_s)
+            same_low, same_high, onc_high = low, high, high
+        else:
+            same_low, same_high, onc_high = b.same_mps.low_mps, b.same_mps.high_mps, b.oncoming_mps.high_mps
+        closing = {Conflict.AHEAD: v + tr.speed_mps - same_low,
+                   Conflict.ONCOMING: v + tr.speed_mps + onc_high,
+                   Conflict.CUT_IN: same_high - v + tr.speed_mps,
+                   Conflict.BEHIND: same_high - v + tr.speed_mps}[conflict]
         return s.required_gap_m(closing)
 
     def _violation(self, conflict: Conflict, v: Vehicle, p: Piece, need: tuple[float, float], lo: bool) -> Violation:
         """A violation: the vehicle's start interval misses the threshold ``need`` (at its lower or upper end)."""
         short = (need[0] - v.lo_m) if lo else (v.hi_m - need[0])
-        required = self._required(conflict, p, need[1])
+        required = self._required(conflict, p, need[1], v)
         return Violation(conflict, v, need[1], required - short, required)
+
+    def _need(self, conflict: Conflict, v: Vehicle, b: Bounded) -> tuple[float, float]:
+        """The threshold ``v`` is held to over ``b``'s piece: its lane's (``Bounded``), or its own."""
+        if v.dynamics is None:
+            return {Conflict.AHEAD: b.ahead, Conflict.ONCOMING: b.oncoming}.get(conflict, b.behind)
+        return self._own_need(conflict, v.dynamics, b.piece)
+
+    def _own_need(self, conflict: Conflict, d: Dynamics, p: Piece) -> tuple[float, float]:
+        """The threshold of ``conflict`` over ``p`` for a vehicle moving by its own dynamics: as ``_ahead_need`` and
+        its twins, with the vehicle's least travel (AHEAD: braking to a stop) or its most (ONCOMING, CUT_IN, BEHIND:
+        speeding up to its top) in place of its lane's speed times the time, and its speed then in the closing speed.
+        The worst position and the worst speed come from one motion, so the bound is exact; over each phase of that
+        motion within the piece both the reference and the vehicle's travel are quadratic (``_quad_max``). For CUT_IN
+        and BEHIND the value is the most ``hi`` allowed, as ``_behind_allow``."""
+        s, tr = self.sound.safety, self.sound.tracking
+        length, tau, g_min = s.vehicle_length_m, s.time_gap_s, s.min_gap_m
+        best = (-math.inf, p.t0_s)
+        for ph in (d.slowest if conflict is Conflict.AHEAD else d.fastest):
+            u0, u1 = max(p.t0_s, ph.t0_s), min(p.t1_s, ph.t1_s)
+            if u1 < u0 or (u1 == u0 and p.t1_s > p.t0_s):
+                continue
+            x, v, acc, span = p.x(u0), p.v(u0), p.acc_mps2, u1 - u0
+            dm, dv, da = ph.travel(u0), ph.speed(u0), ph.accel_mps2
+            if conflict is Conflict.AHEAD:  # lo >= x + e_x + L - D + max(g_min, tau (v + e_v - V))
+                c, b1, a = x + tr.position_m + length - dm, v - dv, (acc - da) / 2
+                found = max(_quad_max(a, b1, c + g_min, span, u0),
+                            _quad_max(a, b1 + tau * (acc - da), c + tau * (v + tr.speed_mps - dv), span, u0))
+            elif conflict is Conflict.ONCOMING:  # lo >= x + e_x + L + D + max(g_min, tau (v + e_v + V))
+                c, b1, a = x + tr.position_m + length + dm, v + dv, (acc + da) / 2
+                found = max(_quad_max(a, b1, c + g_min, span, u0),
+                            _quad_max(a, b1 + tau * (acc + da), c + tau * (v + tr.speed_mps + dv), span, u0))
+            else:  # hi <= x - e_x - L - D - max(g_min, tau (V - v + e_v)): the most of its negation
+                c, b1, a = -(x - tr.position_m - length - dm), -(v - dv), -(acc - da) / 2
+                found = max(_quad_max(a, b1, c + g_min, span, u0),
+                            _quad_max(a, b1 + tau * (da - acc), c + tau * (dv - v + tr.speed_mps), span, u0))
+            best = max(best, found)
+        if conflict in (Conflict.CUT_IN, Conflict.BEHIND):
+            return -best[0], best[1]
+        return best
 
     def check_segment(self, seg: Segment, pieces: list[Bounded], followers: frozenset[int] = frozenset()) \
             -> Violation | None:
@@ -654,41 +776,51 @@ class SoundRules:
         """AHEAD for every vehicle not a follower; BEHIND for the followers over the pieces where they bind."""
         for b in pieces:
             for i, v in enumerate(self.same):
-                if v.lo_m < b.ahead[0] + EPS_M and i not in followers and \
-                        self.held_ahead(v, b.piece.x0_m, b.piece.t0_s):
-                    return self._violation(Conflict.AHEAD, v, b.piece, b.ahead, True)
+                if i in followers:
+                    continue
+                need = self._need(Conflict.AHEAD, v, b)
+                if v.lo_m < need[0] + EPS_M and self.held_ahead(v, b.piece.x0_m, b.piece.t0_s):
+                    return self._violation(Conflict.AHEAD, v, b.piece, need, True)
             if b.rear:
                 for i in sorted(followers):
                     v = self.same[i]
-                    if v.hi_m > b.behind[0] - EPS_M:
-                        return self._violation(Conflict.BEHIND, v, b.piece, b.behind, False)
+                    allow = self._need(Conflict.BEHIND, v, b)
+                    if v.hi_m > allow[0] - EPS_M:
+                        return self._violation(Conflict.BEHIND, v, b.piece, allow, False)
         return None
 
     def _check_oncoming(self, pieces: list[Bounded]) -> Violation | None:
         for b in pieces:
             for v in self.oncoming:
-                if v.lo_m < b.oncoming[0] + EPS_M and not self.passed(v, b.piece.x0_m, b.piece.t0_s):
-                    return self._violation(Conflict.ONCOMING, v, b.piece, b.oncoming, True)
+                need = self._need(Conflict.ONCOMING, v, b)
+                if v.lo_m < need[0] + EPS_M and not self.passed(v, b.piece.x0_m, b.piece.t0_s):
+                    return self._violation(Conflict.ONCOMING, v, b.piece, need, True)
         return None
 
     def _check_entering(self, pieces: list[Bounded], margin: bool) -> Violation | None:
         """Entering the left lane: each same-direction vehicle certainly ahead (AHEAD) or certainly behind (CUT_IN)
         over the whole sideways move. At the plan's start (``margin`` False) the AV is already in the lane: one
         behind need only be one that cannot be clear ahead (``follower_limit_m``); it is a follower, not a cut-in."""
-        ahead = max(pieces, key=lambda b: b.ahead[0])
-        if margin:
-            behind = min(pieces, key=lambda b: b.behind[0])
-            allow = behind.behind
-        else:
-            behind = pieces[0]
-            p = behind.piece
-            allow = (follower_limit_m(p.x0_m, self.sound.safety, self.sound.tracking), p.t0_s)
+        lane_ahead = max(pieces, key=lambda b: b.ahead[0])
+        lane_behind = min(pieces, key=lambda b: b.behind[0]) if margin else pieces[0]
         for v in self.same:
-            if v.lo_m >= ahead.ahead[0] + EPS_M or v.hi_m <= allow[0] - EPS_M:
+            if v.dynamics is None:
+                ahead_piece, need = lane_ahead.piece, lane_ahead.ahead
+                behind_piece, allow = lane_behind.piece, lane_behind.behind
+            else:
+                need, ahead_piece = max(((self._own_need(Conflict.AHEAD, v.dynamics, b.piece), b.piece)
+                                         for b in pieces), key=lambda found: found[0][0])
+                allow, behind_piece = min(((self._own_need(Conflict.CUT_IN, v.dynamics, b.piece), b.piece)
+                                           for b in pieces), key=lambda found: found[0][0]) if margin else \
+                    (lane_behind.behind, lane_behind.piece)
+            if not margin:
+                allow = (follower_limit_m(behind_piece.x0_m, self.sound.safety, self.sound.tracking),
+                         behind_piece.t0_s)
+            if v.lo_m >= need[0] + EPS_M or v.hi_m <= allow[0] - EPS_M:
                 continue
-            if not margin or v.lo_m - ahead.ahead[0] > allow[0] - v.hi_m:  # nearer to being ahead: that conflict
-                return self._violation(Conflict.AHEAD, v, ahead.piece, ahead.ahead, True)
-            return self._violation(Conflict.CUT_IN, v, behind.piece, allow, False)
+            if not margin or v.lo_m - need[0] > allow[0] - v.hi_m:  # nearer to being ahead: that conflict
+                return self._violation(Conflict.AHEAD, v, ahead_piece, need, True)
+            return self._violation(Conflict.CUT_IN, v, behind_piece, allow, False)
         return None
 
     # -- the model's questions -------------------------------------------------------------------------------
@@ -795,10 +927,11 @@ class SoundRules:
                     return Violation(Conflict.ONCOMING, v, end_s, -math.inf, self._required(
                         Conflict.ONCOMING, tail, end_s))
             return None
-        if self.sound.minimal_risk.closes_in(end_v, self.sound.bounds.same_mps.low_mps):
-            for i, v in enumerate(self.same):
-                if i not in followers and self.held_ahead(v, end_x, end_s):
-                    return Violation(Conflict.AHEAD, v, end_s, -math.inf, self._required(Conflict.AHEAD, tail, end_s))
+        for i, v in enumerate(self.same):  # one that may come to drive slower than the AV's hold closes in for ever
+            lowest = 0.0 if v.dynamics is not None else self.sound.bounds.same_mps.low_mps
+            if self.sound.minimal_risk.closes_in(end_v, lowest) and i not in followers and \
+                    self.held_ahead(v, end_x, end_s):
+                return Violation(Conflict.AHEAD, v, end_s, -math.inf, self._required(Conflict.AHEAD, tail, end_s, v))
         if followers and rear_binds(self.sound.bounds, end_v):
             v = self.same[min(followers)]
             return Violation(Conflict.BEHIND, v, end_s, -math.inf, self._required(Conflict.BEHIND, tail, end_s))
@@ -873,8 +1006,9 @@ class SoundRules:
             # A plan ends in the left lane (the right one is never safe for ever with phantoms), where the phantom
             # ahead is held ahead by at least the least gap: the AV cannot be near enough the target's far end.
             room = most_m - self.sound.safety.min_gap_m - 2 * ex
-            if any(self.same_high(v, t_s) - self.same_low(p, t_s) > room + EPS_M for p in self.same_phantoms_ahead):
-                return True
+            if (v.dynamics is None or v.dynamics.speeds_mps(t_s)[1] >= self.sound.bounds.same_mps.low_mps) and any(
+                    self.same_high(v, t_s) - self.same_low(p, t_s) > room + EPS_M for p in self.same_phantoms_ahead):
+                return True  # (a measured target's fastest speed only rises: no slower than the phantom from now on)
         if not (goal.targets_behind and self.targets and self.oncoming_phantoms):
             return False
         x_m = self.boundary_m(state)
@@ -888,7 +1022,7 @@ class SoundRules:
                 continue  # the left lane's rules may let it fall behind there: no argument
             if self.same_high(v, t_s) + length + g_min + ex <= x_m - self.dip_m - ex:
                 continue  # already passed
-            speed_gain = fastest - b.same_mps.high_mps
+            speed_gain = fastest - (b.same_mps.high_mps if v.dynamics is None else v.dynamics.highest_mps)
             if speed_gain <= 0:
                 return True  # never passed for every position
             passed_at = t_s + max(0.0, (self.same_high(v, t_s) + length + g_min + 2 * ex - x_m - self.dip_m)

@@ -163,6 +163,7 @@ ADDED = {"overtake audit": {"--km": "0.3", "--runs": "1"},
          "python -m ci.bench.speeds": {"--km": "0.3"},
          "python -m ci.bench.sound": {"--count": "5"},
          "python -m ci.bench.commit": {"--count": "5"},
+         "python -m ci.bench.measured": {"--count": "5"},
          "python -m ci.bench.engines_sound": {"--count": "5", "--timeout": "1"},  # Z3's undecided runs end sooner
          "python -m ci.bench.crossval": {"--sweep-count": "20"},
          "python -m ci.conformance.tightness": {"--count": "2"},  # every cell size, profile and model: 32 problems

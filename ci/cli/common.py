@@ -29,6 +29,7 @@ from spec.physical import LOOP
 from spec.scenario import Scenario
 from spec.sound import sound_from
 from spec.state import State
+from spec.tracking import VEHICLE_SPEED_CHANGE
 
 
 def _pipe_width() -> int | None:
@@ -178,7 +179,7 @@ def abbrev(answer: Answer, compact: bool = False) -> str:
 #: The commitment semantics' options (the last of ``SOUND_OPTIONS``).
 COMMIT_OPTIONS = ("semantics", "commit_max", "escapes")
 SOUND_OPTIONS = ("bounds", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
-                 "oncoming_view_m", "latency_s", *COMMIT_OPTIONS)
+                 "oncoming_view_m", "latency_s", "accel_mps2", "brake_mps2", *COMMIT_OPTIONS)
 
 
 def sound_options(command: Any) -> Any:
@@ -194,7 +195,7 @@ def whole_sound_options(command: Any) -> Any:
 
 
 def _sound_options(command: Any, commitment: bool) -> Any:
-    from ci.shared.options import LATENCY, METRES, SPEED
+    from ci.shared.options import ACCEL, LATENCY, METRES, SPEED
 
     names = SOUND_OPTIONS if commitment else SOUND_OPTIONS[:-len(COMMIT_OPTIONS)]
 
@@ -225,6 +226,12 @@ def _sound_options(command: Any, commitment: bool) -> Any:
                      f"before the plan acts (the planner's time; the closed loop's is one control step, "
                      f"{LOOP.plan_budget_s * 1000:.1f} ms). "
                      "Default: 0, the profile's."),
+        click.option("--accel-mps2", type=ACCEL, default=None, help="Sound model: the most a vehicle whose speed "
+                     "was measured (the file's left_mps, right_mps) speeds up, m/s^2 (default: "
+                     f"{VEHICLE_SPEED_CHANGE.accel_mps2:g}, spec.tracking)."),
+        click.option("--brake-mps2", type=ACCEL, default=None, help="Sound model: the most a vehicle whose speed "
+                     "was measured brakes, m/s^2, to a standstill at the least (default: "
+                     f"{VEHICLE_SPEED_CHANGE.brake_mps2:g}, spec.tracking)."),
     ) + ((
         click.option("--semantics", default=None, help="Sound model: commit (committed actions with a proved "
                      "escape and a predicted continuation; the default) or whole (every plan proved to its end; "
@@ -247,12 +254,15 @@ def with_sound(scenario: Scenario, bounds: str | None, same_mps: str | None, onc
                sensing_error_m: float | None, phantoms: bool | None, av_speed_mps: float | None,
                followers_react: bool | None = None, oncoming_view_m: float | None = None,
                latency_s: float | None = None, semantics: str | None = None, commit_max: str | None = None,
-               escapes: str | None = None) -> Scenario:
+               escapes: str | None = None, accel_mps2: float | None = None,
+               brake_mps2: float | None = None) -> Scenario:
     """``scenario`` under the sound model the options (over the file's ``bounds``) choose; unchanged without any."""
     if all(v is None for v in (bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
-                               followers_react, oncoming_view_m, latency_s, semantics, commit_max, escapes)):
+                               followers_react, oncoming_view_m, latency_s, semantics, commit_max, escapes,
+                               accel_mps2, brake_mps2)):
         return scenario
     sound = sound_from(scenario.sound, bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
                        followers_react=followers_react, oncoming_view_m=oncoming_view_m, latency_s=latency_s,
-                       semantics=semantics, commit_max=commit_max, escapes=escapes)
+                       semantics=semantics, commit_max=commit_max, escapes=escapes, accel_mps2=accel_mps2,
+                       brake_mps2=brake_mps2)
     return replace(scenario, sound=sound)

@@ -137,6 +137,7 @@ FRACTION = Number(0.0, 1.0)  # a probability
 SPEED = Number(0.0, 100.0)  # m/s: no car on this road goes faster than 360 km/h
 DEGREES = Number(0.0, 90.0)  # a steering offset: past a right angle the wheels point backwards
 SCALE = Number(0.0, 100.0)  # a factor on the bounds' widths: 0 is the rule's middle speed alone
+ACCEL = Number(0.0, 100.0, positive=True)  # m/s^2: an acceleration bound above 0 (about 10 g at the most)
 LATENCY = Number(0.0, MAX_LATENCY_S)  # seconds a snapshot ages before the plan acts (spec.assumptions.MAX_LATENCY_S)
 
 

@@ -67,3 +67,32 @@ def test_measured_intervals_round_trip_in_the_files_cell_order_and_bad_ones_name
         with pytest.raises(ScenarioError, match=reason) as err:
             load_scenario(path)
         assert f"{path}: {key}" in str(err.value)  # numbered as the file numbers its intervals
+
+
+def test_measured_speeds_round_trip_in_the_files_cell_order_and_bad_ones_name_their_key(tmp_path: Path) -> None:
+    """Each vehicle's measured speed interval (``left_mps``, ``right_mps``) is read in the order of the file's cells
+    and written back as the scenario holds it; a list of the wrong length, a speed that is not two finite numbers,
+    upside down or below 0 is bad input naming its key, and so is an acceleration bound of 0 or below."""
+    path = tmp_path / "s.json"
+    path.write_text('{"lane": "left", "left_lane": [14, 11], "right_lane": [30], "left_mps": [[5, 6], [0, 0]], '
+                    '"right_mps": [[8, 9.5]], "bounds": {"accel_mps2": 2.5, "brake_mps2": 8}}')
+    scenario = load_scenario(path)
+    assert scenario.left_lane == (11, 14) and scenario.left_mps == ((0.0, 0.0), (5.0, 6.0))
+    assert scenario.right_mps == ((8.0, 9.5),)
+    assert scenario.sound is not None
+    assert (scenario.sound.speed_change.accel_mps2, scenario.sound.speed_change.brake_mps2) == (2.5, 8.0)
+    again = tmp_path / "again.json"
+    again.write_text(json.dumps(scenario_to_dict(scenario)))
+    assert load_scenario(again) == scenario
+    for key, bad, reason, named in (("left_mps", '[[5, 6]]', "must be a list of 2", "left_mps="),
+                                    ("left_mps", '[[5, "x"], [0, 0]]', "two finite numbers", "left_mps[0]="),
+                                    ("left_mps", '[[5, NaN], [0, 0]]', "two finite numbers", "left_mps[0]="),
+                                    ("left_mps", '[[6, 5], [0, 0]]', "lower end is above", "left_mps[0]="),
+                                    ("left_mps", '[[5, 6], [-1, 0]]', "no vehicle drives backwards", "left_mps[1]="),
+                                    ("right_mps", '[[1, 2], [3, 4]]', "one per vehicle of right_lane", "right_mps="),
+                                    ("bounds", '{"accel_mps2": 0}', "above 0", "bounds.accel_mps2="),
+                                    ("bounds", '{"brake_mps2": -2}', "above 0", "bounds.brake_mps2=")):
+        path.write_text(f'{{"lane": "left", "left_lane": [14, 11], "right_lane": [30], "{key}": {bad}}}')
+        with pytest.raises(ScenarioError, match=reason) as err:
+            load_scenario(path)
+        assert f"{path}: {named}" in str(err.value)

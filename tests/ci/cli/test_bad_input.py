@@ -137,7 +137,8 @@ def sound(command: str) -> list[Case]:
 
 def sound_options(command: str, *extra: str, commitment: bool = True) -> list[Case]:
     """The sound model's options: an unknown profile, speed intervals that are not intervals of finite speeds,
-    numbers out of range (a sensing error beyond the window, a latency above half a second), and (``commitment``:
+    numbers out of range (a sensing error beyond the window, a latency above half a second, an acceleration bound of
+    0 or below), and (``commitment``:
     where the command takes them) the commitment semantics'; ``extra`` arguments with each."""
     return [*(_case(command, *extra, f"--bounds={value}", named="--bounds") for value in ("nosuch", "")),
             *(_case(command, *extra, f"{option}={value}", named=option) for option in ("--sensing-error-m",
@@ -151,6 +152,8 @@ def sound_options(command: str, *extra: str, commitment: bool = True) -> list[Ca
             *(_case(command, *extra, f"{option}={value}", named=option) for option in ("--same-mps", "--oncoming-mps")
               for value in BAD_SPEEDS),
             _case(command, *extra, "--sensing-error-m=1001", named="--sensing-error-m"),
+            *(_case(command, *extra, f"{option}={value}", named=option) for option in ("--accel-mps2", "--brake-mps2")
+              for value in (*NOT_NUMBERS, "0", "-3")),  # an acceleration bound is above 0
             *(commitment_options(command, *extra) if commitment else ())]
 
 
@@ -171,7 +174,10 @@ BOUNDS_FILES = {"bounds_reversed.toml": "bounds.same_mps", "bounds_key.json": "b
                 "bounds_list.json": "bounds", "bounds_phantoms.toml": "bounds.phantoms",
                 "bounds_view.toml": "bounds.oncoming_view_m", "bounds_latency.toml": "bounds.latency_s",
                 "bounds_commit.toml": "bounds.commit_max", "bounds_escapes.json": "bounds.escapes",
-                "bounds_semantics.toml": "bounds.semantics"}
+                "bounds_semantics.toml": "bounds.semantics", "bounds_accel.toml": "bounds.accel_mps2",
+                "bounds_brake.json": "bounds.brake_mps2", "speeds_length.json": "left_mps",
+                "speeds_reversed.toml": "left_mps[0]", "speeds_negative.json": "left_mps[0]",
+                "speeds_nan.json": "right_mps[0]"}
 
 
 def out_dirs(command: str, option: str = "--out") -> list[Case]:
@@ -252,6 +258,12 @@ def _hostile_files(folder: Path) -> None:
         "bounds_commit.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\ncommit_max = 0\n',
         "bounds_escapes.json": '{"lane": "left", "left_lane": [12], "right_lane": [], "bounds": {"escapes": []}}',
         "bounds_semantics.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nsemantics = 3\n',
+        "bounds_accel.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\naccel_mps2 = 0\n',
+        "bounds_brake.json": "{" + good + ', "bounds": {"brake_mps2": -9}}',
+        "speeds_length.json": "{" + good + ', "left_mps": [[5, 6], [7, 8]], "bounds": {}}',
+        "speeds_reversed.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\nleft_mps = [[6, 5]]\n[bounds]\n',
+        "speeds_negative.json": "{" + good + ', "left_mps": [[-1, 5]], "bounds": {}}',
+        "speeds_nan.json": '{"lane": "left", "left_lane": [], "right_lane": [30], "right_mps": [[NaN, 5]]}',
     }
     for name, text in files.items():
         (folder / name).write_text(text)

@@ -1,0 +1,102 @@
+"""The sound model with each vehicle's own measured speed (``Scenario.left_mps``, ``spec.dynamics``): every plan, and
+every committed part with its escape, survives every motion that keeps to each vehicle's own interval and
+acceleration bounds, braking to a standstill at any instant included; the lane-wide model's plans and the paper's do
+not; a vehicle standing ahead is planned for (a committed step and its escape, or the minimal-risk manoeuvre proved
+from the start), never left to the fallback."""
+
+from __future__ import annotations
+
+import random
+from dataclasses import replace
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from oracle import commit, reach
+from oracle.planner import plan
+from spec.answers import Status, Strategy
+from spec.assumptions import SpeedBounds
+from spec.escapes import COMMIT
+from spec.grid import STANDARD_CELLS_M, Grid
+from spec.models import ModelKind
+from spec.scenario import Scenario, make_scenario, measured_speeds, problem_for
+from spec.sound import sound_from
+from tests.conftest import CI_PROFILE
+from tests.oracle.test_commit import _check as check_committed
+from tests.oracle.test_sound import _check as check_whole
+from tests.oracle.test_sound import sound_scenarios
+
+
+def speeds(lane: SpeedBounds, count: int) -> st.SearchStrategy[list[tuple[float, float]]]:
+    """Measured speed intervals for ``count`` vehicles of a lane with ``lane``'s speeds: standing, anything from a
+    standstill to the top, narrow readings anywhere from below the lane's slowest to above its top."""
+    narrow = st.tuples(st.floats(0.0, lane.high_mps + 1.0), st.floats(0.0, 1.5)).map(lambda p: (p[0], p[0] + p[1]))
+    one = st.one_of(st.just((0.0, 0.0)), st.just((0.0, lane.high_mps)), narrow)
+    return st.lists(one, min_size=count, max_size=count)
+
+
+@st.composite
+def measured_scenarios(draw: st.DrawFn) -> Scenario:
+    """A sound scenario on a standard grid whose same-direction vehicles' speeds were measured, and, half the time,
+    the oncoming ones' too."""
+    scenario = draw(st.sampled_from(STANDARD_CELLS_M).flatmap(lambda c: sound_scenarios(Grid(c))))
+    assert scenario.sound is not None
+    b = scenario.sound.bounds
+    left = draw(speeds(b.same_mps, len(scenario.left_lane)))
+    right = draw(st.none() | speeds(b.oncoming_mps, len(scenario.right_lane)))
+    return measured_speeds(scenario, left, right)
+
+
+@settings(max_examples=100 if CI_PROFILE else 25)
+@given(measured_scenarios(), st.sampled_from(list(Strategy)), st.booleans(), st.integers(0, 2**32 - 1))
+def test_every_answer_with_measured_speeds_survives_every_motion_that_may_brake_to_a_standstill(
+        scenario: Scenario, strategy: Strategy, committed: bool, seed: int) -> None:
+    assert scenario.sound is not None
+    if committed:
+        check_committed(replace(scenario, sound=replace(scenario.sound, commitment=COMMIT)), strategy, 4,
+                        random.Random(seed))
+    else:
+        check_whole(scenario, strategy, 4, random.Random(seed))
+
+
+def _standing_ahead(cell: int, start_mps: float | None = None) -> Scenario:
+    """The AV in the left lane at the default bounds, one vehicle standing in its lane at ``cell`` (21 m cells)."""
+    scenario = measured_speeds(make_scenario("left", [cell], [], 1, cell_m=21), [(0.0, 0.0)])
+    return replace(scenario, sound=replace(sound_from(None, "default"), start_mps=start_mps))
+
+
+@pytest.mark.parametrize("cell", [14, 16])
+def test_the_lane_wide_models_and_the_papers_plans_break_against_a_vehicle_standing_ahead(cell: int) -> None:
+    """Planned as if the vehicle ahead drove at its lane's slowest (4.9 m/s) or at the common speed, the AV closes in
+    on it faster than the specification allows once it stands: the standstill corners find it."""
+    standing = _standing_ahead(cell)
+    lane_wide = replace(standing, left_mps=None)
+    answer = plan(lane_wide, Strategy.SENSIBLE)
+    assert answer.status is Status.PLAN and answer.commit is not None
+    assert reach.exact_check(lane_wide, answer.actions) is None
+    assert reach.exact_check(standing, answer.actions) is not None
+    paper = plan(make_scenario("left", [cell], [], 1, cell_m=21), Strategy.SENSIBLE)
+    assert paper.status is Status.PLAN
+    found = reach.exact_check(standing, paper.actions)
+    assert found is not None and found.vehicle.startswith("left_lane[0]")
+
+
+@pytest.mark.parametrize("start_mps", [None, 3.5, 12.0])
+@pytest.mark.parametrize("cell", range(11, 19))
+def test_a_vehicle_standing_ahead_is_planned_for(cell: int, start_mps: float | None) -> None:
+    """From every start that does not already break the specification: a committed step with its escape that
+    survives the standstill, or no committed step with the minimal-risk manoeuvre (braking to a stop behind it)
+    proved from the start; a start too near is an answer of its own."""
+    scenario = _standing_ahead(cell, start_mps)
+    problem = problem_for(scenario, ModelKind.FINAL)
+    rules, first = commit._sound_rules(problem), commit.start(problem)
+    answer = plan(scenario, Strategy.SENSIBLE)
+    if rules.start_violation(first) is not None:
+        assert answer.status is Status.UNSAFE_START
+        return
+    assert rules.continuation_violation(first) is None  # the minimal-risk manoeuvre: a stop behind it
+    assert reach.exact_check(scenario, ()) is None
+    assert answer.status in (Status.PLAN, Status.NO_PLAN)
+    if answer.status is Status.PLAN:
+        assert check_committed(scenario, Strategy.SENSIBLE, 8, random.Random(cell)) > 0
