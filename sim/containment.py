@@ -45,7 +45,7 @@ from spec.lanes import Lane
 from spec.physical import CAR, ROAD
 from spec.safety import SAFETY
 from spec.scenario import Scenario
-from spec.sound import Sound, Vehicle, reach_m, vehicles
+from spec.sound import Sound, Vehicle, reach_m, slowest_ahead_mps, vehicles
 
 #: Breach records kept per run (the counts are exact beyond it).
 MAX_RECORDS = 200
@@ -62,8 +62,12 @@ SENSED_BODY = -4
 class BreachKind(enum.Enum):
     """Which assumption a breach broke."""
 
-    TOO_SLOW = "too slow"  # behind its interval's slow end, or driving slower than its lane's lowest speed
-    TOO_FAST = "too fast"  # beyond its interval's fast end, or driving faster than its lane's highest speed
+    #: behind its interval's slow end, or driving slower than its lane's lowest speed (a vehicle whose speed was
+    #: measured: than braking at b_max from its interval allows)
+    TOO_SLOW = "too slow"
+    #: beyond its interval's fast end, or driving faster than its lane's highest speed (a vehicle whose speed was
+    #: measured: than speeding up at a_max from its interval allows)
+    TOO_FAST = "too fast"
     SENSING = "sensing error"  # outside its interval at the snapshot itself (sensed farther off than the error
     # bound), or a reading of no vehicle in the snapshot (a ghost)
     APPEARED = "appeared"  # a vehicle the decision did not know, where no phantom could be
@@ -147,7 +151,7 @@ class Containment:
         self.decision, self.bounds, self.tracking = decision, sound.bounds, sound.tracking
         self.x0_m, self.t0_s = av_x_m, t_s
         found = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, grid, sound, scenario.left_m,
-                         scenario.right_m)
+                         scenario.right_m, scenario.left_mps, scenario.right_mps)
         by_index = {(v.lane, v.index): v for v in found if v.index is not None}
         self.phantoms = {lane: [v for v in found if v.index is None and v.lane is lane] for lane in Lane}
         self.tracked: dict[int, Vehicle] = {}
@@ -178,6 +182,9 @@ class Containment:
         self.explaining = {lane: [*(v for v in read if v.lane is lane), *self.phantoms[lane]] for lane in Lane}
         self.sensed: Breach | None = None  # the first reading the AV's own monitor could not explain (``sense``)
         self.ended = False  # the decision has ended (its unseen breaches counted: ``unseen``)
+        #: the speed the decision's minimal-risk manoeuvre brakes to, as its proof took it (``slowest_ahead_mps``: a
+        #: standstill where a vehicle's speed was measured)
+        self.hold_floor_mps = slowest_ahead_mps(sound, found)
 
     def shift_x(self, dx_m: float) -> None:
         """The world was re-centred by ``dx_m``."""
@@ -220,7 +227,8 @@ class Containment:
                         continue
                 name, known, miss = self._miss(lane, car, av, elapsed)
                 if miss == 0.0:
-                    if known is not None and (speeding := self._speed(lane, car, name, t_s, km, doing)):
+                    if known is not None and (speeding := self._speed(lane, car, known, elapsed, name, t_s, km,
+                                                                      doing)):
                         out.append(speeding)
                     continue
                 if known is None and not sensed(car):
@@ -257,11 +265,16 @@ class Containment:
         return Breach(self.decision, km, t_s, f"{name} the sensors did not show", car.body, BreachKind.APPEARED,
                       abs(miss), doing)
 
-    def _speed(self, lane: Lane, car: KinematicCar, name: str, t_s: float, km: float, doing: str) -> Breach | None:
-        """``car``'s breach of its lane's speed bounds, if it drives outside them (its true speed along the lane)."""
+    def _speed(self, lane: Lane, car: KinematicCar, known: Vehicle, elapsed_s: float, name: str, t_s: float,
+               km: float, doing: str) -> Breach | None:
+        """``car``'s breach of its speed bounds, if it drives outside them (its true speed along the lane): its lane's,
+        or, for a vehicle whose speed was measured, what its own dynamics allow ``elapsed_s`` after the snapshot."""
         bounds = self.bounds.speeds(lane)
+        low, high = bounds.low_mps, bounds.high_mps
+        if known.dynamics is not None:
+            low, high = known.dynamics.speeds_mps(max(0.0, elapsed_s))
         along_mps = car.velocity_mps if lane is Lane.LEFT else -car.velocity_mps
-        miss = _outside(along_mps, bounds.low_mps, bounds.high_mps, ROUNDING_MPS)
+        miss = _outside(along_mps, low, high, ROUNDING_MPS)
         if miss == 0.0:
             return None
         kind = BreachKind.TOO_SLOW if miss < 0 else BreachKind.TOO_FAST

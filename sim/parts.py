@@ -26,6 +26,7 @@ from sim.traffic import FollowingTraffic, PaperTraffic, SpreadTraffic, TrafficMo
 from sim.vehicle import WheeledCar
 from spec.answers import Answer, Strategy
 from spec.assumptions import Bounds, speed_error_mps, world_bounds
+from spec.dynamics import VehicleSpeeds, parse_vehicle_speeds
 from spec.engines import Engine, check_strategy, get_engine, load_engines, parse_strategy
 from spec.errors import OptionError, check_number
 from spec.faults import DEFAULT_STEERING_OFFSET_DEG, NO_FAULTS, FaultKind, FaultSpec, parse_faults
@@ -99,6 +100,9 @@ class Parts:
     faults: FaultSpec = NO_FAULTS  # what the fault injectors do to the sensors and the steering (``sim.faults``)
     tracking: bool = False  # the tracking layer between the sensors and the discretiser (``sim.tracking``)
     speed_error_mps: float = 0.0  # the range-rate readings' error bound, for the tracker's speed intervals
+    #: the planner and containment read each track's speed interval (``spec.dynamics``: it may brake to a standstill);
+    #: False: every vehicle at its lane's speeds
+    measured_speeds: bool = False
 
 
 @dataclass(frozen=True, slots=True)
@@ -127,6 +131,8 @@ class DriveConfig:
     faults: str = ""  # the fault injectors, as ``--faults`` takes them (``spec.faults.parse_faults``); kept canonical
     steering_offset_deg: float = DEFAULT_STEERING_OFFSET_DEG  # the steering fault's size
     tracking: bool = False  # the planner sees the tracker's vehicles, not each sweep's readings (``sim.tracking``)
+    #: where a vehicle's speed comes from (``VehicleSpeeds``): its lane's bounds, or its track's measured interval
+    vehicle_speeds: VehicleSpeeds = VehicleSpeeds.LANE
     #: stop at the first failure a sensing fault caused; restart after any other (counted apart): the reliability
     #: target's measure, km between sensing-caused failures (docs/faults.md)
     until_sensing_failure: bool = False
@@ -147,6 +153,13 @@ class DriveConfig:
             check_number(option, value, high)
         world_bounds(self.traffic, self.sensor, self.range_sd_m, self.bounds_scale)  # checked here, not in a worker
         object.__setattr__(self, "faults", parse_faults(self.faults, "--faults", self.steering_offset_deg).text())
+        object.__setattr__(self, "vehicle_speeds", parse_vehicle_speeds(self.vehicle_speeds))
+        if self.vehicle_speeds is VehicleSpeeds.MEASURED:  # the sound model's drives read them (the paper's: cells)
+            why = ("needs --tracking on (speeds are measured by the tracks)" if not self.tracking else
+                   None if get_engine(self.engine).measured_speeds else
+                   f"engine {self.engine} answers every vehicle at its lane's speeds only")
+            if why is not None:
+                raise OptionError("--vehicle-speeds", self.vehicle_speeds.value, why)
 
     @property
     def stops_at_failure(self) -> bool:
@@ -187,7 +200,8 @@ class DriveConfig:
             sensor = functools.partial(sensor, noise=self.noise)  # type: ignore[call-arg]
         return Parts(planner, traffic=traffic, sensor=sensor, observers=observers, bounds=self.bounds,
                      faults=self.fault_spec, tracking=self.tracking,
-                     speed_error_mps=speed_error_mps(self.sensor, self.noise.range_rate_sd_mps))
+                     speed_error_mps=speed_error_mps(self.sensor, self.noise.range_rate_sd_mps),
+                     measured_speeds=self.vehicle_speeds is VehicleSpeeds.MEASURED and self.model == "sound")
 
     def to_json(self) -> dict[str, Any]:
         """The configuration as records keep it; event and noise parameters only where the models use them, so that
@@ -201,7 +215,7 @@ class DriveConfig:
             del data["steering_offset_deg"]
         for key, default in (("restart_after_collision", False), ("opportunity_checks", 0), ("model", "paper"),
                              ("bounds_scale", 1.0), ("faults", ""), ("tracking", False),
-                             ("until_sensing_failure", False)):
+                             ("until_sensing_failure", False), ("vehicle_speeds", VehicleSpeeds.LANE.value)):
             if data[key] == default:  # records written before these existed stay the same campaign
                 del data[key]
         return data
@@ -217,7 +231,7 @@ class DriveConfig:
                 "restart_after_collision": self.restart_after_collision,
                 "opportunity_checks": self.opportunity_checks, "model": self.model, "bounds_scale": self.bounds_scale,
                 "faults": self.faults, "steering_offset_deg": self.steering_offset_deg, "tracking": self.tracking,
-                "until_sensing_failure": self.until_sensing_failure}
+                "until_sensing_failure": self.until_sensing_failure, "vehicle_speeds": self.vehicle_speeds.value}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> DriveConfig:

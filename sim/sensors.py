@@ -32,6 +32,8 @@ class Reading:
     dx_m: float
     spread_m: tuple[float, float] = (0.0, 0.0)  # (below, above) dx_m: the vehicle is within [dx - below, dx + above]
     rate_mps: float | None = None  # the range rate (how fast dx_m grows: a radar's Doppler reading); None: not read
+    #: a kept track's speed interval (m/s along its direction of travel) when the planner reads it; None: not told
+    speed_mps: tuple[float, float] | None = None
 
     @property
     def interval_m(self) -> tuple[float, float]:

@@ -394,6 +394,14 @@ class Simulator:
         self.speed_log += [(self.summary.sim_time_s - t.since_s, t.speed_mps, speeds[self.track_body[t.id]])
                            for t in tracks if t.read_m is not None and self.track_body.get(t.id) in speeds]
 
+    def _told_speed(self, lane: Lane, speed_mps: tuple[float, float]) -> tuple[float, float] | None:
+        """A track's speed interval as the planner is told it (``Parts.measured_speeds``; None: not told): one never
+        read is anything from a standstill to its lane's top, the bounds' (``spec.dynamics``: it may stand)."""
+        if not self.parts.measured_speeds or self.parts.bounds is None:
+            return None
+        low, high = speed_mps
+        return (low, self.parts.bounds.speeds(lane).high_mps) if math.isinf(high) else (low, high)
+
     def _on_sweep(self) -> None:
         """A sweep: the sensors read the truth (through any fault injectors), and the steering fault moves on."""
         pose = self.car.pose()
@@ -415,7 +423,8 @@ class Simulator:
             # never hidden), the paper's rules do not (an appearance held is how a fake gap stays closed for them)
             told = (*view.planned, *view.held) if self.sound is not None else view.planned
             self.sweep = tuple(Reading(t.lane, self.track_body.get(t.id, GHOST_BODY), t.place_m - pose.x_m,
-                                       (0.0, 0.0) if t.read_m is not None else (t.place_m - t.lo_m, t.hi_m - t.place_m))
+                                       (0.0, 0.0) if t.read_m is not None else (t.place_m - t.lo_m, t.hi_m - t.place_m),
+                                       speed_mps=self._told_speed(t.lane, t.speed_mps))
                                for t in told)
             self.unresolved = view.unresolved
             if self.speed_log is not None:
@@ -911,6 +920,8 @@ class Simulator:
         mr = MINIMAL_RISK
         assert self.watch is not None
         low = self.watch.bounds.same_mps.low_mps
+        if not emergency and self.containment is not None:  # the proved manoeuvre's own hold speed
+            low = self.containment.hold_floor_mps
         hold = mr.fallback_hold_mps(low) if emergency else mr.hold_mps(self.car.pose().speed_mps, low)
         command = self.car.pose().speed_mps
         y_ref = self.scene.lane_y(self.executor.lane)

@@ -11,12 +11,24 @@ keeps its lane's speeds (``spec.assumptions.Bounds``), as phantoms do.
 
 from __future__ import annotations
 
+import enum
 import functools
 import math
 from dataclasses import dataclass
 
-from spec.errors import OptionError
+from spec.errors import OptionError, parse_choice
 from spec.tracking import VEHICLE_SPEED_CHANGE, Speed, SpeedChange
+
+
+class VehicleSpeeds(enum.Enum):
+    """Where the closed loop's planner and containment take a vehicle's speed from."""
+
+    LANE = "lane"  # its lane's bounds (``spec.assumptions.Bounds``), whatever was measured
+    MEASURED = "measured"  # its track's speed interval (``sim.tracking``), moving by its own dynamics
+
+
+def parse_vehicle_speeds(value: object, where: str = "--vehicle-speeds") -> VehicleSpeeds:
+    return parse_choice(VehicleSpeeds, value, where)
 
 
 @dataclass(frozen=True, slots=True)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import enum
 import math
+from typing import TypeVar
 
 
 class ExitCode(enum.IntEnum):
@@ -94,3 +95,16 @@ def check_number(option: str, value: object, high: float = math.inf, low: float 
             bound = f"between {low:g} and {high:g}" if math.isfinite(high) else f"at least {low:g}"
         raise OptionError(option, value, f"must be {bound}")
     return float(value)
+
+
+Choice = TypeVar("Choice", bound=enum.Enum)
+
+
+def parse_choice(kind: type[Choice], value: object, where: str) -> Choice:
+    """One of ``kind``'s members, given as itself or by its value; anything else is bad input naming ``where``."""
+    if isinstance(value, kind):
+        return value
+    allowed = [str(m.value) for m in kind]
+    if not isinstance(value, str) or value not in allowed:
+        raise OptionError(where, value, f"must be one of {', '.join(allowed)}")
+    return kind(value)

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 from spec.actions import ACTION_RULES, Action
 from spec.constants import MAX_HORIZON
-from spec.errors import OptionError
+from spec.errors import OptionError, parse_choice
 from spec.lanes import Lane
 
 
@@ -147,12 +147,7 @@ COMMIT = Commitment()
 
 
 def parse_semantics(value: object, where: str) -> Semantics:
-    if isinstance(value, Semantics):
-        return value
-    allowed = [s.value for s in Semantics]
-    if not isinstance(value, str) or value not in allowed:
-        raise OptionError(where, value, f"must be one of {', '.join(allowed)}")
-    return Semantics(value)
+    return parse_choice(Semantics, value, where)
 
 
 def parse_most_actions(value: object, where: str) -> int:

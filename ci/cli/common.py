@@ -84,6 +84,18 @@ def faults_options(command: Any) -> Any:
                              f"against the paper's failures (docs/faults.md). Kinds: {kinds}.")(command)
 
 
+def vehicle_speeds_option(command: Any) -> Any:
+    """``--vehicle-speeds lane|measured``, handed to the command as a ``VehicleSpeeds``."""
+    from spec.dynamics import VehicleSpeeds
+
+    return click.option("--vehicle-speeds", type=click.Choice([v.value for v in VehicleSpeeds]),
+                        default=VehicleSpeeds.LANE.value, show_default=True,
+                        callback=lambda _ctx, _param, value: VehicleSpeeds(value),
+                        help="Where the sound model's drives take each vehicle's speed from: its lane's bounds, or "
+                             "its track's measured interval (needs --tracking on; each vehicle may then brake to a "
+                             "standstill: docs/sound.md).")(command)
+
+
 def horizon_option() -> Any:
     from ci.shared.options import HORIZON
 

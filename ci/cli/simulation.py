@@ -7,12 +7,21 @@ from pathlib import Path
 
 import click
 
-from ci.cli.common import err, faults_options, print_header, print_json, print_table, strategy_option
+from ci.cli.common import (
+    err,
+    faults_options,
+    print_header,
+    print_json,
+    print_table,
+    strategy_option,
+    vehicle_speeds_option,
+)
 from ci.shared.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.shared.options import CELL_M, KM, RUNS, SCHEDULER, SEED, TOLERANCE, WORKERS
 from ci.shared.options import out_dir as out_dir_checked
 from ci.shared.records import campaign_lock
 from spec.answers import Strategy
+from spec.dynamics import VehicleSpeeds
 from spec.engines import get_engine
 from spec.errors import ExitCode, OptionError
 from spec.grid import PAPER_GRID
@@ -55,12 +64,13 @@ from spec.physical import LOOP
 @click.option("--paper-replanning", is_flag=True,
               help="Re-plan only as the paper did (not when a deviation exceeds the tolerance).")
 @faults_options
+@vehicle_speeds_option
 @click.option("--json", "as_json", is_flag=True)
 def simulate(km: float, until_failure: bool, until_sensing_failure: bool, seed: int, engine: str, strategy: Strategy,
              cell_m: float, model: str, runs: int,
              workers: int, executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool,
              step_tolerance: float, plan_tolerance: float, paper_replanning: bool, faults: str,
-             steering_offset_deg: float, tracking: bool, as_json: bool) -> None:
+             steering_offset_deg: float, tracking: bool, vehicle_speeds: VehicleSpeeds, as_json: bool) -> None:
     """Drive the PyBullet simulator closed-loop and check every action against the model's prediction."""
     from ci.shared.progress import km_progress
     from ci.simulation.campaign import RUNS_FILE
@@ -76,7 +86,11 @@ def simulate(km: float, until_failure: bool, until_sensing_failure: bool, seed: 
         raise OptionError("--seed", seed, f"seed + runs - 1 must stay below 2**32 (runs {runs})")
     campaign = DriveConfig(km, until_failure, engine, strategy, not paper_replanning, step_tolerance, plan_tolerance,
                            cell_m, model=model, faults=faults, steering_offset_deg=steering_offset_deg,
-                           tracking=tracking, until_sensing_failure=until_sensing_failure)
+                           tracking=tracking, until_sensing_failure=until_sensing_failure,
+                           vehicle_speeds=vehicle_speeds)
+    if vehicle_speeds is VehicleSpeeds.MEASURED and model != "sound":
+        raise OptionError("--vehicle-speeds", vehicle_speeds.value, "needs --model sound (the paper's rules read "
+                          "cells alone)")
     campaign.parts()  # the engine exists and answers the strategy: bad input before any run starts
     get_engine(engine).ready()  # its tools are installed (exit 4), or every plan of every run would fail
     limit = f"{km:g} km" + (" or until failure" if until_failure else "") + (

@@ -367,3 +367,30 @@ def test_the_paper_worlds_vehicles_are_known_only_exactly_where_they_went() -> N
     s = sighting(PROFILES["paper"])
     assert not s.new((Reading(Lane.LEFT, 5, 40.0 + 70.0 - 70.0),), 70.0, 10.0)
     assert s.new((Reading(Lane.LEFT, 5, 41.0),), 70.0, 10.0)
+
+
+def test_a_measured_vehicle_braking_to_a_standstill_is_inside_one_braking_harder_than_b_max_is_not() -> None:
+    """A vehicle whose speed was measured (``Reading.speed_mps``) may brake at b_max to a standstill: the position
+    and the speed that motion reaches are inside its own bounds, where its lane's 4.9 m/s floor called both a breach;
+    a speed just below what braking at b_max allows is a breach, ``too slow``, by that much."""
+    from sim.discretiser import discretise
+    from spec.tracking import VEHICLE_SPEED_CHANGE
+
+    b = VEHICLE_SPEED_CHANGE.brake_mps2
+    readings = (Reading(Lane.LEFT, 1, 40.0, speed_mps=(7.0, 7.0)),)
+    scenario = discretise(readings, Lane.LEFT, PAPER_GRID, measured=True)
+    assert scenario.left_mps == ((7.0, 7.0),)
+
+    def watched() -> Containment:
+        return Containment(1, SOUND, scenario, readings, PAPER_GRID, 0.0, 0.0, [car(1, 40.0)])  # type: ignore[list-item]
+
+    stopped_s = 7.0 / b
+    for t_s in (0.5 * stopped_s, stopped_s, 3.0):  # braking at b_max, then standing
+        speed = max(0.0, 7.0 - b * t_s)
+        x = 40.0 + (7.0 * t_s - b * t_s * t_s / 2 if t_s < stopped_s else 49.0 / (2 * b))
+        assert watched().check(t_s, 0.0, AV, [car(1, x, speed)], [], "drive", never) == []  # type: ignore[list-item]
+    t_s = 0.5 * stopped_s
+    x = 40.0 + 7.0 * t_s - b * t_s * t_s / 2
+    (breach,) = watched().check(t_s, 0.0, AV, [car(1, x, 7.0 - b * t_s - 0.01)], [], "drive",  # type: ignore[list-item]
+                                never)
+    assert breach.kind is BreachKind.TOO_SLOW and breach.speed and breach.by_m == pytest.approx(0.01)

@@ -1,7 +1,8 @@
 """The AV's own containment monitor at its boundaries (``sim.containment.Containment.sense``): a reading is explained
 while its interval, widened by the sensing error (its own), meets where a vehicle the decision knew can be (the
-snapshot's reading widened by the sensing error, grown by its lane's speed bounds since); a reading just beyond that
-is a breach the AV senses, of the kind its side names, one just inside is not.
+snapshot's reading widened by the sensing error, grown by its lane's speed bounds since, or, for a vehicle whose
+speed was measured, by its own dynamics: braking at b_max to a standstill, speeding up at a_max); a reading just
+beyond that is a breach the AV senses, of the kind its side names, one just inside is not.
 
 Every boundary is computed here from the declarations (the world's bounds), not read back from the monitor.
 """
@@ -16,9 +17,11 @@ from sim.containment import BreachKind, Containment
 from sim.discretiser import discretise
 from sim.sensors import Reading
 from spec.assumptions import world_bounds
+from spec.dynamics import Dynamics
 from spec.grid import PAPER_GRID
 from spec.lanes import Lane
 from spec.sound import Sound
+from spec.tracking import VEHICLE_SPEED_CHANGE
 
 BOUNDS = world_bounds("spread", "noisy")  # 4.9..9.1 m/s both lanes, sensing error 1.5 m
 E_M = BOUNDS.sensing_error_m
@@ -26,36 +29,55 @@ READ_M = {Lane.LEFT: 40.0, Lane.RIGHT: 150.0}  # where the snapshot read each la
 ELAPSED_S = 1.0
 AV_MOVED_M = 7.0  # the AV's own travel since the snapshot: a later reading is ahead of it, not of the snapshot
 NUDGE_M = 1e-3  # just inside or just beyond (the monitor's own slack is 1e-6 m)
+#: Each vehicle's measured speed at the snapshot, along its direction of travel (m/s): each stops within the elapsed
+#: time when it brakes at b_max (5 / 9 s, 5.5 / 9 s), neither reaches its lane's top speeding up (6 + 3 x 1 < 9.1).
+MEASURED_MPS = {Lane.LEFT: (5.0, 6.0), Lane.RIGHT: (5.5, 6.0)}
 
 
-def _monitor() -> Containment:
-    seen = (Reading(Lane.LEFT, 1, READ_M[Lane.LEFT]), Reading(Lane.RIGHT, 2, READ_M[Lane.RIGHT]))
+def _monitor(measured: bool) -> Containment:
+    seen = tuple(Reading(lane, body, READ_M[lane], speed_mps=MEASURED_MPS[lane] if measured else None)
+                 for lane, body in ((Lane.LEFT, 1), (Lane.RIGHT, 2)))
     scenario = replace(discretise(seen, Lane.LEFT, PAPER_GRID, measured=True), sound=Sound(BOUNDS))
     assert scenario.sound is not None
+    assert (scenario.left_mps is not None) == measured
     return Containment(0, scenario.sound, scenario, seen, PAPER_GRID, 0.0, 0.0, [])
 
 
-def _edges_m(lane: Lane) -> tuple[float, float]:
+def _edges_m(lane: Lane, measured: bool) -> tuple[float, float]:
     """The farthest a reading (road coordinates, the snapshot's frame) may lie behind and ahead and be explained: the
-    vehicle's interval (its reading +- the error) grown by its lane's speeds, then the reading's own error."""
-    speeds = BOUNDS.speeds(lane)
-    read = READ_M[lane]
-    if lane is Lane.LEFT:
-        low, high = read - E_M + speeds.low_mps * ELAPSED_S, read + E_M + speeds.high_mps * ELAPSED_S
+    vehicle's interval (its reading +- the error) grown by its lane's speeds, or by its own least and most travel
+    (braking at b_max to a standstill, speeding up at a_max), then the reading's own error."""
+    read, t = READ_M[lane], ELAPSED_S
+    if measured:
+        (v_low, v_high), a, b = MEASURED_MPS[lane], VEHICLE_SPEED_CHANGE.accel_mps2, VEHICLE_SPEED_CHANGE.brake_mps2
+        least = v_low * v_low / (2 * b) if v_low / b <= t else v_low * t - b * t * t / 2
+        most = v_high * t + a * t * t / 2
+        assert v_high + a * t <= BOUNDS.speeds(lane).high_mps  # below its top all the while
     else:
-        low, high = read - E_M - speeds.high_mps * ELAPSED_S, read + E_M - speeds.low_mps * ELAPSED_S
+        speeds = BOUNDS.speeds(lane)
+        least, most = speeds.low_mps * t, speeds.high_mps * t
+    if lane is Lane.LEFT:
+        low, high = read - E_M + least, read + E_M + most
+    else:
+        low, high = read - E_M - most, read + E_M - least
     return low - E_M, high + E_M
 
 
+def test_the_measured_bounds_are_the_declared_dynamics() -> None:
+    d = Dynamics(MEASURED_MPS[Lane.LEFT], BOUNDS.same_mps.high_mps)
+    assert d.travel_m(ELAPSED_S) == pytest.approx((25 / 18, 7.5))
+
+
+@pytest.mark.parametrize("measured", [False, True], ids=["lane speeds", "measured speeds"])
 @pytest.mark.parametrize("lane", list(Lane))
 @pytest.mark.parametrize("side", ["behind", "ahead"])
 @pytest.mark.parametrize("inside", [True, False])
 def test_a_reading_just_beyond_its_allowance_is_a_sensed_breach_one_just_inside_is_not(
-        lane: Lane, side: str, inside: bool) -> None:
-    low, high = _edges_m(lane)
+        lane: Lane, side: str, inside: bool, measured: bool) -> None:
+    low, high = _edges_m(lane, measured)
     nudge = -NUDGE_M if inside else NUDGE_M
     x_m = low - nudge if side == "behind" else high + nudge
-    breach = _monitor().sense(ELAPSED_S, 0.0, AV_MOVED_M, (Reading(lane, 1, x_m - AV_MOVED_M),), "a test")
+    breach = _monitor(measured).sense(ELAPSED_S, 0.0, AV_MOVED_M, (Reading(lane, 1, x_m - AV_MOVED_M),), "a test")
     if inside:
         assert breach is None
         return

@@ -113,6 +113,21 @@ def test_the_sound_models_scenario_carries_where_each_vehicle_was_sensed() -> No
     assert scenario.left_m == ((21.0, 26.5), (52.0, 52.0)) and scenario.right_m == ((150.0, 150.0),)
 
 
+
+def test_the_sound_models_scenario_carries_each_vehicles_measured_speed_where_its_lane_has_them_all() -> None:
+    """Tracks' speed intervals (``Reading.speed_mps``) become the scenario's ``left_mps`` / ``right_mps`` in its
+    cells' order; two readings in one cell are one vehicle over the hull of both; a lane with a reading whose speed
+    was not told keeps its lane's speeds (None), and the paper's rules read cells alone."""
+    av = PAPER_GRID.av_cell
+    readings = (Reading(Lane.LEFT, 0, 52.0, speed_mps=(6.0, 7.0)), Reading(Lane.LEFT, 1, 23.0, speed_mps=(0.0, 1.0)),
+                Reading(Lane.LEFT, 3, 25.0, speed_mps=(2.0, 3.0)), Reading(Lane.RIGHT, 2, 150.0))
+    scenario = discretise(readings, Lane.LEFT, PAPER_GRID, measured=True)
+    assert scenario.left_lane == (av + 1, av + 2)
+    assert scenario.left_mps == ((0.0, 3.0), (6.0, 7.0)) and scenario.right_mps is None
+    assert discretise((readings[0], readings[3]), Lane.LEFT, PAPER_GRID).left_mps is None
+    untold = (*readings[:2], Reading(Lane.LEFT, 3, 25.0))
+    assert discretise(untold, Lane.LEFT, PAPER_GRID, measured=True).left_mps is None
+
 @pytest.mark.parametrize("av_y_offset_m", [0.3, 0.5, 0.7])
 def test_the_oncoming_lane_hidden_behind_a_left_lane_vehicle_starts_where_the_view_ends(
         av_y_offset_m: float) -> None:

@@ -94,6 +94,15 @@ def _case(command: str, *extra: str, named: str, code: int = ExitCode.BAD_INPUT,
 NO_TOOLS = (("PATH", "/nonexistent"),)  # spin and gcc are not installed
 
 
+def vehicle_speeds(command: str) -> list[Case]:
+    """``--vehicle-speeds``: an unknown source; measured speeds without tracking, from an engine that moves every
+    vehicle at its lane's speeds, or (simulate) for the paper's rules: exit 2 naming it."""
+    measured = ("--vehicle-speeds=measured",)
+    return [*choices(command, "--vehicle-speeds"), _case(command, *measured, named="--vehicle-speeds"),
+            _case(command, *measured, "--tracking=on", "--engine=z3", named="--vehicle-speeds"),
+            *([_case(command, *measured, "--tracking=on", named="--vehicle-speeds")] if command == "simulate" else [])]
+
+
 def faults(command: str) -> list[Case]:
     """Unknown fault kinds, rates outside [0, 1], persistences below one sweep, a bad steering offset: exit 2."""
     bad = ("fake=0.1", "fake-gap", "fake-gap=1.5", "fake-gap=-0.1", "fake-gap=nan", "fake-gap=x", "fake-gap=0.1/0",
@@ -316,6 +325,7 @@ CASES: list[Case] = [
     _case("simulate", "--seed=4294967295", "--runs=2", named="--seed"),
     _case("simulate", "--until-failure", "--until-sensing-failure", named="--until-sensing-failure"),
     *out_dirs("simulate"), *unknown("simulate"), no_spin("simulate", "--engine=spin"), *faults("simulate"),
+    *vehicle_speeds("simulate"),
     # audit
     *numbers("audit", "--km", "--min-spawn-gap-m", "--range-sd-m", "--miss-rate"),
     *numbers("audit", "--stop-rate-per-h"),  # at most one stop starting per vehicle and control step
@@ -331,6 +341,7 @@ CASES: list[Case] = [
     _case("audit", "--miss-rate=1.5", named="--miss-rate"),
     *schedulers("audit"), *out_dirs("audit"), *unknown("audit"),
     no_spin("audit", "--engine=spin"), no_spin("audit", "--engines=spin"), *faults("audit"),
+    *vehicle_speeds("audit"),
     # crossval
     *numbers("crossval", "--timeout", "--cell-m"),
     *whole("crossval", "--workers", WORKERS), *whole("crossval", "--seed", SEED),
