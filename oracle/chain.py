@@ -207,7 +207,7 @@ def drive(world: World, sound: Sound, grid: Grid, policy: Policy, end_s: float, 
         followers = reach.followers_now(followers, was_entering, entering, lanes, cars, pos, x)
         was_entering = entering
         speeds = [_speed(world.same_speeds if c.lane is Lane.LEFT else world.oncoming_speeds, t) for c in cars]
-        rear = rear_binds(b, v)
+        rear = [rear_binds(b, v)] * len(cars)
         found = reach.instant_breach(sound, f"chain ({world.describe()})", t, x, v, lanes, entering, rear, cars, pos,
                                      speeds, followers)
         if found is not None:

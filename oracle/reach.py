@@ -175,6 +175,9 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
     rate = path.max_speed + tr.speed_mps + fastest_vehicle + sound.safety.time_gap_s * (path.max_accel
                                                                                        + vehicle_accel)
 
+    def top_mps(c: Vehicle) -> float:
+        return b.same_mps.high_mps if c.dynamics is None else max(b.same_mps.high_mps, c.dynamics.highest_mps)
+
     def speeds(c: Vehicle, t: float) -> tuple[float, float]:
         if c.dynamics is not None:
             return c.dynamics.speeds_mps(t)
@@ -185,11 +188,11 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
         """The least margin over the conflicts at ``t`` and the breach it would be."""
         x, v = path.position(t), path.speed(t)
         least: tuple[float, Breach | None] = (math.inf, None)
-        rear = not b.followers_react and v < b.same_mps.high_mps - TOLERANCE_M  # followers closing in: BEHIND
         for i, c in enumerate(cars):
             options = []
             low, high = reach_m(c, b, t)
             slow, fast = speeds(c, t)
+            rear = not b.followers_react and v < top_mps(c) - TOLERANCE_M  # a follower closing in: BEHIND
             if rear and c.lane is Lane.LEFT and Lane.LEFT in lanes and i in behind:
                 options.append((Conflict.BEHIND, (x - tr.position_m) - high - length, fast - v + tr.speed_mps))
             if c.lane is Lane.LEFT and Lane.LEFT in lanes and i not in behind:
@@ -447,7 +450,9 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
             found = _goal_breach(scenario, goal, cars, pos, x, motion.name, t)
             if found is not None:
                 return found
-        rear = not sound.bounds.followers_react and path.speed(t) < sound.bounds.same_mps.high_mps - TOLERANCE_M
+        high = sound.bounds.same_mps.high_mps
+        rear = [not sound.bounds.followers_react and path.speed(t) < (high if c.dynamics is None else max(
+            high, c.dynamics.highest_mps)) - TOLERANCE_M for c in cars]  # per follower: closing in
         found = instant_breach(sound, motion.name, t, x, v, lanes, entering, rear, cars, pos, speeds, followers)
         if found is not None:
             return found
@@ -477,16 +482,16 @@ def _approach(speed_mps: float, target_mps: float, dt_s: float, accel_mps2: floa
 
 
 def instant_breach(sound: Sound, motion: str, t: float, x: float, v: float, lanes: frozenset[Lane], entering: bool,
-                   rear: bool, cars: Sequence[Vehicle], pos: Sequence[float], speeds: Sequence[float],
+                   rear: Sequence[bool], cars: Sequence[Vehicle], pos: Sequence[float], speeds: Sequence[float],
                    followers: set[int]) -> Breach | None:
     """The first vehicle whose gap to the AV (at ``x``, speed ``v``, occupying ``lanes``) breaks the specification at
     one instant, each vehicle at ``pos`` moving at ``speeds``: ahead in the left lane (behind it while entering that
-    lane: a cut-in; a follower only where followers keep their speed and the AV is slower, ``rear``), oncoming while
-    the AV is in the right lane and the vehicle not yet past."""
+    lane: a cut-in; a follower only where followers keep their speed and the AV is slower than it may be, ``rear``,
+    per vehicle), oncoming while the AV is in the right lane and the vehicle not yet past."""
     length = sound.safety.vehicle_length_m
     for i, c in enumerate(cars):
         y, s = pos[i], speeds[i]
-        if rear and c.lane is Lane.LEFT and Lane.LEFT in lanes and i in followers:
+        if rear[i] and c.lane is Lane.LEFT and Lane.LEFT in lanes and i in followers:
             found = _gap_breach(sound, motion, Conflict.BEHIND, c.name, t, x - y - length, s - v)
             if found is not None:
                 return found

@@ -359,13 +359,16 @@ def slowest_ahead_mps(sound: Sound, vehicles: tuple[Vehicle, ...]) -> float:
     return sound.bounds.same_mps.low_mps
 
 
-def rear_binds(bounds: Bounds, slowest_mps: float) -> bool:
-    """Whether the AV's followers are in conflict (``Conflict.BEHIND``) while its reference drives no faster than
-    ``slowest_mps``: only where followers keep their speed whatever the AV does, and only while the reference is
-    slower than a follower may be. At or above that speed the reference never closes on a follower, and the car's
-    own error is the envelope's position bound; below it, a follower at its fastest closes in and must be far enough
-    behind for the specification's gap (``SoundRules._behind_allow``, the cut-in's threshold)."""
-    return not bounds.followers_react and slowest_mps < bounds.same_mps.high_mps - CLOSING_EPS_MPS
+def rear_binds(bounds: Bounds, slowest_mps: float, follower: Vehicle | None = None) -> bool:
+    """Whether the AV's followers (or ``follower``) are in conflict (``Conflict.BEHIND``) while its reference drives
+    no faster than ``slowest_mps``: only where followers keep their speed whatever the AV does, and only while the
+    reference is slower than a follower may be (its lane's top; a measured one's own, which may be above it). At or
+    above that speed the reference never closes on a follower, and the car's own error is the envelope's position
+    bound; below it, a follower at its fastest closes in and must be far enough behind for the specification's gap
+    (``SoundRules._behind_allow``, the cut-in's threshold)."""
+    top = bounds.same_mps.high_mps if follower is None or follower.dynamics is None else max(
+        bounds.same_mps.high_mps, follower.dynamics.highest_mps)
+    return not bounds.followers_react and slowest_mps < top - CLOSING_EPS_MPS
 
 
 def follower_limit_m(x0_m: float, safety: SafetySpec, tracking: Tracking) -> float:
@@ -781,9 +784,10 @@ class SoundRules:
                 need = self._need(Conflict.AHEAD, v, b)
                 if v.lo_m < need[0] + EPS_M and self.held_ahead(v, b.piece.x0_m, b.piece.t0_s):
                     return self._violation(Conflict.AHEAD, v, b.piece, need, True)
-            if b.rear:
-                for i in sorted(followers):
-                    v = self.same[i]
+            for i in sorted(followers):
+                v = self.same[i]
+                if b.rear if v.dynamics is None else rear_binds(self.sound.bounds, min(b.piece.v0_mps, b.piece.v(
+                        b.piece.t1_s)), v):
                     allow = self._need(Conflict.BEHIND, v, b)
                     if v.hi_m > allow[0] - EPS_M:
                         return self._violation(Conflict.BEHIND, v, b.piece, allow, False)
@@ -928,14 +932,31 @@ class SoundRules:
                         Conflict.ONCOMING, tail, end_s))
             return None
         for i, v in enumerate(self.same):  # one that may come to drive slower than the AV's hold closes in for ever
+            if i in followers or not self.held_ahead(v, end_x, end_s):
+                continue
             lowest = 0.0 if v.dynamics is not None else self.sound.bounds.same_mps.low_mps
-            if self.sound.minimal_risk.closes_in(end_v, lowest) and i not in followers and \
-                    self.held_ahead(v, end_x, end_s):
+            if self.sound.minimal_risk.closes_in(end_v, lowest):
                 return Violation(Conflict.AHEAD, v, end_s, -math.inf, self._required(Conflict.AHEAD, tail, end_s, v))
-        if followers and rear_binds(self.sound.bounds, end_v):
-            v = self.same[min(followers)]
-            return Violation(Conflict.BEHIND, v, end_s, -math.inf, self._required(Conflict.BEHIND, tail, end_s))
+            found = self._braking_on(v, end_s, end_x, end_v)
+            if found is not None:
+                return found
+        for i in sorted(followers):
+            v = self.same[i]
+            if rear_binds(self.sound.bounds, end_v, v):
+                return Violation(Conflict.BEHIND, v, end_s, -math.inf, self._required(Conflict.BEHIND, tail, end_s, v))
         return None
+
+    def _braking_on(self, v: Vehicle, end_s: float, end_x: float, end_v: float) -> Violation | None:
+        """A measured vehicle held ahead may still be braking when the manoeuvre's ramp ends: the closing speed on it
+        rises until it stands, while the AV holds ``end_v``. AHEAD over that stretch (after it, nothing changes)."""
+        if v.dynamics is None:
+            return None
+        stop_s = v.dynamics.speed_mps[0] / v.dynamics.change.brake_mps2
+        if stop_s <= end_s:
+            return None
+        hold = Piece(end_s, stop_s, end_x, end_v, 0.0)
+        need = self._own_need(Conflict.AHEAD, v.dynamics, hold)
+        return self._violation(Conflict.AHEAD, v, hold, need, True) if v.lo_m < need[0] + EPS_M else None
 
     def goal_holds(self, state: SoundState, goal: GoalRule) -> bool:
         """Every field of ``goal`` for every position of the vehicles it names (sensed ones, never phantoms)."""
@@ -1022,7 +1043,9 @@ class SoundRules:
                 continue  # the left lane's rules may let it fall behind there: no argument
             if self.same_high(v, t_s) + length + g_min + ex <= x_m - self.dip_m - ex:
                 continue  # already passed
-            speed_gain = fastest - (b.same_mps.high_mps if v.dynamics is None else v.dynamics.highest_mps)
+            # the AV gains on the target's fastest position at most this fast from now on (a measured one's fastest
+            # speed only rises from what it may be now)
+            speed_gain = fastest - (b.same_mps.high_mps if v.dynamics is None else v.dynamics.speeds_mps(t_s)[1])
             if speed_gain <= 0:
                 return True  # never passed for every position
             passed_at = t_s + max(0.0, (self.same_high(v, t_s) + length + g_min + 2 * ex - x_m - self.dip_m)

@@ -7,6 +7,7 @@ from the start), never left to the fallback."""
 from __future__ import annotations
 
 import random
+from collections.abc import Callable
 from dataclasses import replace
 
 import pytest
@@ -15,12 +16,16 @@ from hypothesis import strategies as st
 
 from oracle import commit, reach
 from oracle.planner import plan
+from spec.actions import Action
 from spec.answers import Status, Strategy
 from spec.assumptions import SpeedBounds
+from spec.cells import left_extent_m
 from spec.escapes import COMMIT
-from spec.grid import STANDARD_CELLS_M, Grid
+from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
+from spec.lanes import Lane
 from spec.models import ModelKind
-from spec.scenario import Scenario, make_scenario, measured_speeds, problem_for
+from spec.safety import Conflict
+from spec.scenario import Scenario, make_scenario, measured_speeds, problem_for, sensed
 from spec.sound import sound_from
 from tests.conftest import CI_PROFILE
 from tests.oracle.test_commit import _check as check_committed
@@ -100,3 +105,46 @@ def test_a_vehicle_standing_ahead_is_planned_for(cell: int, start_mps: float | N
     assert answer.status in (Status.PLAN, Status.NO_PLAN)
     if answer.status is Status.PLAN:
         assert check_committed(scenario, Strategy.SENSIBLE, 8, random.Random(cell)) > 0
+
+
+def _least_accepted_m(scenario_at: Callable[[float], Scenario], lo_m: float, hi_m: float) -> float:
+    """The nearest reading of the vehicle (bisected within ``lo_m .. hi_m``) from which the model proves the start
+    and its minimal-risk manoeuvre (the empty answer)."""
+    def accepted(dx_m: float) -> bool:
+        problem = problem_for(scenario_at(dx_m), ModelKind.FINAL)
+        rules, first = commit._sound_rules(problem), commit.start(problem)
+        return rules.start_violation(first) is None and rules.continuation_violation(first) is None
+
+    assert accepted(hi_m)
+    for _ in range(50):
+        mid = (lo_m + hi_m) / 2
+        lo_m, hi_m = (lo_m, mid) if accepted(mid) else (mid, hi_m)
+    return hi_m + 1e-6
+
+
+def test_a_vehicle_still_braking_when_the_av_stands_is_held_to_its_gap_until_it_stands_too() -> None:
+    """The AV at 1.08 m/s stops within 0.2 s; a vehicle ahead at 2.3 m/s brakes for 0.26 s: the closing speed on it
+    rises to the AV's speed error after the AV stands, and the gap must hold it (found by review: the model checked
+    the manoeuvre only to the AV's stop, and accepted a start the exact check breaks 0.06 m short)."""
+    def at(dx_m: float) -> Scenario:
+        base = sensed(make_scenario("left", [11], [], 1, cell_m=21), [(dx_m, dx_m)])
+        return replace(measured_speeds(base, [(2.3, 2.3)]), sound=replace(sound_from(None, "default"), start_mps=1.08))
+
+    lo_m, hi_m = left_extent_m(11, Lane.LEFT, PAPER_GRID)
+    nearest = at(_least_accepted_m(at, lo_m, hi_m))
+    assert reach.exact_check(nearest, ()) is None
+    assert all(reach.run_motion(nearest, (), m) is None for m in reach.motions(nearest, (), random.Random(3), 8))
+
+
+def test_a_measured_follower_faster_than_its_lanes_top_is_held_behind() -> None:
+    """Where followers keep their speed (the paper's profile, 7 m/s), one measured at 10 m/s 12 m behind the AV
+    closes in while the AV drives 7 m/s: every step in its lane is refused for it, and the checks break a plan that
+    ignored it (found by review: BEHIND bound only below the lane's top speed)."""
+    base = measured_speeds(sensed(make_scenario("left", [9], [], 0, cell_m=21), [(-12.0, -12.0)]), [(10.0, 10.0)])
+    scenario = replace(base, sound=sound_from(None, "paper", phantoms=False))
+    problem = problem_for(scenario, ModelKind.FINAL)
+    rules, first = commit._sound_rules(problem), commit.start(problem)
+    for action in (Action.DRIVE, Action.RIGHT_LANE_CHANGE, Action.ACCELERATE):
+        found = rules.step_violation(first, action)
+        assert found is not None and found.conflict is Conflict.BEHIND, action
+    assert reach.exact_check(scenario, (Action.DRIVE, Action.RIGHT_LANE_CHANGE)) is not None
