@@ -69,7 +69,7 @@ class BreachKind(enum.Enum):
     #: measured: than speeding up at a_max from its interval allows)
     TOO_FAST = "too fast"
     SENSING = "sensing error"  # outside its interval at the snapshot itself (sensed farther off than the error
-    # bound), or a reading of no vehicle in the snapshot (a ghost)
+    # bound; a measured speed: a range-rate reading beyond its error bound), or a reading of no vehicle (a ghost)
     APPEARED = "appeared"  # a vehicle the decision did not know, where no phantom could be
     FOLLOWER = "follower too close"  # one behind the AV in its lane nearer than the safety specification allows
     AV_ENVELOPE = "AV envelope"  # the AV off its reference by more than its stated tracking, or its sideways move late
@@ -277,7 +277,10 @@ class Containment:
         miss = _outside(along_mps, low, high, ROUNDING_MPS)
         if miss == 0.0:
             return None
-        kind = BreachKind.TOO_SLOW if miss < 0 else BreachKind.TOO_FAST
+        if known.dynamics is not None and elapsed_s <= 0.0:  # outside what was measured at the snapshot itself
+            kind = BreachKind.SENSING
+        else:
+            kind = BreachKind.TOO_SLOW if miss < 0 else BreachKind.TOO_FAST
         return self._breach(Breach(self.decision, km, t_s, name, car.body, kind, abs(miss), doing, speed=True))
 
     def check_av(self, t_s: float, km: float, av: Pose, x_ref_m: float, v_ref_mps: float, lane_due: Lane | None,

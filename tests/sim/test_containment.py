@@ -372,7 +372,8 @@ def test_the_paper_worlds_vehicles_are_known_only_exactly_where_they_went() -> N
 def test_a_measured_vehicle_braking_to_a_standstill_is_inside_one_braking_harder_than_b_max_is_not() -> None:
     """A vehicle whose speed was measured (``Reading.speed_mps``) may brake at b_max to a standstill: the position
     and the speed that motion reaches are inside its own bounds, where its lane's 4.9 m/s floor called both a breach;
-    a speed just below what braking at b_max allows is a breach, ``too slow``, by that much."""
+    a speed just below what braking at b_max allows is a breach, ``too slow``, by that much; a speed outside the
+    measured interval at the snapshot itself is a ``sensing error`` (the range-rate reading's error bound broke)."""
     from sim.discretiser import discretise
     from spec.tracking import VEHICLE_SPEED_CHANGE
 
@@ -394,3 +395,6 @@ def test_a_measured_vehicle_braking_to_a_standstill_is_inside_one_braking_harder
     (breach,) = watched().check(t_s, 0.0, AV, [car(1, x, 7.0 - b * t_s - 0.01)], [], "drive",  # type: ignore[list-item]
                                 never)
     assert breach.kind is BreachKind.TOO_SLOW and breach.speed and breach.by_m == pytest.approx(0.01)
+    # outside the measured interval at the snapshot itself: the speed reading's error bound broke, not the vehicle
+    (breach,) = watched().check(0.0, 0.0, AV, [car(1, 40.0, 7.02)], [], "drive", never)  # type: ignore[list-item]
+    assert breach.kind is BreachKind.SENSING and breach.speed and breach.by_m == pytest.approx(0.02)
