@@ -35,7 +35,16 @@ from spec.motion import Ramp, action_speed_mps, ramp_s
 from spec.physical import LOOP
 from spec.safety import Conflict
 from spec.scenario import Scenario
-from spec.sound import Sound, Vehicle, follower_limit_m, measured_dynamics, reach_m, slowest_ahead_mps, vehicles
+from spec.sound import (
+    Sound,
+    Vehicle,
+    follower_limit_m,
+    measured_dynamics,
+    reach_m,
+    slowest_ahead_mps,
+    top_mps,
+    vehicles,
+)
 
 #: The longest step between two samples of the exact check (the issue's 10 ms).
 MAX_DT_S = 0.01
@@ -175,9 +184,6 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
     rate = path.max_speed + tr.speed_mps + fastest_vehicle + sound.safety.time_gap_s * (path.max_accel
                                                                                        + vehicle_accel)
 
-    def top_mps(c: Vehicle) -> float:
-        return b.same_mps.high_mps if c.dynamics is None else max(b.same_mps.high_mps, c.dynamics.highest_mps)
-
     def speeds(c: Vehicle, t: float) -> tuple[float, float]:
         if c.dynamics is not None:
             return c.dynamics.speeds_mps(t)
@@ -192,7 +198,7 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
             options = []
             low, high = reach_m(c, b, t)
             slow, fast = speeds(c, t)
-            rear = not b.followers_react and v < top_mps(c) - TOLERANCE_M  # a follower closing in: BEHIND
+            rear = not b.followers_react and v < top_mps(b, c) - TOLERANCE_M  # a follower closing in: BEHIND
             if rear and c.lane is Lane.LEFT and Lane.LEFT in lanes and i in behind:
                 options.append((Conflict.BEHIND, (x - tr.position_m) - high - length, fast - v + tr.speed_mps))
             if c.lane is Lane.LEFT and Lane.LEFT in lanes and i not in behind:
@@ -450,9 +456,8 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
             found = _goal_breach(scenario, goal, cars, pos, x, motion.name, t)
             if found is not None:
                 return found
-        high = sound.bounds.same_mps.high_mps
-        rear = [not sound.bounds.followers_react and path.speed(t) < (high if c.dynamics is None else max(
-            high, c.dynamics.highest_mps)) - TOLERANCE_M for c in cars]  # per follower: closing in
+        rear = [not sound.bounds.followers_react and path.speed(t) < top_mps(sound.bounds, c) - TOLERANCE_M
+                for c in cars]  # per follower: closing in
         found = instant_breach(sound, motion.name, t, x, v, lanes, entering, rear, cars, pos, speeds, followers)
         if found is not None:
             return found

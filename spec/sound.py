@@ -366,9 +366,15 @@ def rear_binds(bounds: Bounds, slowest_mps: float, follower: Vehicle | None = No
     above that speed the reference never closes on a follower, and the car's own error is the envelope's position
     bound; below it, a follower at its fastest closes in and must be far enough behind for the specification's gap
     (``SoundRules._behind_allow``, the cut-in's threshold)."""
-    top = bounds.same_mps.high_mps if follower is None or follower.dynamics is None else max(
-        bounds.same_mps.high_mps, follower.dynamics.highest_mps)
+    top = bounds.same_mps.high_mps if follower is None else top_mps(bounds, follower)
     return not bounds.followers_react and slowest_mps < top - CLOSING_EPS_MPS
+
+
+def top_mps(bounds: Bounds, v: Vehicle) -> float:
+    """The fastest ``v`` may ever drive along its direction: its lane's top, or a measured vehicle's own top when
+    that is higher (``Dynamics.highest_mps``)."""
+    top = bounds.speeds(v.lane).high_mps
+    return top if v.dynamics is None else max(top, v.dynamics.highest_mps)
 
 
 def follower_limit_m(x0_m: float, safety: SafetySpec, tracking: Tracking) -> float:
