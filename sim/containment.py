@@ -31,7 +31,7 @@ import enum
 import math
 from collections import Counter
 from collections.abc import Callable, Iterable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 from sim.discretiser import in_window, reading_cell
@@ -39,7 +39,9 @@ from sim.faults import GHOST_BODY
 from sim.scene import Scene
 from sim.sensors import Reading
 from sim.vehicle import KinematicCar, Pose
+from spec.actions import Action
 from spec.assumptions import Bounds
+from spec.dynamics import Overtaken, passing_windows_s
 from spec.grid import Grid
 from spec.lanes import Lane
 from spec.physical import CAR, ROAD
@@ -68,6 +70,9 @@ class BreachKind(enum.Enum):
     #: beyond its interval's fast end, or driving faster than its lane's highest speed (a vehicle whose speed was
     #: measured: than speeding up at a_max from its interval allows)
     TOO_FAST = "too fast"
+    #: faster, or farther, than a measured same-direction vehicle may be while the AV is in the passing lane under
+    #: ``Overtaken.NO_ACCELERATION`` (it sped up while being overtaken), within what its own dynamics allow
+    ACCELERATED = "accelerated while overtaken"
     SENSING = "sensing error"  # outside its interval at the snapshot itself (sensed farther off than the error
     # bound; a measured speed: a range-rate reading beyond its error bound), or a reading of no vehicle (a ghost)
     APPEARED = "appeared"  # a vehicle the decision did not know, where no phantom could be
@@ -150,6 +155,9 @@ class Containment:
                  av_x_m: float, t_s: float, cars: Iterable[KinematicCar]) -> None:
         self.decision, self.bounds, self.tracking = decision, sound.bounds, sound.tracking
         self.x0_m, self.t0_s = av_x_m, t_s
+        self.lane, self.overtaken = scenario.lane, sound.overtaken
+        #: the decision's passing windows (``passing``): measured same-direction vehicles hold their speed in them
+        self.windows_s: tuple[tuple[float, float], ...] = ()
         found = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, grid, sound, scenario.left_m,
                          scenario.right_m, scenario.left_mps, scenario.right_mps)
         by_index = {(v.lane, v.index): v for v in found if v.index is not None}
@@ -189,6 +197,22 @@ class Containment:
     def shift_x(self, dx_m: float) -> None:
         """The world was re-centred by ``dx_m``."""
         self.x0_m += dx_m
+
+    def passing(self, actions: tuple[Action, ...]) -> None:
+        """The decision executes ``actions``: under ``Overtaken.NO_ACCELERATION`` its proof took every measured
+        same-direction vehicle not to speed up while the AV is in the passing lane (``passing_windows_s``)."""
+        if self.overtaken is Overtaken.NO_ACCELERATION:
+            self.windows_s = passing_windows_s(self.lane, actions)
+
+    def assumed(self, v: Vehicle, elapsed_s: float) -> Vehicle:
+        """``v`` as the decision's proof took it ``elapsed_s`` after the snapshot: within a passing window, a measured
+        same-direction vehicle that has not sped up since the window began (``passing``)."""
+        if v.dynamics is None or v.lane is not Lane.LEFT:
+            return v
+        for t0, t1 in self.windows_s:
+            if t0 <= elapsed_s <= t1:
+                return replace(v, dynamics=v.dynamics.held_from(t0))
+        return v
 
     def _sets(self, lane: Lane, car: KinematicCar) -> tuple[str, Vehicle | None, list[Vehicle]]:
         """The vehicle the decision knew ``car`` as (None: unknown), and the intervals it must be inside."""
@@ -239,7 +263,7 @@ class Containment:
                     kind = BreachKind.SENSING
                 else:  # behind the interval's slow end: too slow in the left lane, too fast in the oncoming one
                     slow = (miss < 0) == (lane is Lane.LEFT)
-                    kind = BreachKind.TOO_SLOW if slow else BreachKind.TOO_FAST
+                    kind = BreachKind.TOO_SLOW if slow else self._fast_kind(known, elapsed, car.x_m - self.x0_m)
                 out.append(self._breach(Breach(self.decision, km, t_s, name, car.body, kind, abs(miss), doing)))
         return out
 
@@ -251,8 +275,15 @@ class Containment:
         if known is None and lane is Lane.RIGHT and car.x_m < av.x_m - CAR.length_m:
             return name, known, 0.0
         dx = car.x_m - self.x0_m
-        misses = [_outside(dx, *reach_m(v, self.bounds, elapsed_s)) for v in sets]
+        misses = [_outside(dx, *reach_m(self.assumed(v, elapsed_s), self.bounds, elapsed_s)) for v in sets]
         return name, known, min(misses, key=abs, default=0.0)
+
+    def _fast_kind(self, known: Vehicle, elapsed_s: float, dx_m: float) -> BreachKind:
+        """A known vehicle beyond its interval's fast end: ``accelerated while overtaken`` where only the held
+        speed of a passing window puts it there (``assumed``), else ``too fast``."""
+        if self.assumed(known, elapsed_s) is known or dx_m > reach_m(known, self.bounds, elapsed_s)[1] + ROUNDING_M:
+            return BreachKind.TOO_FAST
+        return BreachKind.ACCELERATED
 
     def hidden(self, t_s: float, km: float, av: Pose, lane: Lane, car: KinematicCar, doing: str) -> Breach | None:
         """The breach of a vehicle the decision did not know and the sensors do not show, where no phantom could be:
@@ -271,16 +302,21 @@ class Containment:
         or, for a vehicle whose speed was measured, what its own dynamics allow ``elapsed_s`` after the snapshot."""
         bounds = self.bounds.speeds(lane)
         low, high = bounds.low_mps, bounds.high_mps
-        if known.dynamics is not None:
-            low, high = known.dynamics.speeds_mps(max(0.0, elapsed_s))
+        assumed = self.assumed(known, max(0.0, elapsed_s))
+        if assumed.dynamics is not None:
+            low, high = assumed.dynamics.speeds_mps(max(0.0, elapsed_s))
         along_mps = car.velocity_mps if lane is Lane.LEFT else -car.velocity_mps
         miss = _outside(along_mps, low, high, ROUNDING_MPS)
         if miss == 0.0:
             return None
         if known.dynamics is not None and elapsed_s <= 0.0:  # outside what was measured at the snapshot itself
             kind = BreachKind.SENSING
-        else:
-            kind = BreachKind.TOO_SLOW if miss < 0 else BreachKind.TOO_FAST
+        elif miss < 0:
+            kind = BreachKind.TOO_SLOW
+        else:  # beyond the held speed, within what its own dynamics allow: it sped up while being overtaken
+            physical = known.dynamics.speeds_mps(elapsed_s)[1] if known.dynamics is not None else high
+            kind = BreachKind.ACCELERATED if assumed is not known and along_mps <= physical + ROUNDING_MPS else \
+                BreachKind.TOO_FAST
         return self._breach(Breach(self.decision, km, t_s, name, car.body, kind, abs(miss), doing, speed=True))
 
     def check_av(self, t_s: float, km: float, av: Pose, x_ref_m: float, v_ref_mps: float, lane_due: Lane | None,
@@ -305,23 +341,28 @@ class Containment:
         reading whose interval (a kept track's spread, widened by the sensing error bound: the reading's own error)
         meets no interval of its lane at ``t_s``, neither a vehicle's the decision knew nor a phantom's, if new. An
         oncoming reading the AV has passed is no vehicle any condition speaks of. Its kind is read from the nearest
-        interval: behind a known vehicle's (``too slow`` in the left lane), beyond it (``too fast``), or none known
-        near (``appeared``)."""
+        interval: behind a known vehicle's (``too slow`` in the left lane), beyond it (``too fast``; ``accelerated
+        while overtaken`` where only a passing window's held speed puts it there), or none known near
+        (``appeared``)."""
         if self.sensed is not None:
             return None
         elapsed, shift_m = t_s - self.t0_s, av_x_m - self.x0_m
         for r in readings:
             if r.lane is Lane.RIGHT and r.dx_m < -CAR.length_m:
                 continue
-            misses = [(_miss_m(r, v, self.bounds, shift_m, elapsed), v.index is not None)
+            misses = [(_miss_m(r, self.assumed(v, elapsed), self.bounds, shift_m, elapsed), v)
                       for v in self.explaining[r.lane]]
             if any(miss == 0.0 for miss, _ in misses):
                 continue
-            miss, of_known = min(misses, key=lambda m: abs(m[0]), default=(math.inf, False))
-            if not of_known or not math.isfinite(miss):
+            miss, nearest = min(misses, key=lambda m: abs(m[0]), default=(math.inf, None))
+            if nearest is None or nearest.index is None or not math.isfinite(miss):
                 kind = BreachKind.APPEARED
+            elif (miss < 0) == (r.lane is Lane.LEFT):
+                kind = BreachKind.TOO_SLOW
             else:
-                kind = BreachKind.TOO_SLOW if (miss < 0) == (r.lane is Lane.LEFT) else BreachKind.TOO_FAST
+                held = self.assumed(nearest, elapsed) is not nearest
+                kind = BreachKind.ACCELERATED if held and _miss_m(r, nearest, self.bounds, shift_m, elapsed) == 0.0 \
+                    else BreachKind.TOO_FAST
             self.sensed = Breach(self.decision, km, t_s, f"a sensed {r.lane.value}-lane reading at {r.dx_m:+.1f} m",
                                  SENSED_BODY, kind, abs(miss) if math.isfinite(miss) else 0.0, doing, sensed=True)
             return self.sensed

@@ -26,7 +26,7 @@ from sim.traffic import FollowingTraffic, PaperTraffic, SpreadTraffic, TrafficMo
 from sim.vehicle import WheeledCar
 from spec.answers import Answer, Strategy
 from spec.assumptions import Bounds, speed_error_mps, world_bounds
-from spec.dynamics import VehicleSpeeds, parse_vehicle_speeds
+from spec.dynamics import Overtaken, VehicleSpeeds, parse_overtaken, parse_vehicle_speeds
 from spec.engines import Engine, check_strategy, get_engine, load_engines, parse_strategy
 from spec.errors import OptionError, check_number
 from spec.faults import DEFAULT_STEERING_OFFSET_DEG, NO_FAULTS, FaultKind, FaultSpec, parse_faults
@@ -133,6 +133,8 @@ class DriveConfig:
     tracking: bool = False  # the planner sees the tracker's vehicles, not each sweep's readings (``sim.tracking``)
     #: where a vehicle's speed comes from (``VehicleSpeeds``): its lane's bounds, or its track's measured interval
     vehicle_speeds: VehicleSpeeds = VehicleSpeeds.LANE
+    #: what a measured same-direction vehicle may do while the AV is in the passing lane (``Overtaken``)
+    overtaken: Overtaken = Overtaken.PHYSICS
     #: stop at the first failure a sensing fault caused; restart after any other (counted apart): the reliability
     #: target's measure, km between sensing-caused failures (docs/faults.md)
     until_sensing_failure: bool = False
@@ -160,6 +162,10 @@ class DriveConfig:
                    f"engine {self.engine} answers every vehicle at its lane's speeds only")
             if why is not None:
                 raise OptionError("--vehicle-speeds", self.vehicle_speeds.value, why)
+        object.__setattr__(self, "overtaken", parse_overtaken(self.overtaken))
+        if self.overtaken is not Overtaken.PHYSICS and self.vehicle_speeds is not VehicleSpeeds.MEASURED:
+            raise OptionError("--overtaken", self.overtaken.value, "needs --vehicle-speeds measured (the profile "
+                              "speaks of vehicles whose speed was measured; it applies to the sound model's drives)")
 
     @property
     def stops_at_failure(self) -> bool:
@@ -191,7 +197,8 @@ class DriveConfig:
     def parts(self, observers: tuple[Observer, ...] = ()) -> Parts:
         """The assembly this configuration names."""
         # the sound model plans for the snapshot's age at the plan's start: the planner's time in the loop
-        sound = Sound(replace(self.bounds, latency_s=LOOP.plan_budget_s)) if self.model == "sound" else None
+        sound = Sound(replace(self.bounds, latency_s=LOOP.plan_budget_s), overtaken=self.overtaken) \
+            if self.model == "sound" else None
         planner = Planner(get_engine(self.engine), self.strategy, self.grid, sound)
         traffic, sensor = TRAFFIC_MODELS[self.traffic], SENSOR_MODELS[self.sensor]
         if self.traffic != "paper":
@@ -215,7 +222,8 @@ class DriveConfig:
             del data["steering_offset_deg"]
         for key, default in (("restart_after_collision", False), ("opportunity_checks", 0), ("model", "paper"),
                              ("bounds_scale", 1.0), ("faults", ""), ("tracking", False),
-                             ("until_sensing_failure", False), ("vehicle_speeds", VehicleSpeeds.LANE.value)):
+                             ("until_sensing_failure", False), ("vehicle_speeds", VehicleSpeeds.LANE.value),
+                             ("overtaken", Overtaken.PHYSICS.value)):
             if data[key] == default:  # records written before these existed stay the same campaign
                 del data[key]
         return data
@@ -231,7 +239,8 @@ class DriveConfig:
                 "restart_after_collision": self.restart_after_collision,
                 "opportunity_checks": self.opportunity_checks, "model": self.model, "bounds_scale": self.bounds_scale,
                 "faults": self.faults, "steering_offset_deg": self.steering_offset_deg, "tracking": self.tracking,
-                "until_sensing_failure": self.until_sensing_failure, "vehicle_speeds": self.vehicle_speeds.value}
+                "until_sensing_failure": self.until_sensing_failure, "vehicle_speeds": self.vehicle_speeds.value,
+                "overtaken": self.overtaken.value}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> DriveConfig:

@@ -45,6 +45,7 @@ from sim.vehicle import KinematicCar, Pose, first_contact
 from spec.actions import ACTION_RULES, Action
 from spec.answers import Answer, Status
 from spec.assumptions import PROFILES
+from spec.dynamics import Overtaken
 from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING
 from spec.errors import ScenarioError
 from spec.faults import lost_control
@@ -94,7 +95,9 @@ class Simulator:
         self.planner, self.observers = parts.planner, parts.observers
         self.grid = parts.planner.grid
         self.sound = parts.planner.sound  # None: the paper model decides (and containment is only measured)
-        self.watch = None if parts.bounds is None else Sound(parts.bounds)  # the sets containment is measured against
+        # the sets containment is measured against (with the sound model's stated behaviour of vehicles overtaken)
+        self.watch = None if parts.bounds is None else Sound(
+            parts.bounds, overtaken=Overtaken.PHYSICS if self.sound is None else self.sound.overtaken)
         self.summary = RunSummary(seed, tolerance=tolerance or ToleranceReport())
         self.safety = SafetyMonitor()
         self.summary.safety = self.safety.report
@@ -686,7 +689,7 @@ class Simulator:
         if pending:
             self.summary.kept_plans.append(self._event(FailureKind.PLANNER, why, "kept the rest of the last plan"))
             self._sight(self._sense(), *self._where_swept())
-            return self._sound_execute(pending, self.car.pose().speed_mps, "the last plan, kept")
+            return self._sound_execute(pending, self.car.pose().speed_mps, "the last plan, kept", kept=True)
         self.summary.minimal_risk_steps += 1
         self.doing = f"minimal-risk manoeuvre (the last decision's, {why})"
         self.enveloped = True
@@ -697,12 +700,14 @@ class Simulator:
             self.enveloped = False
             self._observe(self.summary.plans, 0, None, None, [], since_s)
 
-    def _sound_execute(self, actions: tuple[Action, ...], speed_mps: float, what: str) -> bool:
+    def _sound_execute(self, actions: tuple[Action, ...], speed_mps: float, what: str, kept: bool = False) -> bool:
         """Execute a sound decision's actions from the speed it planned with (the reference starts at the car), while
         its containment holds as the AV senses it; a sensed breach ends it at once (after any sideways move), and the
         next decision re-plans from a fresh snapshot. The caller has sighted what the decision knew (``_sight``)."""
         self._hand_back()
         self.proved = self.containment
+        if self.containment is not None and not kept:  # a kept plan's windows are its decision's, on its clock
+            self.containment.passing(actions)
         # a breach sensed while a take-over was under way did not interrupt it; it ends this decision before its step
         self.interrupt = self.interrupt or (self.containment is not None and self.containment.sensed is not None)
         self.executor.reset_reference()

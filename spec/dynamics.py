@@ -7,6 +7,11 @@ The least distance it travels is braking at b_max from ``low`` to a stop and sta
 a_max from ``high`` to its top and holding it. Each is a few phases of constant acceleration (``Phase``), so every
 check of the sound model takes its extreme over a window exactly (``spec.sound``). A vehicle without a measured speed
 keeps its lane's speeds (``spec.assumptions.Bounds``), as phantoms do.
+
+A stated behaviour may narrow that, offered as a profile and never silently (``Overtaken``): under
+``NO_ACCELERATION`` a measured same-direction vehicle does not speed up while the AV is in the passing lane
+(``passing_windows_s``), the duty of a vehicle being overtaken in several countries (for example StVO section 5(6)
+in Germany). Its fastest motion then speeds up only until the AV starts its move out (``Dynamics.held_from``).
 """
 
 from __future__ import annotations
@@ -14,9 +19,12 @@ from __future__ import annotations
 import enum
 import functools
 import math
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
 
+from spec.actions import ACTION_RULES, Action
 from spec.errors import OptionError, parse_choice
+from spec.lanes import Lane
 from spec.tracking import VEHICLE_SPEED_CHANGE, Speed, SpeedChange
 
 
@@ -29,6 +37,39 @@ class VehicleSpeeds(enum.Enum):
 
 def parse_vehicle_speeds(value: object, where: str = "--vehicle-speeds") -> VehicleSpeeds:
     return parse_choice(VehicleSpeeds, value, where)
+
+
+class Overtaken(enum.Enum):
+    """What a measured same-direction vehicle may do while the AV is in the passing lane (``passing_windows_s``)."""
+
+    PHYSICS = "physics"  # whatever its dynamics allow: it may speed up at a_max while the AV passes it
+    #: it does not speed up while the AV is in the passing lane (StVO section 5(6): "Wer überholt wird, darf seine
+    #: Geschwindigkeit nicht erhöhen"); a stated behaviour, monitored (``sim.containment``: ``accelerated while
+    #: overtaken``), never physics
+    NO_ACCELERATION = "no-acceleration"
+
+
+def parse_overtaken(value: object, where: str = "--overtaken") -> Overtaken:
+    return parse_choice(Overtaken, value, where)
+
+
+def passing_windows_s(lane: Lane, actions: Sequence[Action]) -> tuple[tuple[float, float], ...]:
+    """When the AV is out of its lane along a plan that starts in ``lane``, on the plan's clock: from the start of each
+    move into the passing (right) lane (0 when the plan starts there) to the end of the move back (infinite when
+    the plan ends out there). Under ``Overtaken.NO_ACCELERATION`` no measured same-direction vehicle speeds up
+    within one; before and after, its dynamics are its own."""
+    out, t_s, since = [], 0.0, 0.0 if lane is Lane.RIGHT else None
+    for a in actions:
+        rule = ACTION_RULES[a]
+        if rule.to_lane is Lane.RIGHT and since is None:
+            since = t_s
+        t_s += float(rule.duration_s)
+        if rule.to_lane is Lane.LEFT and since is not None:
+            out.append((since, t_s))
+            since = None
+    if since is not None:
+        out.append((since, math.inf))
+    return tuple(out)
 
 
 @dataclass(frozen=True, slots=True)
@@ -58,6 +99,9 @@ class Dynamics:
     speed_mps: Speed
     top_mps: float
     change: SpeedChange = VEHICLE_SPEED_CHANGE
+    #: from this instant on (s after the snapshot) it does not speed up (``Overtaken.NO_ACCELERATION`` within a
+    #: passing window); infinite: it may until its top speed
+    hold_from_s: float = math.inf
 
     def __post_init__(self) -> None:
         low, high = self.speed_mps
@@ -73,8 +117,10 @@ class Dynamics:
 
     @property
     def fastest(self) -> tuple[Phase, ...]:
-        """The most travel: accelerating at a_max from the highest speed to the top speed, then holding it."""
-        return _fastest(self.speed_mps[1], max(self.top_mps, self.speed_mps[1]), self.change.accel_mps2)
+        """The most travel: accelerating at a_max from the highest speed to the top speed (or until ``hold_from_s``),
+        then holding the speed reached."""
+        return _fastest(self.speed_mps[1], max(self.top_mps, self.speed_mps[1]), self.change.accel_mps2,
+                        self.hold_from_s)
 
     @property
     def highest_mps(self) -> float:
@@ -93,7 +139,11 @@ class Dynamics:
         """The same vehicle ``dt_s`` later, its speed interval grown by what its speed may change meanwhile (the
         snapshot's age: ``spec.sound.Sound.age_m``)."""
         low, high = self.speeds_mps(dt_s) if dt_s > 0 else self.speed_mps
-        return Dynamics((low, high), self.top_mps, self.change)
+        return Dynamics((low, high), self.top_mps, self.change, max(0.0, self.hold_from_s - max(0.0, dt_s)))
+
+    def held_from(self, t_s: float) -> Dynamics:
+        """The same vehicle, not speeding up from ``t_s`` after the snapshot on (a passing window's start)."""
+        return replace(self, hold_from_s=max(0.0, min(t_s, self.hold_from_s)))
 
 
 def _at(phases: tuple[Phase, ...], t_s: float) -> Phase:
@@ -113,9 +163,10 @@ def _slowest(low_mps: float, brake_mps2: float) -> tuple[Phase, ...]:
 
 
 @functools.lru_cache(maxsize=4096)
-def _fastest(high_mps: float, top_mps: float, accel_mps2: float) -> tuple[Phase, ...]:
-    if high_mps >= top_mps:
+def _fastest(high_mps: float, top_mps: float, accel_mps2: float, hold_from_s: float) -> tuple[Phase, ...]:
+    if high_mps >= top_mps or hold_from_s <= 0:
         return (Phase(0.0, math.inf, 0.0, high_mps, 0.0),)
-    top_s = (top_mps - high_mps) / accel_mps2
+    top_s = min((top_mps - high_mps) / accel_mps2, hold_from_s)
+    reached = high_mps + accel_mps2 * top_s
     return (Phase(0.0, top_s, 0.0, high_mps, accel_mps2),
-            Phase(top_s, math.inf, (high_mps + top_mps) / 2 * top_s, top_mps, 0.0))
+            Phase(top_s, math.inf, (high_mps + reached) / 2 * top_s, reached, 0.0))

@@ -44,7 +44,7 @@ from typing import NamedTuple
 from spec.actions import ACTION_RULES, Action
 from spec.assumptions import DEFAULT_PROFILE, Bounds, Phantom, check_bounds, parse_speeds, profile
 from spec.cells import left_extent_m, oncoming_extent_m
-from spec.dynamics import Dynamics
+from spec.dynamics import Dynamics, Overtaken, parse_overtaken
 from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING, MinimalRisk, Piece, Reference, Tracking
 from spec.errors import OptionError, check_number
 from spec.escapes import COMMIT, Commitment, Semantics, parse_escape_kinds, parse_most_actions, parse_semantics
@@ -90,6 +90,9 @@ class Sound:
     #: how fast a vehicle whose speed was measured can change it (``spec.dynamics``): the scenario's ``left_mps`` and
     #: ``right_mps`` give each one's speed interval at the snapshot; a vehicle without one keeps its lane's speeds
     speed_change: SpeedChange = VEHICLE_SPEED_CHANGE
+    #: what a measured same-direction vehicle may do while the AV is in the passing lane (``spec.dynamics``): speed
+    #: up as physics allows, or, as a stated profile, not at all
+    overtaken: Overtaken = Overtaken.PHYSICS
 
     def phantoms(self) -> tuple[Phantom, ...]:
         """The phantoms of this snapshot: the bounds' own, the oncoming one where the view of that lane ended; each
@@ -146,12 +149,15 @@ class Sound:
                 + (f", latency {b.latency_s:g} s (vehicles {self.age_m:.3g} m on)" if b.latency_s else "")
                 + ("" if _rates(self.speed_change) == _rates(VEHICLE_SPEED_CHANGE) else
                    f", measured vehicles accelerate at most {self.speed_change.accel_mps2:g} and brake at most "
-                   f"{self.speed_change.brake_mps2:g} m/s^2"))
+                   f"{self.speed_change.brake_mps2:g} m/s^2")
+                + ("" if self.overtaken is Overtaken.PHYSICS else
+                   ", measured same-direction vehicles do not speed up while the AV is in the passing lane"))
 
 
 #: The keys of a scenario file's ``bounds`` table (and the command line's options of the same names).
 BOUNDS_KEYS = ("profile", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
-               "oncoming_view_m", "latency_s", "semantics", "commit_max", "escapes", "accel_mps2", "brake_mps2")
+               "oncoming_view_m", "latency_s", "semantics", "commit_max", "escapes", "accel_mps2", "brake_mps2",
+               "overtaken")
 #: How near the AV an aged phantom may come (``Sound.phantoms``): never onto it (Spin reads a phantom at 0 as none).
 PHANTOM_NEAREST_M = 1e-3
 
@@ -160,7 +166,8 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
                sensing_error_m: object = None, phantoms: bool | None = None, av_speed_mps: object = None,
                where: str = "--", followers_react: bool | None = None, oncoming_view_m: object = None,
                latency_s: object = None, semantics: object = None, commit_max: object = None,
-               escapes: object = None, accel_mps2: object = None, brake_mps2: object = None) -> Sound:
+               escapes: object = None, accel_mps2: object = None, brake_mps2: object = None,
+               overtaken: object = None) -> Sound:
     """The sound model from a base (a file's, or None: the default profile, under the commitment semantics), a named
     profile and overrides of its numbers and semantics; every value is checked, and bad input names the option or
     key (``where`` + its name)."""
@@ -207,10 +214,14 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
     commitment = commitment_from(base.commitment if base is not None else COMMIT, semantics, commit_max, escapes, key)
     change = speed_change_from(base.speed_change if base is not None else VEHICLE_SPEED_CHANGE, accel_mps2,
                                brake_mps2, key)
+    behaves = base.overtaken if base is not None else Overtaken.PHYSICS
+    if overtaken is not None:
+        behaves = parse_overtaken(overtaken, key("overtaken"))
     if base is None:
-        return Sound(bounds, start_mps=start, oncoming_view_m=view, commitment=commitment, speed_change=change)
+        return Sound(bounds, start_mps=start, oncoming_view_m=view, commitment=commitment, speed_change=change,
+                     overtaken=behaves)
     return replace(base, bounds=bounds, start_mps=start, oncoming_view_m=view, commitment=commitment,
-                   speed_change=change)
+                   speed_change=change, overtaken=behaves)
 
 
 def _rates(change: SpeedChange) -> tuple[float, float]:
@@ -268,7 +279,7 @@ def sound_from_table(table: object, where: str = "bounds") -> Sound:
                       table.get("sensing_error_m"), table.get("phantoms"), table.get("av_speed_mps"), f"{where}.",
                       table.get("followers_react"), table.get("oncoming_view_m"), table.get("latency_s"),
                       table.get("semantics"), table.get("commit_max"), table.get("escapes"), table.get("accel_mps2"),
-                      table.get("brake_mps2"))
+                      table.get("brake_mps2"), table.get("overtaken"))
 
 
 def sound_to_table(sound: Sound) -> dict[str, object]:
@@ -293,6 +304,8 @@ def sound_to_table(sound: Sound) -> dict[str, object]:
         table["escapes"] = [k.value for k in c.escapes]
     if _rates(sound.speed_change) != _rates(VEHICLE_SPEED_CHANGE):
         table["accel_mps2"], table["brake_mps2"] = sound.speed_change.accel_mps2, sound.speed_change.brake_mps2
+    if sound.overtaken is not Overtaken.PHYSICS:
+        table["overtaken"] = sound.overtaken.value
     return table
 
 
@@ -433,11 +446,15 @@ class SoundState(NamedTuple):
     #: The same-direction vehicles (places in ``SoundRules.same``) certainly behind the AV when it last got into the
     #: left lane: they follow it from then on (a lane keeps its order). None: since the start (classified there).
     followers: frozenset[int] | None = None
+    #: When the AV started its move into the passing lane it is in, in time units (``Overtaken.NO_ACCELERATION``:
+    #: measured same-direction vehicles do not speed up from then until it is back). None: in the left lane, out
+    #: there since the start, or no such profile.
+    out_units: int | None = None
 
     def key(self) -> tuple[object, ...]:
         """What the future depends on: everything but the step count (a search at the least depth keeps it)."""
         return (self.lane, self.lane_changes, self.t_units, self.d_cells, self.first_mps, self.last_mps, self.moved,
-                self.followers)
+                self.followers, self.out_units)
 
 
 def advance(state: SoundState, action: Action, grid: Grid, speed_mps: float) -> SoundState:
@@ -448,7 +465,7 @@ def advance(state: SoundState, action: Action, grid: Grid, speed_mps: float) -> 
     return SoundState(rule.to_lane or state.lane, state.lane_changes + int(rule.changes_lane), state.steps + 1,
                       state.t_units + units, state.d_cells + units - grid.left_shift(action),
                       speed_mps if state.first_mps is None else state.first_mps, speed_mps, rule.to_lane,
-                      state.followers)
+                      state.followers, state.out_units)
 
 
 @dataclass(frozen=True, slots=True)
@@ -544,6 +561,10 @@ class SoundRules:
         self._at_boundary: dict[tuple[int, int, float | None, float | None], float] = {}
         self._relative = _shapes(sound, grid, self.hold_floor_mps)
         self._start_followers: frozenset[int] | None = None
+        #: Whether measured same-direction vehicles hold their speed while the AV is in the passing lane
+        #: (``Overtaken.NO_ACCELERATION``, and a vehicle it speaks of): states then carry ``out_units``.
+        self.held_passing = sound.overtaken is Overtaken.NO_ACCELERATION and any(
+            v.dynamics is not None for v in self.same)
 
     def key(self, state: SoundState) -> tuple[object, ...]:
         """What a search tells states apart by (``SoundState.key``)."""
@@ -696,6 +717,30 @@ class SoundRules:
             return v.hi_m - v.dynamics.travel_m(t_s)[0]
         return v.hi_m - self.sound.bounds.oncoming_mps.low_mps * t_s
 
+    def least_high(self, v: Vehicle, t_s: float) -> float:
+        """``same_high`` as the prunes may take it: under ``Overtaken.NO_ACCELERATION`` the fastest motion that holds
+        for every plan (a measured vehicle at its highest speed, never speeding up: any passing window may start at
+        once), so an argument that such a motion cannot be passed holds for all of them."""
+        if self.held_passing and v.dynamics is not None:
+            return v.hi_m + v.dynamics.held_from(0.0).travel_m(t_s)[1]
+        return self.same_high(v, t_s)
+
+    def least_high_mps(self, v: Vehicle, t_s: float) -> float:
+        """The speed of ``least_high``'s motion at ``t_s`` (a vehicle without a measured speed: its lane's top)."""
+        if v.dynamics is None:
+            return self.sound.bounds.same_mps.high_mps
+        d = v.dynamics.held_from(0.0) if self.held_passing else v.dynamics
+        return d.speeds_mps(t_s)[1]
+
+    def passing_from_s(self, state: SoundState) -> float | None:
+        """When the passing window ``state`` is in started (plan clock), if measured vehicles hold their speed in it
+        (``held_passing``): the AV's move out, or the start when it started out there; None: no such window."""
+        if not self.held_passing:
+            return None
+        if state.out_units is not None:
+            return state.out_units * self.unit_s
+        return 0.0 if state.lane is Lane.RIGHT else None
+
     def held_ahead(self, v: Vehicle, ref_x: float, t_s: float) -> bool:
         """Whether a same-direction vehicle is held to AHEAD at ``t_s``: when every position of it is clear ahead of
         the AV. Where the AV entered the left lane (or started in it) every vehicle was certainly ahead with its gap,
@@ -768,12 +813,13 @@ class SoundRules:
             return -best[0], best[1]
         return best
 
-    def check_segment(self, seg: Segment, pieces: list[Bounded], followers: frozenset[int] = frozenset()) \
-            -> Violation | None:
+    def check_segment(self, seg: Segment, pieces: list[Bounded], followers: frozenset[int] = frozenset(),
+                      held_from_s: float | None = None) -> Violation | None:
         """The first violation over one segment of a window (AV occupancy fixed), or None; ``followers``: the
-        vehicles that follow the AV in the left lane (no conflict)."""
+        vehicles that follow the AV in the left lane (no conflict); ``held_from_s``: measured same-direction vehicles
+        do not speed up from then on (a passing window's start, ``passing_from_s``)."""
         if Lane.LEFT in seg.lanes:
-            found = self._check_entering(pieces, not seg.at_start) if seg.entering_left else \
+            found = self._check_entering(pieces, not seg.at_start, held_from_s) if seg.entering_left else \
                 self._check_ahead(pieces, followers)
             if found is not None:
                 return found
@@ -807,10 +853,13 @@ class SoundRules:
                     return self._violation(Conflict.ONCOMING, v, b.piece, need, True)
         return None
 
-    def _check_entering(self, pieces: list[Bounded], margin: bool) -> Violation | None:
+    def _check_entering(self, pieces: list[Bounded], margin: bool, held_from_s: float | None = None) \
+            -> Violation | None:
         """Entering the left lane: each same-direction vehicle certainly ahead (AHEAD) or certainly behind (CUT_IN)
         over the whole sideways move. At the plan's start (``margin`` False) the AV is already in the lane: one
-        behind need only be one that cannot be clear ahead (``follower_limit_m``); it is a follower, not a cut-in."""
+        behind need only be one that cannot be clear ahead (``follower_limit_m``); it is a follower, not a cut-in.
+        A move back from the passing lane under ``Overtaken.NO_ACCELERATION`` (``held_from_s``): a measured vehicle
+        cut in ahead of has not sped up since the move out began."""
         lane_ahead = max(pieces, key=lambda b: b.ahead[0])
         lane_behind = min(pieces, key=lambda b: b.behind[0]) if margin else pieces[0]
         for v in self.same:
@@ -820,7 +869,9 @@ class SoundRules:
             else:
                 need, ahead_piece = max(((self._own_need(Conflict.AHEAD, v.dynamics, b.piece), b.piece)
                                          for b in pieces), key=lambda found: found[0][0])
-                allow, behind_piece = min(((self._own_need(Conflict.CUT_IN, v.dynamics, b.piece), b.piece)
+                dynamics = v.dynamics if held_from_s is None else v.dynamics.held_from(held_from_s)
+                v = replace(v, dynamics=dynamics)
+                allow, behind_piece = min(((self._own_need(Conflict.CUT_IN, dynamics, b.piece), b.piece)
                                            for b in pieces), key=lambda found: found[0][0]) if margin else \
                     (lane_behind.behind, lane_behind.piece)
             if not margin:
@@ -855,12 +906,13 @@ class SoundRules:
             return self._steps[asked]
         found = None
         followers = self.followers(state, action)
+        held = self.passing_from_s(state) if ACTION_RULES[action].to_lane is Lane.LEFT else None
         for seg, pieces in self.window(state, action):
             if cut is not None:
                 if seg.t0_s >= cut:
                     break
                 seg, pieces = self._clipped(seg, pieces, cut)
-            found = self.check_segment(seg, pieces, followers)
+            found = self.check_segment(seg, pieces, followers, held)
             if found is not None:
                 break
         if len(self._steps) >= MEMO_ENTRIES:
@@ -888,8 +940,11 @@ class SoundRules:
         """The state after ``action`` (``advance``), with the vehicles that follow the AV once it gets into the left
         lane."""
         nxt = advance(state, action, self.grid, self.speeds[action])
-        if ACTION_RULES[action].to_lane is Lane.LEFT:
-            return nxt._replace(followers=self.followers(state, action))
+        to_lane = ACTION_RULES[action].to_lane
+        if to_lane is Lane.LEFT:
+            return nxt._replace(followers=self.followers(state, action), out_units=None)
+        if to_lane is Lane.RIGHT and self.held_passing:
+            return nxt._replace(out_units=state.t_units)
         return nxt
 
     def followers(self, state: SoundState, action: Action | None) -> frozenset[int]:
@@ -1001,12 +1056,12 @@ class SoundRules:
         ramp = self.most_first_ramp_m if state.first_mps is None else self.first_ramp_m[state.first_mps]
         most = max(0.0, self.gain_per_action_m) * actions_left + ramp
         ex, length = self.sound.tracking.position_m, self.sound.safety.vehicle_length_m
-        if goal.targets_behind and any(self.same_high(self.sensed_same[i], t_s) + length + ex - x_m > most + EPS_M
+        if goal.targets_behind and any(self.least_high(self.sensed_same[i], t_s) + length + ex - x_m > most + EPS_M
                                        for i in self.targets):
             return True  # a target's fastest position still ahead of where it must be behind the AV
         nearest = self.sensed_same[self.targets[0]]
         most_m = self.nearest_target_m(goal)
-        return most_m is not None and self.same_high(nearest, t_s) - (x_m - ex) - length - most_m > most + EPS_M
+        return most_m is not None and self.least_high(nearest, t_s) - (x_m - ex) - length - most_m > most + EPS_M
 
     def hopeless(self, state: SoundState, goal: GoalRule) -> bool:
         """Whether ``goal`` can hold neither in ``state`` nor in any state after it, so a search need not go on.
@@ -1028,13 +1083,13 @@ class SoundRules:
         most_m = self.nearest_target_m(goal)
         if most_m is not None and self.targets:
             v = self.sensed_same[self.targets[0]]
-            if self.same_high(v, t_s) - self.same_low(v, t_s) + 2 * ex > most_m + EPS_M:
+            if self.least_high(v, t_s) - self.same_low(v, t_s) + 2 * ex > most_m + EPS_M:
                 return True
             # A plan ends in the left lane (the right one is never safe for ever with phantoms), where the phantom
             # ahead is held ahead by at least the least gap: the AV cannot be near enough the target's far end.
             room = most_m - self.sound.safety.min_gap_m - 2 * ex
-            if (v.dynamics is None or v.dynamics.speeds_mps(t_s)[1] >= self.sound.bounds.same_mps.low_mps) and any(
-                    self.same_high(v, t_s) - self.same_low(p, t_s) > room + EPS_M for p in self.same_phantoms_ahead):
+            if self.least_high_mps(v, t_s) >= self.sound.bounds.same_mps.low_mps and any(
+                    self.least_high(v, t_s) - self.same_low(p, t_s) > room + EPS_M for p in self.same_phantoms_ahead):
                 return True  # (a measured target's fastest speed only rises: no slower than the phantom from now on)
         if not (goal.targets_behind and self.targets and self.oncoming_phantoms):
             return False
@@ -1047,16 +1102,16 @@ class SoundRules:
             if state.lane is Lane.LEFT and (self.same.index(v) in followers or
                                             not self.held_ahead(v, x_m + self.dip_m, t_s)):
                 continue  # the left lane's rules may let it fall behind there: no argument
-            if self.same_high(v, t_s) + length + g_min + ex <= x_m - self.dip_m - ex:
+            if self.least_high(v, t_s) + length + g_min + ex <= x_m - self.dip_m - ex:
                 continue  # already passed
             # the AV gains on the target's fastest position at most this fast from now on (a measured one's fastest
             # speed only rises from what it may be now)
-            speed_gain = fastest - (b.same_mps.high_mps if v.dynamics is None else v.dynamics.speeds_mps(t_s)[1])
+            speed_gain = fastest - self.least_high_mps(v, t_s)
             if speed_gain <= 0:
                 return True  # never passed for every position
-            passed_at = t_s + max(0.0, (self.same_high(v, t_s) + length + g_min + 2 * ex - x_m - self.dip_m)
+            passed_at = t_s + max(0.0, (self.least_high(v, t_s) + length + g_min + 2 * ex - x_m - self.dip_m)
                                   / speed_gain)
-            av_at = self.same_high(v, passed_at) + length + g_min + ex  # the AV's reference there, at least
+            av_at = self.least_high(v, passed_at) + length + g_min + ex  # the AV's reference there, at least
             if nearest - b.oncoming_mps.high_mps * passed_at - (av_at + ex) - length < least_m - EPS_M:
                 return True
         return False

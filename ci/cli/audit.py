@@ -9,7 +9,16 @@ from typing import Any
 import click
 from rich.table import Table
 
-from ci.cli.common import err, faults_options, print_header, print_json, print_paths, print_table, vehicle_speeds_option
+from ci.cli.common import (
+    err,
+    faults_options,
+    overtaken_option,
+    print_header,
+    print_json,
+    print_paths,
+    print_table,
+    vehicle_speeds_option,
+)
 from ci.shared.executors import ExecutorChoice, ExecutorKind, check_executor
 from ci.shared.options import (
     CELL_M,
@@ -28,7 +37,7 @@ from ci.shared.options import (
 )
 from ci.shared.options import out_dir as out_dir_checked
 from ci.shared.records import campaign_lock
-from spec.dynamics import VehicleSpeeds
+from spec.dynamics import Overtaken, VehicleSpeeds
 from spec.errors import ExitCode, OptionError
 from spec.grid import STANDARD_CELLS_M, grid_for
 from spec.physical import EVENTS, NOISE
@@ -103,13 +112,14 @@ def parse_cells(text: str) -> tuple[float, ...]:
 @click.option("--fresh", is_flag=True, help="Forget the runs already recorded in --out instead of resuming.")
 @faults_options
 @vehicle_speeds_option
+@overtaken_option
 @click.option("--json", "as_json", is_flag=True)
 def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, scale_text: str, km: float, runs: int,
           seed: int, engine: str,
           cost_engines: str, snapshots: int, opportunity_checks: int, stop_rate_per_h: float,
           min_spawn_gap_m: float, range_sd_m: float, miss_rate: float, workers: int, executor_kind: str,
           scheduler: str | None, out_dir: str, fresh: bool, faults: str, steering_offset_deg: float,
-          tracking: bool, vehicle_speeds: VehicleSpeeds, as_json: bool) -> None:
+          tracking: bool, vehicle_speeds: VehicleSpeeds, overtaken: Overtaken, as_json: bool) -> None:
     """Audit the grid abstraction: cell size x traffic model x sensing model x seeds, driven closed-loop."""
     from ci.audit.campaign import AuditPlan, figure, label, planning_cost, rows, run_audit, write_reports
     from ci.shared.progress import km_progress
@@ -124,7 +134,8 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
     base = DriveConfig(km, engine=engine, stop_rate_per_h=stop_rate_per_h, min_spawn_gap_m=min_spawn_gap_m,
                        range_sd_m=range_sd_m, miss_rate=miss_rate, snapshots=snapshots, restart_after_collision=True,
                        opportunity_checks=opportunity_checks, faults=faults,
-                       steering_offset_deg=steering_offset_deg, tracking=tracking, vehicle_speeds=vehicle_speeds)
+                       steering_offset_deg=steering_offset_deg, tracking=tracking, vehicle_speeds=vehicle_speeds,
+                       overtaken=overtaken)
     plan = AuditPlan(parse_cells(cells), _models("--traffic", traffic_text, dict(TRAFFIC_MODELS)),
                      _models("--sensing", sensing_text, dict(SENSOR_MODELS)), tuple(range(seed, seed + runs)), base,
                      _models("--model", model_text, dict(PLANNING_MODELS)), _scales(scale_text))

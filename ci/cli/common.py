@@ -96,6 +96,19 @@ def vehicle_speeds_option(command: Any) -> Any:
                              "standstill: docs/sound.md).")(command)
 
 
+def overtaken_option(command: Any) -> Any:
+    """``--overtaken physics|no-acceleration`` for the closed loop, handed to the command as an ``Overtaken``."""
+    from spec.dynamics import Overtaken
+
+    return click.option("--overtaken", type=click.Choice([v.value for v in Overtaken]),
+                        default=Overtaken.PHYSICS.value, show_default=True,
+                        callback=lambda _ctx, _param, value: Overtaken(value),
+                        help="What a same-direction vehicle whose speed was measured may do while the AV is in the "
+                             "passing lane: speed up as physics allows, or (a stated profile, StVO section 5(6), "
+                             "monitored as 'accelerated while overtaken') not at all. Needs --vehicle-speeds "
+                             "measured.")(command)
+
+
 def horizon_option() -> Any:
     from ci.shared.options import HORIZON
 
@@ -191,7 +204,7 @@ def abbrev(answer: Answer, compact: bool = False) -> str:
 #: The commitment semantics' options (the last of ``SOUND_OPTIONS``).
 COMMIT_OPTIONS = ("semantics", "commit_max", "escapes")
 SOUND_OPTIONS = ("bounds", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
-                 "oncoming_view_m", "latency_s", "accel_mps2", "brake_mps2", *COMMIT_OPTIONS)
+                 "oncoming_view_m", "latency_s", "accel_mps2", "brake_mps2", "overtaken", *COMMIT_OPTIONS)
 
 
 def sound_options(command: Any) -> Any:
@@ -244,6 +257,10 @@ def _sound_options(command: Any, commitment: bool) -> Any:
         click.option("--brake-mps2", type=ACCEL, default=None, help="Sound model: the most a vehicle whose speed "
                      "was measured brakes, m/s^2, to a standstill at the least (default: "
                      f"{VEHICLE_SPEED_CHANGE.brake_mps2:g}, spec.tracking)."),
+        click.option("--overtaken", default=None, help="Sound model: what a same-direction vehicle whose speed was "
+                     "measured may do while the AV is in the passing lane: physics (speed up at --accel-mps2, the "
+                     "default) or no-acceleration (a stated profile: it does not speed up, as StVO section 5(6) "
+                     "asks of a vehicle being overtaken). See docs/sound.md."),
     ) + ((
         click.option("--semantics", default=None, help="Sound model: commit (committed actions with a proved "
                      "escape and a predicted continuation; the default) or whole (every plan proved to its end; "
@@ -267,14 +284,14 @@ def with_sound(scenario: Scenario, bounds: str | None, same_mps: str | None, onc
                followers_react: bool | None = None, oncoming_view_m: float | None = None,
                latency_s: float | None = None, semantics: str | None = None, commit_max: str | None = None,
                escapes: str | None = None, accel_mps2: float | None = None,
-               brake_mps2: float | None = None) -> Scenario:
+               brake_mps2: float | None = None, overtaken: str | None = None) -> Scenario:
     """``scenario`` under the sound model the options (over the file's ``bounds``) choose; unchanged without any."""
     if all(v is None for v in (bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
                                followers_react, oncoming_view_m, latency_s, semantics, commit_max, escapes,
-                               accel_mps2, brake_mps2)):
+                               accel_mps2, brake_mps2, overtaken)):
         return scenario
     sound = sound_from(scenario.sound, bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
                        followers_react=followers_react, oncoming_view_m=oncoming_view_m, latency_s=latency_s,
                        semantics=semantics, commit_max=commit_max, escapes=escapes, accel_mps2=accel_mps2,
-                       brake_mps2=brake_mps2)
+                       brake_mps2=brake_mps2, overtaken=overtaken)
     return replace(scenario, sound=sound)

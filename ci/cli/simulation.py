@@ -10,6 +10,7 @@ import click
 from ci.cli.common import (
     err,
     faults_options,
+    overtaken_option,
     print_header,
     print_json,
     print_table,
@@ -21,7 +22,7 @@ from ci.shared.options import CELL_M, KM, RUNS, SCHEDULER, SEED, TOLERANCE, WORK
 from ci.shared.options import out_dir as out_dir_checked
 from ci.shared.records import campaign_lock
 from spec.answers import Strategy
-from spec.dynamics import VehicleSpeeds
+from spec.dynamics import Overtaken, VehicleSpeeds
 from spec.engines import get_engine
 from spec.errors import ExitCode, OptionError
 from spec.grid import PAPER_GRID
@@ -65,12 +66,14 @@ from spec.physical import LOOP
               help="Re-plan only as the paper did (not when a deviation exceeds the tolerance).")
 @faults_options
 @vehicle_speeds_option
+@overtaken_option
 @click.option("--json", "as_json", is_flag=True)
 def simulate(km: float, until_failure: bool, until_sensing_failure: bool, seed: int, engine: str, strategy: Strategy,
              cell_m: float, model: str, runs: int,
              workers: int, executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool,
              step_tolerance: float, plan_tolerance: float, paper_replanning: bool, faults: str,
-             steering_offset_deg: float, tracking: bool, vehicle_speeds: VehicleSpeeds, as_json: bool) -> None:
+             steering_offset_deg: float, tracking: bool, vehicle_speeds: VehicleSpeeds, overtaken: Overtaken,
+             as_json: bool) -> None:
     """Drive the PyBullet simulator closed-loop and check every action against the model's prediction."""
     from ci.shared.progress import km_progress
     from ci.simulation.campaign import RUNS_FILE
@@ -87,7 +90,7 @@ def simulate(km: float, until_failure: bool, until_sensing_failure: bool, seed: 
     campaign = DriveConfig(km, until_failure, engine, strategy, not paper_replanning, step_tolerance, plan_tolerance,
                            cell_m, model=model, faults=faults, steering_offset_deg=steering_offset_deg,
                            tracking=tracking, until_sensing_failure=until_sensing_failure,
-                           vehicle_speeds=vehicle_speeds)
+                           vehicle_speeds=vehicle_speeds, overtaken=overtaken)
     if vehicle_speeds is VehicleSpeeds.MEASURED and model != "sound":
         raise OptionError("--vehicle-speeds", vehicle_speeds.value, "needs --model sound (the paper's rules read "
                           "cells alone)")

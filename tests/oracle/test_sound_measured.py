@@ -20,6 +20,7 @@ from spec.actions import Action
 from spec.answers import Status, Strategy
 from spec.assumptions import SpeedBounds
 from spec.cells import left_extent_m
+from spec.dynamics import Overtaken
 from spec.escapes import COMMIT
 from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
@@ -54,10 +55,14 @@ def measured_scenarios(draw: st.DrawFn) -> Scenario:
 
 
 @settings(max_examples=100 if CI_PROFILE else 25)
-@given(measured_scenarios(), st.sampled_from(list(Strategy)), st.booleans(), st.integers(0, 2**32 - 1))
+@given(measured_scenarios(), st.sampled_from(list(Strategy)), st.booleans(), st.integers(0, 2**32 - 1),
+       st.sampled_from(list(Overtaken)))
 def test_every_answer_with_measured_speeds_survives_every_motion_that_may_brake_to_a_standstill(
-        scenario: Scenario, strategy: Strategy, committed: bool, seed: int) -> None:
+        scenario: Scenario, strategy: Strategy, committed: bool, seed: int, overtaken: Overtaken) -> None:
+    """Under either profile of vehicles overtaken (``no-acceleration``: the motions do not speed up while the AV is
+    in the passing lane, ``oracle.reach``)."""
     assert scenario.sound is not None
+    scenario = replace(scenario, sound=replace(scenario.sound, overtaken=overtaken))
     if committed:
         check_committed(replace(scenario, sound=replace(scenario.sound, commitment=COMMIT)), strategy, 4,
                         random.Random(seed))
@@ -148,3 +153,30 @@ def test_a_measured_follower_faster_than_its_lanes_top_is_held_behind() -> None:
         found = rules.step_violation(first, action)
         assert found is not None and found.conflict is Conflict.BEHIND, action
     assert reach.exact_check(scenario, (Action.DRIVE, Action.RIGHT_LANE_CHANGE)) is not None
+
+
+def _overtaking(overtaken: Overtaken) -> Scenario:
+    """The AV in the passing lane beside a vehicle measured at 3.5..6.5 m/s (its target, cell 10), another at 5..8
+    m/s ahead (cell 18), an oncoming one at cell 19 (21 m cells, default bounds)."""
+    base = measured_speeds(make_scenario("right", [10, 18], [19], 1, cell_m=21), [(3.5, 6.5), (5.0, 8.0)])
+    return replace(base, sound=sound_from(None, "default", overtaken=overtaken.value))
+
+
+def test_the_no_acceleration_profile_returns_ahead_of_a_vehicle_that_could_speed_up_under_physics() -> None:
+    """Under ``no-acceleration`` the AV completes the pass (drive, accelerate, back into the left lane): every motion
+    that does not speed up while the AV is out survives it. Under ``physics`` the model finds no plan, and the same
+    actions break: the target speeding up at a_max while the AV passes it is where the AV cuts in."""
+    held = _overtaking(Overtaken.NO_ACCELERATION)
+    answer = plan(held, Strategy.SENSIBLE)
+    assert answer.status is Status.PLAN
+    actions = answer.actions
+    assert actions == (Action.DRIVE, Action.ACCELERATE, Action.LEFT_LANE_CHANGE)
+    assert reach.exact_check(held, actions) is None
+    assert all(reach.run_motion(held, actions, m) is None for m in reach.motions(held, actions, random.Random(5), 30))
+    physics = _overtaking(Overtaken.PHYSICS)
+    assert plan(physics, Strategy.SENSIBLE).status is Status.NO_PLAN
+    breach = reach.exact_check(physics, actions)
+    assert breach is not None and breach.conflict is Conflict.CUT_IN and breach.vehicle.startswith("left_lane[0]")
+    corners = reach.motions(physics, actions, random.Random(5), 0)
+    fastest = next(m for m in corners if "fastest, readings high" in m.name)
+    assert reach.run_motion(physics, actions, fastest) is not None

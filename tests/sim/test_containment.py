@@ -398,3 +398,55 @@ def test_a_measured_vehicle_braking_to_a_standstill_is_inside_one_braking_harder
     # outside the measured interval at the snapshot itself: the speed reading's error bound broke, not the vehicle
     (breach,) = watched().check(0.0, 0.0, AV, [car(1, 40.0, 7.02)], [], "drive", never)  # type: ignore[list-item]
     assert breach.kind is BreachKind.SENSING and breach.speed and breach.by_m == pytest.approx(0.02)
+
+
+def test_a_measured_vehicle_speeding_up_while_overtaken_breaks_the_no_acceleration_profile_only() -> None:
+    """Under ``Overtaken.NO_ACCELERATION`` the decision's proof took a measured same-direction vehicle not to speed up
+    while the AV is in the passing lane (``passing_windows_s`` of the actions it executes): a speed just above the
+    one it had when the window began is ``accelerated while overtaken``, one at it is inside; beyond what a_max allows
+    is ``too fast``; under ``physics`` speeding up at a_max is inside; outside the window the profile says nothing."""
+    from sim.discretiser import discretise
+    from spec.actions import Action
+    from spec.dynamics import Overtaken
+    from spec.tracking import VEHICLE_SPEED_CHANGE
+
+    a = 0.5  # below its lane's top (9.1 m/s) all the while: 7 + 0.5 x 4 s
+    change = replace(VEHICLE_SPEED_CHANGE, accel_mps2=a)
+    readings = (Reading(Lane.LEFT, 1, 40.0, speed_mps=(7.0, 7.0)),)
+    scenario = discretise(readings, Lane.LEFT, PAPER_GRID, measured=True)
+    plan = (Action.DRIVE, Action.RIGHT_LANE_CHANGE, Action.ACCELERATE, Action.LEFT_LANE_CHANGE)
+    out_s = 3.0  # the drive's end: the move out starts
+
+    def watched(overtaken: Overtaken) -> Containment:
+        sound = replace(SOUND, overtaken=overtaken, speed_change=change)
+        c = Containment(1, sound, scenario, readings, PAPER_GRID, 0.0, 0.0, [car(1, 40.0)])  # type: ignore[list-item]
+        c.passing(plan)
+        return c
+
+    assert watched(Overtaken.NO_ACCELERATION).windows_s == ((out_s, 12.0),)
+    t_s = out_s + 1.0
+    held_x = 40.0 + 7.0 * out_s + a * out_s * out_s / 2 + (7.0 + a * out_s) * 1.0  # sped up until the move out only
+    held_v = 7.0 + a * out_s
+    for overtaken, speed, kind in ((Overtaken.NO_ACCELERATION, held_v, None),
+                                   (Overtaken.NO_ACCELERATION, held_v + 0.01, BreachKind.ACCELERATED),
+                                   (Overtaken.NO_ACCELERATION, 7.0 + a * t_s + 0.01, BreachKind.TOO_FAST),
+                                   (Overtaken.PHYSICS, 7.0 + a * t_s, None),
+                                   (Overtaken.PHYSICS, 7.0 + a * t_s + 0.01, BreachKind.TOO_FAST)):
+        found = watched(overtaken).check(t_s, 0.0, AV, [car(1, held_x, speed)], [], "drive",  # type: ignore[list-item]
+                                         never)
+        assert [b.kind for b in found] == ([] if kind is None else [kind]), (overtaken, speed)
+    # before the move out, speeding up at a_max is inside either way
+    before_s = out_s - 0.5
+    x = 40.0 + 7.0 * before_s + a * before_s * before_s / 2
+    assert watched(Overtaken.NO_ACCELERATION).check(before_s, 0.0, AV, [car(1, x, 7.0 + a * before_s)], [],  # type: ignore[list-item]
+                                                    "drive", never) == []
+    # a position the held speed cannot reach, and speeding up at a_max can (0.25 m farther): accelerated while
+    # overtaken, by how far beyond the held reach
+    (breach,) = watched(Overtaken.NO_ACCELERATION).check(t_s, 0.0, AV, [car(1, held_x + 0.1, held_v)], [],  # type: ignore[list-item]
+                                                         "drive", never)
+    assert breach.kind is BreachKind.ACCELERATED and not breach.speed and breach.by_m == pytest.approx(0.1)
+    # the AV's own monitor reads the same: a reading only the held speed cannot explain, then one it can
+    sensed = watched(Overtaken.NO_ACCELERATION).sense(t_s, 0.0, 0.0, (Reading(Lane.LEFT, 1, held_x + 0.1),), "drive")
+    assert sensed is not None and sensed.kind is BreachKind.ACCELERATED and sensed.by_m == pytest.approx(0.1)
+    assert watched(Overtaken.NO_ACCELERATION).sense(t_s, 0.0, 0.0, (Reading(Lane.LEFT, 1, held_x),), "drive") is None
+    assert watched(Overtaken.PHYSICS).sense(t_s, 0.0, 0.0, (Reading(Lane.LEFT, 1, held_x + 0.1),), "drive") is None

@@ -10,8 +10,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from spec.dynamics import Dynamics
+from spec.actions import Action
+from spec.dynamics import Dynamics, passing_windows_s
 from spec.errors import OptionError
+from spec.lanes import Lane
 from spec.tracking import SpeedChange
 
 CHANGE = SpeedChange(3.0, 9.0, "test")
@@ -63,6 +65,52 @@ def test_the_bounds_are_braking_to_a_standstill_and_speeding_up_to_the_top() -> 
     assert standing.travel_m(100.0)[0] == 0.0 and standing.speeds_mps(1.0) == (0.0, 3.0)
     above = Dynamics((12.0, 12.5), 10.0, CHANGE)  # measured above its lane's top: it may keep that speed
     assert above.highest_mps == 12.5 and above.travel_m(2.0)[1] == pytest.approx(25.0)
+
+
+@given(driven(), st.floats(0.0, 6.0))
+def test_a_motion_that_stops_speeding_up_at_the_hold_stays_inside_the_held_bounds(
+        drawn: tuple[Dynamics, float, list[tuple[float, float]]], hold_s: float) -> None:
+    """``held_from``: every motion within the bounds that does not speed up after ``hold_s`` (its speed never above
+    what it was then) stays inside the held travel and speeds."""
+    dynamics, speed, schedule = drawn
+    held = dynamics.held_from(hold_s)
+    top = dynamics.highest_mps
+    t, travel, dt, cap = 0.0, 0.0, 0.005, math.inf
+    for duration, accel in schedule:
+        end = t + duration
+        while t < end - 1e-12:
+            h = min(dt, end - t, hold_s - t if t < hold_s else math.inf)
+            if t >= hold_s:
+                cap = min(cap, speed)
+            new = min(max(speed + accel * h, 0.0), max(top, speed), cap)
+            travel += (speed + new) / 2 * h
+            speed, t = new, t + h
+            least, most = held.travel_m(t)
+            slow, fast = held.speeds_mps(t)
+            assert least - 1e-6 <= travel <= most + 1e-6, (t, travel, least, most)
+            assert slow - 1e-9 <= speed <= fast + 1e-9, (t, speed, slow, fast)
+
+
+def test_held_from_speeds_up_until_the_hold_and_keeps_that_speed() -> None:
+    d = Dynamics((6.0, 8.0), 10.0, CHANGE)
+    held = d.held_from(0.5)
+    assert held.speeds_mps(0.25)[1] == pytest.approx(8.75) and held.speeds_mps(3.0)[1] == pytest.approx(9.5)
+    assert held.travel_m(3.0)[1] == pytest.approx(8.0 * 0.5 + 3.0 * 0.5 * 0.5 / 2 + 9.5 * 2.5)
+    assert held.travel_m(3.0)[0] == d.travel_m(3.0)[0]  # braking is unchanged
+    assert d.held_from(0.0).travel_m(2.0)[1] == 16.0 and d.held_from(5.0).travel_m(2.0) == d.travel_m(2.0)
+    assert d.held_from(1.0).held_from(2.0).hold_from_s == 1.0  # the earliest hold holds
+
+
+@pytest.mark.parametrize(("lane", "plan", "windows"), [
+    (Lane.LEFT, (Action.DRIVE,), ()),
+    (Lane.LEFT, (Action.DRIVE, Action.RIGHT_LANE_CHANGE, Action.ACCELERATE, Action.LEFT_LANE_CHANGE), ((3.0, 12.0),)),
+    (Lane.LEFT, (Action.RIGHT_LANE_CHANGE, Action.ACCELERATE), ((0.0, math.inf),)),
+    (Lane.RIGHT, (Action.ACCELERATE, Action.LEFT_LANE_CHANGE, Action.RIGHT_LANE_CHANGE), ((0.0, 6.0), (6.0, math.inf))),
+    (Lane.RIGHT, (), ((0.0, math.inf),)),
+])
+def test_the_passing_windows_run_from_the_move_out_to_the_end_of_the_move_back(
+        lane: Lane, plan: tuple[Action, ...], windows: tuple[tuple[float, float], ...]) -> None:
+    assert passing_windows_s(lane, plan) == windows
 
 
 def test_a_snapshot_aged_widens_the_speed_interval_by_the_change_it_allows() -> None:

@@ -96,11 +96,14 @@ NO_TOOLS = (("PATH", "/nonexistent"),)  # spin and gcc are not installed
 
 def vehicle_speeds(command: str) -> list[Case]:
     """``--vehicle-speeds``: an unknown source; measured speeds without tracking, from an engine that moves every
-    vehicle at its lane's speeds, or (simulate) for the paper's rules: exit 2 naming it."""
+    vehicle at its lane's speeds, or (simulate) for the paper's rules; ``--overtaken``: an unknown profile, or one
+    without measured speeds: exit 2 naming it."""
     measured = ("--vehicle-speeds=measured",)
     return [*choices(command, "--vehicle-speeds"), _case(command, *measured, named="--vehicle-speeds"),
             _case(command, *measured, "--tracking=on", "--engine=z3", named="--vehicle-speeds"),
-            *([_case(command, *measured, "--tracking=on", named="--vehicle-speeds")] if command == "simulate" else [])]
+            *([_case(command, *measured, "--tracking=on", named="--vehicle-speeds")] if command == "simulate" else []),
+            # the no-acceleration profile speaks of measured vehicles: lane speeds are refused
+            *choices(command, "--overtaken"), _case(command, "--overtaken=no-acceleration", named="--overtaken")]
 
 
 def faults(command: str) -> list[Case]:
@@ -163,6 +166,8 @@ def sound_options(command: str, *extra: str, commitment: bool = True) -> list[Ca
             _case(command, *extra, "--sensing-error-m=1001", named="--sensing-error-m"),
             *(_case(command, *extra, f"{option}={value}", named=option) for option in ("--accel-mps2", "--brake-mps2")
               for value in (*NOT_NUMBERS, "0", "-3")),  # an acceleration bound is above 0
+            *(_case(command, *extra, f"--overtaken={value}", named="--overtaken")
+              for value in ("sometimes", "", "PHYSICS ")),  # one of the profiles, spelt as stated
             *(commitment_options(command, *extra) if commitment else ())]
 
 
@@ -186,7 +191,7 @@ BOUNDS_FILES = {"bounds_reversed.toml": "bounds.same_mps", "bounds_key.json": "b
                 "bounds_semantics.toml": "bounds.semantics", "bounds_accel.toml": "bounds.accel_mps2",
                 "bounds_brake.json": "bounds.brake_mps2", "speeds_length.json": "left_mps",
                 "speeds_reversed.toml": "left_mps[0]", "speeds_negative.json": "left_mps[0]",
-                "speeds_nan.json": "right_mps[0]"}
+                "speeds_nan.json": "right_mps[0]", "bounds_overtaken.toml": "bounds.overtaken"}
 
 
 def out_dirs(command: str, option: str = "--out") -> list[Case]:
@@ -269,6 +274,7 @@ def _hostile_files(folder: Path) -> None:
         "bounds_semantics.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nsemantics = 3\n',
         "bounds_accel.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\naccel_mps2 = 0\n',
         "bounds_brake.json": "{" + good + ', "bounds": {"brake_mps2": -9}}',
+        "bounds_overtaken.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\novertaken = true\n',
         "speeds_length.json": "{" + good + ', "left_mps": [[5, 6], [7, 8]], "bounds": {}}',
         "speeds_reversed.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\nleft_mps = [[6, 5]]\n[bounds]\n',
         "speeds_negative.json": "{" + good + ', "left_mps": [[-1, 5]], "bounds": {}}',
