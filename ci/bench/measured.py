@@ -8,7 +8,9 @@ its lane's speeds, and every vehicle with a measured speed interval (``Scenario.
 speed drawn from its lane's bounds (seeded), the interval that wide around it (default: the tracker's median width
 after 2 s of noisy sightings, ``python -m ci.bench.speeds``, docs/faults.md), and, for a share of the same-direction
 vehicles (``--standing``), a vehicle standing. Per cell size: how many each commits to, the interpreter's latency
-(whole pipeline) per strategy, and whether each commitment with measured speeds survives the exact check.
+(whole pipeline) per strategy, and whether each commitment with measured speeds survives the exact check; then the
+same measured scenarios under the no-acceleration profile of vehicles overtaken (``spec.dynamics.Overtaken``): how
+many it commits to, how many of those commit to a move back from the passing lane, and the exact check.
 """
 
 from __future__ import annotations
@@ -25,9 +27,12 @@ from ci.bench.commit import DEFAULT_SPACE, committed, read_at_centres, timed
 from ci.conformance.crossval import parse_space
 from ci.shared.machine import machine
 from oracle import reach
-from spec.answers import Status, Strategy
+from spec.actions import ACTION_RULES
+from spec.answers import Answer, Status, Strategy
 from spec.assumptions import SpeedBounds
+from spec.dynamics import Overtaken
 from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
+from spec.lanes import Lane
 from spec.scenario import Scenario, measured_speeds, refined
 from spec.sound import sound_from
 
@@ -53,6 +58,20 @@ def measured(scenario: Scenario, rng: random.Random, width_mps: float, standing:
                            [one(b.oncoming_mps, False) for _ in scenario.right_lane])
 
 
+def survives(scenario: Scenario, answer: Answer) -> bool:
+    """Whether ``answer``'s commitment and its escape survive the exact check (False: no commitment)."""
+    if answer.status is not Status.PLAN or answer.commit is None:
+        return False
+    c = answer.commit
+    return reach.exact_check(scenario, (*c.committed, *(c.escape.actions if c.escape else ()))) is None
+
+
+def moves_back(answer: Answer) -> bool:
+    """Whether ``answer`` commits to a move back into the left lane (a pass completed, or an abort)."""
+    return answer.status is Status.PLAN and answer.commit is not None and any(
+        ACTION_RULES[a].to_lane is Lane.LEFT for a in answer.commit.committed)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--count", type=int, default=123, help="scenarios drawn from the space")
@@ -73,12 +92,13 @@ def main() -> None:
                   f"{machine()}")
     table = Table(title="commitments and the interpreter's latency (ms), whole pipeline, default bounds")
     for col in ("cell", "lane-wide commits", "measured commits", "survive exact check", "sensible median", "p99",
-                "max", "shortest median", "p99", "max", "lane-wide sensible median", "p99"):
+                "max", "shortest median", "p99", "max", "lane-wide sensible median", "p99",
+                "no-acceleration commits", "moves back", "survive exact check"):
         table.add_column(col, justify="right")
     for cell_m in STANDARD_CELLS_M:
         grid = Grid(cell_m)
         rng = random.Random(args.seed)  # the same speeds at every cell size
-        counts = dict.fromkeys(("lane", "measured", "exact"), 0)
+        counts = dict.fromkeys(("lane", "measured", "exact", "held", "held back", "held exact", "back"), 0)
         ms: dict[str, list[float]] = {"sensible": [], "shortest": [], "lane": []}
         for s in sample:
             lane_wide = replace(read_at_centres(s if grid == PAPER_GRID else refined(s, grid)),
@@ -89,17 +109,23 @@ def main() -> None:
             _, shortest_ms = timed(ours, Strategy.SHORTEST)
             counts["lane"] += committed(before)
             counts["measured"] += committed(answer)
-            if answer.status is Status.PLAN and answer.commit is not None:
-                c = answer.commit
-                counts["exact"] += reach.exact_check(ours, (*c.committed, *(c.escape.actions if c.escape else ()))) \
-                    is None
+            counts["exact"] += survives(ours, answer)
+            counts["back"] += moves_back(answer)
+            assert ours.sound is not None
+            held = replace(ours, sound=replace(ours.sound, overtaken=Overtaken.NO_ACCELERATION))
+            held_answer, _ = timed(held, Strategy.SENSIBLE)
+            counts["held"] += committed(held_answer)
+            counts["held back"] += moves_back(held_answer)
+            counts["held exact"] += survives(held, held_answer)
             ms["sensible"].append(sensible_ms)
             ms["shortest"].append(shortest_ms)
             ms["lane"].append(lane_ms)
         q = {k: (np.median(v), np.percentile(v, 99), max(v)) for k, v in ms.items()}
         table.add_row(f"{float(cell_m):g} m", str(counts["lane"]), str(counts["measured"]),
                       f"{counts['exact']} of {counts['measured']}", *(f"{x:.2f}" for x in q["sensible"]),
-                      *(f"{x:.2f}" for x in q["shortest"]), *(f"{x:.2f}" for x in q["lane"][:2]))
+                      *(f"{x:.2f}" for x in q["shortest"]), *(f"{x:.2f}" for x in q["lane"][:2]),
+                      str(counts["held"]), f"{counts['held back']} (physics {counts['back']})",
+                      f"{counts['held exact']} of {counts['held']}")
     console.print(table)
 
 
