@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import enum
 import json
 import os
 import sys
@@ -84,29 +85,30 @@ def faults_options(command: Any) -> Any:
                              f"against the paper's failures (docs/faults.md). Kinds: {kinds}.")(command)
 
 
+def _enum_option(name: str, choices: type[enum.Enum], default: enum.Enum, help_text: str) -> Any:
+    """An option of one of ``choices``' values, handed to the command as the member."""
+    return click.option(name, type=click.Choice([v.value for v in choices]), default=default.value, show_default=True,
+                        callback=lambda _ctx, _param, value: choices(value), help=help_text)
+
+
 def vehicle_speeds_option(command: Any) -> Any:
     """``--vehicle-speeds lane|measured``, handed to the command as a ``VehicleSpeeds``."""
     from spec.dynamics import VehicleSpeeds
 
-    return click.option("--vehicle-speeds", type=click.Choice([v.value for v in VehicleSpeeds]),
-                        default=VehicleSpeeds.LANE.value, show_default=True,
-                        callback=lambda _ctx, _param, value: VehicleSpeeds(value),
-                        help="Where the sound model's drives take each vehicle's speed from: its lane's bounds, or "
-                             "its track's measured interval (needs --tracking on; each vehicle may then brake to a "
-                             "standstill: docs/sound.md).")(command)
+    return _enum_option("--vehicle-speeds", VehicleSpeeds, VehicleSpeeds.LANE,
+                        "Where the sound model's drives take each vehicle's speed from: its lane's bounds, or its "
+                        "track's measured interval (needs --tracking on; each vehicle may then brake to a "
+                        "standstill: docs/sound.md).")(command)
 
 
 def overtaken_option(command: Any) -> Any:
     """``--overtaken physics|no-acceleration`` for the closed loop, handed to the command as an ``Overtaken``."""
     from spec.dynamics import Overtaken
 
-    return click.option("--overtaken", type=click.Choice([v.value for v in Overtaken]),
-                        default=Overtaken.PHYSICS.value, show_default=True,
-                        callback=lambda _ctx, _param, value: Overtaken(value),
-                        help="What a same-direction vehicle whose speed was measured may do while the AV is in the "
-                             "passing lane: speed up as physics allows, or (a stated profile, StVO section 5(6), "
-                             "monitored as 'accelerated while overtaken') not at all. Needs --vehicle-speeds "
-                             "measured.")(command)
+    return _enum_option("--overtaken", Overtaken, Overtaken.PHYSICS,
+                        "What a same-direction vehicle whose speed was measured may do while the AV is in the "
+                        "passing lane: speed up as physics allows, or (a stated profile, StVO section 5(6), monitored "
+                        "as 'accelerated while overtaken') not at all. Needs --vehicle-speeds measured.")(command)
 
 
 def horizon_option() -> Any:

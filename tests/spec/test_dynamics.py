@@ -37,17 +37,26 @@ def driven(draw: st.DrawFn) -> tuple[Dynamics, float, list[tuple[float, float]]]
 def test_every_motion_within_the_bounds_stays_inside_its_travel_and_speed_bounds(
         drawn: tuple[Dynamics, float, list[tuple[float, float]]]) -> None:
     dynamics, speed, schedule = drawn
+    _drive_inside(dynamics, dynamics, speed, schedule, math.inf)
+
+
+def _drive_inside(dynamics: Dynamics, bounds: Dynamics, speed: float, schedule: list[tuple[float, float]],
+                  hold_s: float) -> None:
+    """Drive ``schedule`` from ``speed`` within ``dynamics``' bounds (never backwards, never above its top, never
+    above its speed at ``hold_s`` from then on) and assert every instant inside ``bounds``' travel and speeds."""
     top = dynamics.highest_mps
-    t, travel, dt = 0.0, 0.0, 0.005
+    t, travel, dt, cap = 0.0, 0.0, 0.005, math.inf
     for duration, accel in schedule:
         end = t + duration
         while t < end - 1e-12:
-            h = min(dt, end - t)
-            new = min(max(speed + accel * h, 0.0), max(top, speed))  # never backwards, never above its top
+            h = min(dt, end - t, hold_s - t if t < hold_s else math.inf)
+            if t >= hold_s:
+                cap = min(cap, speed)
+            new = min(max(speed + accel * h, 0.0), max(top, speed), cap)
             travel += (speed + new) / 2 * h  # exact: the speed is linear within a step that does not clip
             speed, t = new, t + h
-            least, most = dynamics.travel_m(t)
-            slow, fast = dynamics.speeds_mps(t)
+            least, most = bounds.travel_m(t)
+            slow, fast = bounds.speeds_mps(t)
             assert least - 1e-6 <= travel <= most + 1e-6, (t, travel, least, most)
             assert slow - 1e-9 <= speed <= fast + 1e-9, (t, speed, slow, fast)
 
@@ -73,22 +82,7 @@ def test_a_motion_that_stops_speeding_up_at_the_hold_stays_inside_the_held_bound
     """``held_from``: every motion within the bounds that does not speed up after ``hold_s`` (its speed never above
     what it was then) stays inside the held travel and speeds."""
     dynamics, speed, schedule = drawn
-    held = dynamics.held_from(hold_s)
-    top = dynamics.highest_mps
-    t, travel, dt, cap = 0.0, 0.0, 0.005, math.inf
-    for duration, accel in schedule:
-        end = t + duration
-        while t < end - 1e-12:
-            h = min(dt, end - t, hold_s - t if t < hold_s else math.inf)
-            if t >= hold_s:
-                cap = min(cap, speed)
-            new = min(max(speed + accel * h, 0.0), max(top, speed), cap)
-            travel += (speed + new) / 2 * h
-            speed, t = new, t + h
-            least, most = held.travel_m(t)
-            slow, fast = held.speeds_mps(t)
-            assert least - 1e-6 <= travel <= most + 1e-6, (t, travel, least, most)
-            assert slow - 1e-9 <= speed <= fast + 1e-9, (t, speed, slow, fast)
+    _drive_inside(dynamics, dynamics.held_from(hold_s), speed, schedule, hold_s)
 
 
 def test_held_from_speeds_up_until_the_hold_and_keeps_that_speed() -> None:
