@@ -869,8 +869,10 @@ class SoundRules:
             else:
                 need, ahead_piece = max(((self._own_need(Conflict.AHEAD, v.dynamics, b.piece), b.piece)
                                          for b in pieces), key=lambda found: found[0][0])
-                dynamics = v.dynamics if held_from_s is None else v.dynamics.held_from(held_from_s)
-                v = replace(v, dynamics=dynamics)
+                dynamics = v.dynamics
+                if held_from_s is not None:
+                    dynamics = dynamics.held_from(held_from_s)
+                    v = replace(v, dynamics=dynamics)
                 allow, behind_piece = min(((self._own_need(Conflict.CUT_IN, dynamics, b.piece), b.piece)
                                            for b in pieces), key=lambda found: found[0][0]) if margin else \
                     (lane_behind.behind, lane_behind.piece)
