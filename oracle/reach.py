@@ -23,11 +23,11 @@ from __future__ import annotations
 import math
 import random
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from spec.actions import ACTION_RULES, Action
 from spec.cells import left_cell, oncoming_cell, oncoming_extent_m
-from spec.dynamics import Dynamics, Overtaken, passing_windows_s
+from spec.dynamics import Dynamics
 from spec.grid import Grid
 from spec.lanes import Lane
 from spec.models import GoalRule
@@ -39,6 +39,8 @@ from spec.sound import (
     Sound,
     Vehicle,
     follower_limit_m,
+    held_vehicle,
+    held_windows_s,
     measured_dynamics,
     reach_m,
     slowest_ahead_mps,
@@ -176,7 +178,7 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
     sound = _sound(scenario)
     path = scenario_path(scenario, actions)
     tr, b, length = sound.tracking, sound.bounds, sound.safety.vehicle_length_m
-    windows = passing_windows(scenario, actions)
+    windows = held_windows_s(sound, scenario.lane, actions)
     cars = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid, sound, scenario.left_m,
                     scenario.right_m, scenario.left_mps, scenario.right_mps)
     measured = [c.dynamics for c in cars if c.dynamics is not None]
@@ -190,14 +192,6 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
             return c.dynamics.speeds_mps(t)
         sp = b.same_mps if c.lane is Lane.LEFT else b.oncoming_mps
         return sp.low_mps, sp.high_mps
-
-    def overtaken(c: Vehicle, t: float) -> Vehicle:
-        """``c`` as the AV cutting in ahead of it at ``t`` may take it: under ``Overtaken.NO_ACCELERATION`` a measured
-        same-direction vehicle has not sped up since the passing window ``t`` is in began."""
-        if c.dynamics is None or c.lane is not Lane.LEFT:
-            return c
-        since = [t0 for t0, t1 in windows if t0 <= t <= t1]
-        return replace(c, dynamics=c.dynamics.held_from(since[0])) if since else c
 
     def worst(t: float, lanes: frozenset[Lane], entering: bool, behind: set[int]) -> tuple[float, Breach | None]:
         """The least margin over the conflicts at ``t`` and the breach it would be."""
@@ -213,7 +207,7 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
             if c.lane is Lane.LEFT and Lane.LEFT in lanes and i not in behind:
                 options.append((Conflict.AHEAD, low - (x + tr.position_m) - length, v + tr.speed_mps - slow))
                 if entering:
-                    held = overtaken(c, t)
+                    held = held_vehicle(c, windows, t)
                     cut_high, cut_fast = reach_m(held, b, t)[1], speeds(held, t)[1]
                     options.append((Conflict.CUT_IN, (x - tr.position_m) - cut_high - length,
                                     cut_fast - v + tr.speed_mps))
@@ -252,7 +246,7 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
         else:  # in the lane: a vehicle certainly behind follows the AV from now on
             x = path.position(t)
             behind |= {i for i, c in enumerate(cars) if c.lane is Lane.LEFT
-                       and reach_m(overtaken(c, t), b, t)[1] + length <= x - tr.position_m}
+                       and reach_m(held_vehicle(c, windows, t), b, t)[1] + length <= x - tr.position_m}
         margin, found = worst(t, lanes, entering, behind)
         if margin < -TOLERANCE_M:
             return found
@@ -263,14 +257,6 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
                 return found
         previous = (t, margin)
     return None
-
-
-def passing_windows(scenario: Scenario, actions: Sequence[Action]) -> tuple[tuple[float, float], ...]:
-    """The plan's passing windows in which measured same-direction vehicles hold their speed
-    (``spec.dynamics.passing_windows_s`` under ``Overtaken.NO_ACCELERATION``; none otherwise)."""
-    if _sound(scenario).overtaken is not Overtaken.NO_ACCELERATION:
-        return ()
-    return passing_windows_s(scenario.lane, actions)
 
 
 def scenario_path(scenario: Scenario, actions: Sequence[Action]) -> Path:
@@ -454,7 +440,7 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
     followers = {i for i, c in enumerate(cars) if c.lane is Lane.LEFT and scenario.lane is Lane.LEFT
                  and pos[i] <= follower_limit_m(0.0, sound.safety, sound.tracking)}
     goal_checked, was_entering = goal is None, False
-    windows = passing_windows(scenario, actions)
+    windows = held_windows_s(sound, scenario.lane, actions)
     held: list[float | None] = [None] * len(cars)  # a measured same-direction vehicle's speed as a window began
     for k, t in enumerate(times):
         while dev_k + 1 < len(motion.av_offset) and motion.av_offset[dev_k + 1][0] <= t:

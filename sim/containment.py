@@ -31,7 +31,7 @@ import enum
 import math
 from collections import Counter
 from collections.abc import Callable, Iterable
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from sim.discretiser import in_window, reading_cell
@@ -41,13 +41,12 @@ from sim.sensors import Reading
 from sim.vehicle import KinematicCar, Pose
 from spec.actions import Action
 from spec.assumptions import Bounds
-from spec.dynamics import Overtaken, passing_windows_s
 from spec.grid import Grid
 from spec.lanes import Lane
 from spec.physical import CAR, ROAD
 from spec.safety import SAFETY
 from spec.scenario import Scenario
-from spec.sound import Sound, Vehicle, reach_m, slowest_ahead_mps, vehicles
+from spec.sound import Sound, Vehicle, held_vehicle, held_windows_s, reach_m, slowest_ahead_mps, vehicles
 
 #: Breach records kept per run (the counts are exact beyond it).
 MAX_RECORDS = 200
@@ -155,7 +154,7 @@ class Containment:
                  av_x_m: float, t_s: float, cars: Iterable[KinematicCar]) -> None:
         self.decision, self.bounds, self.tracking = decision, sound.bounds, sound.tracking
         self.x0_m, self.t0_s = av_x_m, t_s
-        self.lane, self.overtaken = scenario.lane, sound.overtaken
+        self.lane, self.sound = scenario.lane, sound
         #: the decision's passing windows (``passing``): measured same-direction vehicles hold their speed in them
         self.windows_s: tuple[tuple[float, float], ...] = ()
         found = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, grid, sound, scenario.left_m,
@@ -201,18 +200,12 @@ class Containment:
     def passing(self, actions: tuple[Action, ...]) -> None:
         """The decision executes ``actions``: under ``Overtaken.NO_ACCELERATION`` its proof took every measured
         same-direction vehicle not to speed up while the AV is in the passing lane (``passing_windows_s``)."""
-        if self.overtaken is Overtaken.NO_ACCELERATION:
-            self.windows_s = passing_windows_s(self.lane, actions)
+        self.windows_s = held_windows_s(self.sound, self.lane, actions)
 
     def assumed(self, v: Vehicle, elapsed_s: float) -> Vehicle:
         """``v`` as the decision's proof took it ``elapsed_s`` after the snapshot: within a passing window, a measured
         same-direction vehicle that has not sped up since the window began (``passing``)."""
-        if v.dynamics is None or v.lane is not Lane.LEFT:
-            return v
-        for t0, t1 in self.windows_s:
-            if t0 <= elapsed_s <= t1:
-                return replace(v, dynamics=v.dynamics.held_from(t0))
-        return v
+        return held_vehicle(v, self.windows_s, elapsed_s)
 
     def _sets(self, lane: Lane, car: KinematicCar) -> tuple[str, Vehicle | None, list[Vehicle]]:
         """The vehicle the decision knew ``car`` as (None: unknown), and the intervals it must be inside."""

@@ -37,14 +37,14 @@ from __future__ import annotations
 import enum
 import functools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 from spec.actions import ACTION_RULES, Action
 from spec.assumptions import DEFAULT_PROFILE, Bounds, Phantom, check_bounds, parse_speeds, profile
 from spec.cells import left_extent_m, oncoming_extent_m
-from spec.dynamics import Dynamics, Overtaken, parse_overtaken
+from spec.dynamics import Dynamics, Overtaken, parse_overtaken, passing_windows_s
 from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING, MinimalRisk, Piece, Reference, Tracking
 from spec.errors import OptionError, check_number
 from spec.escapes import COMMIT, Commitment, Semantics, parse_escape_kinds, parse_most_actions, parse_semantics
@@ -381,6 +381,23 @@ def rear_binds(bounds: Bounds, slowest_mps: float, follower: Vehicle | None = No
     (``SoundRules._behind_allow``, the cut-in's threshold)."""
     top = bounds.same_mps.high_mps if follower is None else top_mps(bounds, follower)
     return not bounds.followers_react and slowest_mps < top - CLOSING_EPS_MPS
+
+
+def held_windows_s(sound: Sound, lane: Lane, actions: Sequence[Action]) -> tuple[tuple[float, float], ...]:
+    """The windows of a plan from ``lane`` in which measured same-direction vehicles hold their speed: its passing
+    windows (``spec.dynamics.passing_windows_s``) under ``Overtaken.NO_ACCELERATION``, none under physics."""
+    return passing_windows_s(lane, actions) if sound.overtaken is Overtaken.NO_ACCELERATION else ()
+
+
+def held_vehicle(v: Vehicle, windows_s: tuple[tuple[float, float], ...], t_s: float) -> Vehicle:
+    """``v`` as a plan's assumptions take it at ``t_s``: within one of ``windows_s`` (``held_windows_s``), a measured
+    same-direction vehicle that has not sped up since the window began; else ``v`` itself."""
+    if v.dynamics is None or v.lane is not Lane.LEFT:
+        return v
+    for t0, t1 in windows_s:
+        if t0 <= t_s <= t1:
+            return replace(v, dynamics=v.dynamics.held_from(t0))
+    return v
 
 
 def top_mps(bounds: Bounds, v: Vehicle) -> float:
