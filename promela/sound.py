@@ -48,7 +48,7 @@ from spec.lanes import Lane
 from spec.models import GoalRule, ModelRules
 from spec.scenario import Problem
 from spec.sound import EPS_M, Checks, Sound, follower_limit_m, rear_binds
-from spec.windows import NO_SPEED, Binding, Instant, Window, sound_table
+from spec.windows import NO_SPEED, Binding, Instant, Window, shapes, sound_table
 
 ENV_VAR = "OVERTAKE_SCENARIO"
 LANE_CODE = {Lane.LEFT: 0, Lane.RIGHT: 1}
@@ -187,10 +187,12 @@ def table_text(sound: Sound, grid: Grid) -> str:
              " ".join(str(table.action_speed[a]) for a in ACTION_ORDER)]
     windows: list[list[str]] = []
     relative = [[[[-1] * 3 for _ in Lane] for _ in range(CONTINUATION + 1)] for _ in table.speeds_mps]
-    for (before, action, lane, moved), w in sorted(table.relative.items(), key=lambda kv: (
-            kv[0][0], _action_code(kv[0][1]), LANE_CODE[kv[0][2]], MOVED_CODE[kv[0][3]])):
+    unstarted = replace(sound, start_mps=None)
+    for before, action, lane, moved in sorted(table.relative, key=lambda k: (
+            k[0], _action_code(k[1]), LANE_CODE[k[2]], MOVED_CODE[k[3]])):
         relative[before][_action_code(action)][LANE_CODE[lane]][MOVED_CODE[moved]] = len(windows)
-        windows.append(_window(w, sound))
+        only = before not in table.action_speed.values()
+        windows.append(_shape_lines(unstarted, grid, table.speeds_mps[before], only)[action, lane, moved])
     early = []
     for (lane, t, d, first, last, moved, action), w in sorted(table.early.items(), key=lambda kv: (
             LANE_CODE[kv[0][0]], *kv[0][1:5], MOVED_CODE[kv[0][5]], _action_code(kv[0][6]))):
@@ -207,6 +209,14 @@ def table_text(sound: Sound, grid: Grid) -> str:
               for by_speed in relative]
     lines += [str(len(early)), *early, " ".join(starts), str(TABLE_END)]
     return "\n".join(lines) + "\n"
+
+
+@functools.lru_cache(maxsize=64)
+def _shape_lines(sound: Sound, grid: Grid, before_mps: float, continuation_only: bool) -> dict[
+        tuple[Action | None, Lane, Lane | None], list[str]]:
+    """The table's lines of the shapes after ``before_mps`` (``spec.windows.shapes``; ``sound`` without a start
+    speed), written once: a new measured start speed adds its own continuation and early windows only."""
+    return {key: _window(w, sound) for key, w in shapes(sound, grid, before_mps, continuation_only).items()}
 
 
 def _tables(shape: SoundShape) -> str:

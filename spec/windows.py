@@ -40,7 +40,7 @@ time units and ``d_cells`` cells plus the first ramp's gain (``gain_m``).
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from spec.actions import ACTION_RULES, Action
 from spec.envelope import Reference
@@ -173,16 +173,11 @@ def sound_table(sound: Sound, grid: Grid) -> SoundTable:
     action_speeds = {a: rules.speeds[a] for a in Action}
     speeds = tuple(sorted({*action_speeds.values(), rules.start_mps}))
     index = {v: i for i, v in enumerate(speeds)}
-    relative: dict[ShapeKey, Window] = {}
-    for before in speeds:
-        for lane in Lane:
-            for moved in (None, lane):
-                for action in (*Action, None):
-                    if action is not None and ACTION_RULES[action].from_lane not in (None, lane):
-                        continue
-                    shape = rules.relative_window(before, action, lane, moved)
-                    ref = rules._reference(0.0, 0.0, before, before, action, before)
-                    relative[index[before], action, lane, moved] = declared(shape, _at_boundary(ref))
+    unstarted = replace(sound, start_mps=None)
+    # after the start speed (when no action drives at it) only the continuation from the start is ever looked up
+    relative: dict[ShapeKey, Window] = {
+        (index[before], *key): w for before in speeds
+        for key, w in shapes(unstarted, grid, before, before not in action_speeds.values()).items()}
     early_windows: dict[EarlyKey, Window] = {}
     first_end_s = max(ramp_s(rules.start_mps, v) for v in speeds)
     half_ramp_s = max(ramp_s(a, b) for a in speeds for b in speeds) / 2
@@ -211,6 +206,27 @@ def sound_table(sound: Sound, grid: Grid) -> SoundTable:
     gains = tuple(ramp_gain_m(rules.start_mps, v) for v in speeds)
     return SoundTable(sound, grid, rules.unit_s, rules.cell_m, speeds, {a: index[v] for a, v in action_speeds.items()},
                       index[rules.start_mps], gains, relative, early_windows, start)
+
+
+@functools.lru_cache(maxsize=64)
+def shapes(sound: Sound, grid: Grid, before_mps: float, continuation_only: bool = False) -> dict[
+        tuple[Action | None, Lane, Lane | None], Window]:
+    """Every window's shape after the speed ``before_mps`` (``SoundRules.relative_window``), by action (None: the
+    continuation), lane and the lane the action before moved into; ``continuation_only``: the continuation's alone
+    (after a start speed no action drives at, the only shape ever looked up). A shape never reads the AV's start
+    speed: the closed loop's every new measured speed reuses the shapes of the actions' speeds (``sound`` comes with
+    ``start_mps`` None)."""
+    rules = SoundRules(sound, Lane.RIGHT, (), (), grid, ())
+    found: dict[tuple[Action | None, Lane, Lane | None], Window] = {}
+    for lane in Lane:
+        for moved in (None, lane):
+            for action in (None,) if continuation_only else (*Action, None):
+                if action is not None and ACTION_RULES[action].from_lane not in (None, lane):
+                    continue
+                shape = rules.relative_window(before_mps, action, lane, moved)
+                ref = rules._reference(0.0, 0.0, before_mps, before_mps, action, before_mps)
+                found[action, lane, moved] = declared(shape, _at_boundary(ref))
+    return found
 
 
 def _index(index: dict[float, int], speed: float | None) -> int:

@@ -4,6 +4,7 @@ attributed."""
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Callable
 from dataclasses import replace
@@ -12,11 +13,12 @@ from pathlib import Path
 import pytest
 
 from sim.parts import DriveConfig
-from sim.simulator import Simulator
+from sim.simulator import Simulator, run_drive
 from sim.summary import RunSummary
 from sim.tolerance import ToleranceReport
 from spec.errors import OptionError
 from spec.physical import LOOP, SENSORS
+from tests.sim.test_pinned_drive import WALL_CLOCK
 
 
 class Watched(Simulator):
@@ -589,3 +591,21 @@ def test_planning_is_named_once_in_what_the_av_was_doing_however_many_decisions_
     for _ in range(3):
         assert Simulator._while_planning(sim)  # type: ignore[arg-type]
     assert sim.doing == "planning (brake (plan 3, step 1 of 2))" and held == [LOOP.plan_budget_s] * 3
+
+
+@pytest.mark.parametrize("traffic", ["paper", "following"])
+def test_spin_and_the_interpreter_drive_the_same_sound_drive(traffic: str, tmp_path: Path) -> None:
+    """The sound model's sensible plans are the same plans whichever engine finds them: a pinned drive planned by
+    Spin is the interpreter's, summary (less its wall-clock figures and its configuration, which names the engine)
+    and trace alike. One answer may be worded apart: where the interpreter proves there is no plan at any horizon,
+    Spin answers only that there is none within it (``Engine.prove_beyond``); the AV does the same either way."""
+    drives, plans = {}, []
+    for engine in ("interpreter", "spin"):
+        config = DriveConfig(1.0, engine=engine, model="sound", traffic=traffic, sensor="noisy")
+        summary = run_drive(3, config, str(tmp_path / engine)).to_json()
+        plans.append(summary["plans"])
+        text = json.dumps({k: v for k, v in summary.items() if k not in (*WALL_CLOCK, "config")}, sort_keys=True) \
+            + (tmp_path / engine / "trace-seed3.jsonl").read_text()
+        drives[engine] = text.replace("(no_plan)", "(no_plan_within_horizon)") if engine == "interpreter" else text
+    assert drives["spin"] == drives["interpreter"]
+    assert min(plans) > 10
