@@ -57,5 +57,5 @@ def _beyond(problem: Problem) -> SearchResult:
 INTERPRETER = register(
     Engine("interpreter", (Strategy.SENSIBLE, Strategy.SHORTEST, Strategy.OPTIMAL), _solve,
            "Python reference interpreter and planners", _beyond, sound=True, commit=True,
-           measured_speeds=True)
+           measured_speeds=True, overtaken_profile=True)
 )

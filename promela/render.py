@@ -25,7 +25,7 @@ from spec.lanes import Lane
 from spec.models import GOAL_RULES, MODEL_RULES, GoalKind, GoalRule, ModelKind, ModelRules
 from spec.rules import behind_line, collision_span, left_path, nearest_span, passed_line
 from spec.scenario import Problem, Scenario
-from spec.sound import sensed_extents
+from spec.sound import sensed_extents, vehicles
 
 ENV_VAR = "OVERTAKE_SCENARIO"
 LANE_CODE = {Lane.LEFT: 0, Lane.RIGHT: 1}
@@ -115,7 +115,27 @@ def scenario_values(problem: Problem) -> str:
         else:
             same, oncoming = sensed_extents(s.lane, s.left_lane, s.right_lane, s.grid, s.left_m, s.right_m)
             words += [1, *(repr(float(x)) for pair in (*same, *oncoming) for x in pair)]
+        words += _measured_speeds(s)
     return " ".join(map(str, words))
+
+
+def _measured_speeds(s: Scenario) -> list[object]:
+    """0, or 1 and for each sensed vehicle (same-direction then oncoming) 0, or 1 and where it can be at the plan's
+    start and how it may move from there (``spec.sound.vehicles``: its interval widened by its own error, its speed
+    interval aged by the snapshot's age, its top): lo hi low high top."""
+    if s.sound is None or (s.left_mps is None and s.right_mps is None):
+        return [0]
+    words: list[object] = [1]
+    for v in vehicles(s.lane, s.left_lane, s.right_lane, s.grid, s.sound, s.left_m, s.right_m, s.left_mps,
+                      s.right_mps):
+        if v.index is None:
+            continue  # a phantom: the verifier places it from its edge
+        if v.dynamics is None:
+            words.append(0)
+            continue
+        low, high = v.dynamics.speed_mps
+        words += [1, *(repr(float(x)) for x in (v.lo_m, v.hi_m, low, high, v.dynamics.top_mps))]
+    return words
 
 
 def render(shape: Shape, scenario: Scenario | None = None, horizon: int | None = None) -> str:

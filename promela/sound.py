@@ -42,6 +42,7 @@ from dataclasses import dataclass, replace
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.cells import left_extent_m, oncoming_extent_m
 from spec.constants import MAX_HORIZON
+from spec.envelope import CLOSING_EPS_MPS
 from spec.errors import EngineError
 from spec.grid import Grid
 from spec.lanes import Lane
@@ -55,7 +56,7 @@ LANE_CODE = {Lane.LEFT: 0, Lane.RIGHT: 1}
 MOVED_CODE = {None: 0, Lane.LEFT: 1, Lane.RIGHT: 2}
 CONTINUATION = len(ACTION_ORDER)  # the action code of the minimal-risk continuation (action None)
 WORD_BITS = 32
-TABLE_FORMAT = 1  # the table file's layout (table_text): a verifier reads only its own
+TABLE_FORMAT = 2  # the table file's layout (table_text): a verifier reads only its own
 TABLE_END = 271828  # the table's last number: a file cut short is refused
 
 
@@ -108,6 +109,12 @@ def table_sound(problem: Problem) -> Sound:
     return replace(sound, oncoming_view_m=None)
 
 
+def standstill(problem: Problem) -> bool:
+    """Whether ``problem``'s minimal-risk manoeuvre brakes to a standstill: a same-direction vehicle's speed was
+    measured (``spec.sound.slowest_ahead_mps``), so its table's windows are those (``spec.windows.sound_table``)."""
+    return bool(problem.scenario.left_mps)
+
+
 def shape_of(problem: Problem) -> SoundShape:
     """The verifier shape that serves ``problem``: one word of followers when its same-direction list fits, else as
     many as a full road needs. The identity check's paper cell rules (``Checks.PAPER_CELLS``) are the interpreter's
@@ -144,13 +151,14 @@ def _piece(b: Binding, sound: Sound) -> str:
     oncoming = s.required_gap_m(b.oncoming.v_mps + e_v + onc.high_mps)
     behind = s.required_gap_m(same.high_mps - b.behind.v_mps + e_v)
     return (f"   {_f(b.start.t_s)} {_f(b.start.x_m)}  {_at(b.ahead, ahead)}  {_at(b.oncoming, oncoming)}  "
-            f"{_at(b.behind, behind)}  {int(b.rear)}")
+            f"{_at(b.behind, behind)}  {int(b.rear)}  {_f(b.end_s)} {_f(b.start.v_mps)} {_f(b.acc_mps2)}")
 
 
 def _window(w: Window, sound: Sound) -> list[str]:
-    """A window: its stretches, boundary, end and whether the minimal-risk manoeuvre from its end closes in; then
-    each stretch (its occupancy's lanes and its pieces), a line each."""
+    """A window: its stretches, boundary, end (time, place, speed) and whether the minimal-risk manoeuvre from its
+    end closes in; then each stretch (its occupancy's lanes and its pieces), a line each."""
     lines = [f" {len(w.stretches)} {_f(w.boundary.t_s)} {_f(w.boundary.x_m)} {_f(w.end.t_s)} {_f(w.end.x_m)} "
+             f"{_f(w.end.v_mps)} "
              f"{int(sound.minimal_risk.closes_in(w.end.v_mps, sound.bounds.same_mps.low_mps))} "
              f"{int(rear_binds(sound.bounds, w.end.v_mps))}"]
     for st in w.stretches:
@@ -164,15 +172,19 @@ def _action_code(action: Action | None) -> int:
 
 
 @functools.lru_cache(maxsize=64)
-def table_text(sound: Sound, grid: Grid) -> str:
+def table_text(sound: Sound, grid: Grid, standstill: bool = False) -> str:
     """Every number of the sound model a verifier reads when it starts (``sound_load_table``), from
     ``spec.windows.sound_table``: the bounds, the envelope, each window (shapes, early windows, start windows) with
     the gap required at each instant a condition binds (``SafetySpec.required_gap_m`` of the closing speed this
     module forms from the instant's speed, the speed error and the lane's bound), the speeds and gains. Its first
     line names it; its second checks it against the verifier (format, road cells, actions, the phantoms' lanes), as
     do the grid's time unit and cell that open the third; a sentinel ends it. Doubles as Python's ``repr`` writes
-    them: ``strtod`` reads each back exactly."""
-    table = sound_table(sound, grid)
+    them: ``strtod`` reads each back exactly. ``standstill``: the windows of scenarios whose minimal-risk manoeuvre
+    brakes to a standstill (``spec.windows.sound_table``); the fourth line holds what a vehicle measured to move by
+    its own dynamics is checked with (the specification's gaps, the speed error, its rates of speed change, whether
+    followers react)."""
+    table = sound_table(sound, grid, standstill)
+    change = sound.speed_change
     b, s, tr = sound.bounds, sound.safety, sound.tracking
     start = "" if sound.start_mps is None else f", measured start speed {sound.start_mps:g} m/s"
     phantoms = [LANE_CODE[p.lane] for p in b.phantom_vehicles()]
@@ -181,6 +193,8 @@ def table_text(sound: Sound, grid: Grid) -> str:
              " ".join(_f(x) for x in (table.unit_s, table.cell_m, tr.position_m, s.vehicle_length_m,
                                       follower_limit_m(0.0, s, tr), b.same_mps.low_mps, b.same_mps.high_mps,
                                       b.oncoming_mps.low_mps, b.oncoming_mps.high_mps, sound.start_error_m)),
+             " ".join(_f(x) for x in (s.min_gap_m, s.time_gap_s, tr.speed_mps, change.accel_mps2, change.brake_mps2,
+                                      float(b.followers_react), CLOSING_EPS_MPS)),
              f"{len(table.speeds_mps)} {table.start_speed}",
              " ".join(map(_f, table.speeds_mps)),
              " ".join(map(_f, table.gain_m)),
@@ -192,7 +206,7 @@ def table_text(sound: Sound, grid: Grid) -> str:
             k[0], _action_code(k[1]), LANE_CODE[k[2]], MOVED_CODE[k[3]])):
         relative[before][_action_code(action)][LANE_CODE[lane]][MOVED_CODE[moved]] = len(windows)
         only = before not in table.action_speed.values()
-        windows.append(_shape_lines(unstarted, grid, table.speeds_mps[before], only)[action, lane, moved])
+        windows.append(_shape_lines(unstarted, grid, table.speeds_mps[before], only, standstill)[action, lane, moved])
     early = []
     for (lane, t, d, first, last, moved, action), w in sorted(table.early.items(), key=lambda kv: (
             LANE_CODE[kv[0][0]], *kv[0][1:5], MOVED_CODE[kv[0][5]], _action_code(kv[0][6]))):
@@ -212,11 +226,12 @@ def table_text(sound: Sound, grid: Grid) -> str:
 
 
 @functools.lru_cache(maxsize=64)
-def _shape_lines(sound: Sound, grid: Grid, before_mps: float, continuation_only: bool) -> dict[
+def _shape_lines(sound: Sound, grid: Grid, before_mps: float, continuation_only: bool, standstill: bool) -> dict[
         tuple[Action | None, Lane, Lane | None], list[str]]:
     """The table's lines of the shapes after ``before_mps`` (``spec.windows.shapes``; ``sound`` without a start
     speed), written once: a new measured start speed adds its own continuation and early windows only."""
-    return {key: _window(w, sound) for key, w in shapes(sound, grid, before_mps, continuation_only).items()}
+    return {key: _window(w, sound) for key, w in shapes(sound, grid, before_mps, continuation_only,
+                                                        standstill).items()}
 
 
 def _tables(shape: SoundShape) -> str:
@@ -244,9 +259,13 @@ def _tables(shape: SoundShape) -> str:
         f"#define CONTINUATION {CONTINUATION}",
         "c_decl {",
         "typedef struct { double t, x, gap; } SoundAt;  /* an instant of the reference, the gap required there */",
-        "typedef struct { double t0, x0; SoundAt ahead, oncoming, behind; int rear; } SoundPiece;",
+        "typedef struct { double t0, x0; SoundAt ahead, oncoming, behind; int rear; double t1, v0, acc; } SoundPiece;",
         "typedef struct { int left, right, entering, at_start, n; SoundPiece *p; } SoundStretch;",
-        "typedef struct { int n; SoundStretch *s; double bt, bx, et, ex; int closes, rear_closes; } SoundWindow;",
+        "typedef struct { int n; SoundStretch *s; double bt, bx, et, ex, ev; int closes, rear_closes; } SoundWindow;",
+        "/* a stretch of constant acceleration of a measured vehicle's least or most travel (spec.dynamics.Phase) */",
+        "typedef struct { double t0, t1, travel, speed, accel; } SoundPhase;",
+        "/* a vehicle's own dynamics (spec.dynamics.Dynamics), when its speed was measured: measured 0 otherwise */",
+        "typedef struct { int measured, ns, nf; SoundPhase slow[2], fast[2]; double low, top; } SoundMotion;",
         "typedef struct { int lane, t, d, first, last, moved, action, window; } SoundEarly;",
         "typedef struct { int lane; double dx; } SoundPhantom;  /* dx: read with the scenario (its view) */",
         f"static const double EPS_M = {_f(EPS_M)};",
@@ -254,6 +273,7 @@ def _tables(shape: SoundShape) -> str:
         f"static const double UNIT_S = {_f(float(grid.time_unit_s))}, CELL_M = {_f(grid.cell)};  /* the grid's */",
         "static double E_X, LEN, FOLLOWER_M, SAME_LOW, SAME_HIGH, ONC_LOW, ONC_HIGH;",
         "static double START_ERROR_M;  /* sensing error + age */",
+        "static double G_MIN, TAU, E_V, A_MAX, B_MAX, FOLLOWERS_REACT, CLOSING_EPS;  /* for measured vehicles */",
         "static int N_SPEEDS, START_SPEED, N_WINDOWS, N_EARLY, START_WINDOW[2], ACTION_SPEED[CONTINUATION];",
         "static double *SPEEDS_MPS, *GAIN_M;",
         "static SoundWindow *WINDOWS;",
@@ -270,6 +290,7 @@ def _tables(shape: SoundShape) -> str:
         f"static const double ONCOMING_EXTENT[ROAD_CELLS + 1][2] = {{{onc_ext}}};",
         "/* the scenario, set once when the verifier starts (sound_load) */",
         "static double S_LO[MAX_SAME], S_HI[MAX_SAME], O_LO[MAX_ONC], O_HI[MAX_ONC];",
+        "static SoundMotion S_MOT[MAX_SAME], O_MOT[MAX_ONC];",
         "static int n_same, n_onc, n_left, n_right, n_targets, first_target;",
         "static int left_cells[ROAD_CELLS + 1], right_cells[ROAD_CELLS + 1];",
         "static unsigned step_fol[FW];  /* the followers during the step just tested */",
@@ -285,12 +306,12 @@ def _goal(goal: GoalRule) -> str:
         lines.append(f"\tif (now.lane != {LANE_CODE[goal.av_lane]}) return 0;")
     if goal.targets_behind:
         lines.append("\tfor (i = first_target; i < first_target + n_targets; i++)\n"
-                     "\t\tif (S_HI[i] + SAME_HIGH * t > x - E_X - LEN) return 0;")
+                     "\t\tif (sound_same_high(i, t) > x - E_X - LEN) return 0;")
     if goal.nearest_target_m is not None:
         lines.append("\tif (n_targets == 0) return 0;\n"
                      "\ti = first_target;\n"
-                     "\tif (S_LO[i] + SAME_LOW * t - (x + E_X) - LEN < 0\n"
-                     f"\t||  S_HI[i] + SAME_HIGH * t - (x - E_X) - LEN > {_f(float(goal.nearest_target_m))}) return 0;")
+                     "\tif (sound_same_low(i, t) - (x + E_X) - LEN < 0\n"
+                     f"\t||  sound_same_high(i, t) - (x - E_X) - LEN > {_f(float(goal.nearest_target_m))}) return 0;")
     if goal.oncoming_passed:
         lines.append("\tfor (i = 0; i < n_right; i++) if (!sound_passed(i, x, t)) return 0;  /* sensed ones only */")
     return "\n".join(lines)
@@ -299,11 +320,66 @@ def _goal(goal: GoalRule) -> str:
 _FUNCTIONS = r"""c_code {
 static int sound_follows(const unsigned *fol, int i) { return (fol[i / 32] >> (i % 32)) & 1u; }
 
+/* a measured vehicle's motion (spec.dynamics): the phase of a travel bound at t, its travel and speed then */
+static const SoundPhase *sound_phase(const SoundPhase *ph, int n, double t)
+{	int k;
+	for (k = 0; k < n; k++) { if (t < ph[k].t1) { return &ph[k]; } }
+	return &ph[n - 1];
+}
+
+static double sound_travel(const SoundPhase *p, double t)
+{	double s = t - p->t0;
+	return p->travel + p->speed * s + p->accel * s * s / 2;
+}
+
+static double sound_speed(const SoundPhase *p, double t) { return p->speed + p->accel * (t - p->t0); }
+
+/* braking at B_MAX from low to a standstill; speeding up at A_MAX from high to its top (spec.dynamics) */
+static void sound_motion(SoundMotion *m, double low, double high, double top)
+{	double stop, top_s, reached, most = top > high ? top : high;
+	m->measured = 1; m->low = low; m->top = most;
+	if (low <= 0)
+	{	m->ns = 1; m->slow[0].t0 = 0.0; m->slow[0].t1 = __builtin_inf(); m->slow[0].travel = 0.0;
+		m->slow[0].speed = 0.0; m->slow[0].accel = 0.0;
+	} else
+	{	stop = low / B_MAX;
+		m->ns = 2; m->slow[0].t0 = 0.0; m->slow[0].t1 = stop; m->slow[0].travel = 0.0; m->slow[0].speed = low;
+		m->slow[0].accel = -B_MAX;
+		m->slow[1].t0 = stop; m->slow[1].t1 = __builtin_inf(); m->slow[1].travel = low * low / (2 * B_MAX);
+		m->slow[1].speed = 0.0; m->slow[1].accel = 0.0;
+	}
+	if (high >= most)
+	{	m->nf = 1; m->fast[0].t0 = 0.0; m->fast[0].t1 = __builtin_inf(); m->fast[0].travel = 0.0;
+		m->fast[0].speed = high; m->fast[0].accel = 0.0;
+	} else
+	{	top_s = (most - high) / A_MAX;
+		reached = high + A_MAX * top_s;
+		m->nf = 2; m->fast[0].t0 = 0.0; m->fast[0].t1 = top_s; m->fast[0].travel = 0.0; m->fast[0].speed = high;
+		m->fast[0].accel = A_MAX;
+		m->fast[1].t0 = top_s; m->fast[1].t1 = __builtin_inf(); m->fast[1].travel = (high + reached) / 2 * top_s;
+		m->fast[1].speed = reached; m->fast[1].accel = 0.0;
+	}
+}
+
+static double sound_least(const SoundMotion *m, double t) { return sound_travel(sound_phase(m->slow, m->ns, t), t); }
+static double sound_most(const SoundMotion *m, double t) { return sound_travel(sound_phase(m->fast, m->nf, t), t); }
+
+/* where a vehicle can be at t: the least and the most of a same-direction one, of an oncoming one */
+static double sound_same_low(int i, double t)
+{	return S_MOT[i].measured ? S_LO[i] + sound_least(&S_MOT[i], t) : S_LO[i] + SAME_LOW * t;
+}
+static double sound_same_high(int i, double t)
+{	return S_MOT[i].measured ? S_HI[i] + sound_most(&S_MOT[i], t) : S_HI[i] + SAME_HIGH * t;
+}
+static double sound_onc_high(int j, double t)
+{	return O_MOT[j].measured ? O_HI[j] - sound_least(&O_MOT[j], t) : O_HI[j] - ONC_LOW * t;
+}
+
 /* a same-direction vehicle clear ahead of the AV at (x, t) for every position: held to AHEAD */
-static int sound_held_ahead(int i, double x, double t) { return S_LO[i] + SAME_LOW * t - LEN >= x + E_X; }
+static int sound_held_ahead(int i, double x, double t) { return sound_same_low(i, t) - LEN >= x + E_X; }
 
 /* an oncoming vehicle certainly past the AV at (x, t) */
-static int sound_passed(int j, double x, double t) { return O_HI[j] - ONC_LOW * t + LEN <= x - E_X - EPS_M; }
+static int sound_passed(int j, double x, double t) { return sound_onc_high(j, t) + LEN <= x - E_X - EPS_M; }
 
 static int sound_ahead_refused(int i, const SoundAt *a, double dt, double dx)
 {	return S_LO[i] + SAME_LOW * (a->t + dt) < a->x + dx + E_X + LEN + a->gap + EPS_M;
@@ -317,18 +393,93 @@ static int sound_behind_clear(int i, const SoundAt *a, double dt, double dx)
 {	return S_HI[i] + SAME_HIGH * (a->t + dt) <= a->x + dx - E_X - LEN - a->gap - EPS_M;
 }
 
+/* the most of a s^2 + b s + c over [0, span] */
+static double sound_quad_max(double a, double b, double c, double span)
+{	double best = c, end = a * span * span + b * span + c, s;
+	if (end > best) { best = end; }
+	if (a < 0)
+	{	s = -b / (2 * a);
+		if (0 < s && s < span && a * s * s + b * s + c > best) { best = a * s * s + b * s + c; }
+	}
+	return best;
+}
+
+#define OWN_AHEAD 0
+#define OWN_ONCOMING 1
+#define OWN_BEHIND 2  /* a cut-in's, or a follower's */
+
+/* a measured vehicle's threshold over the reference piece (t0, t1, x0, v0, acc) (spec.sound.SoundRules._own_need):
+   AHEAD and ONCOMING the least start lo, BEHIND the most start hi; exact over each phase of its worst motion */
+static double sound_own_need(int conflict, const SoundMotion *m, double pt0, double pt1, double px0, double pv0,
+                             double pacc)
+{	const SoundPhase *ph = conflict == OWN_AHEAD ? m->slow : m->fast;
+	int n = conflict == OWN_AHEAD ? m->ns : m->nf, k;
+	double best = -__builtin_inf(), u0, u1, s0, x, v, span, dm, dv, da, c, b1, a, f1, f2;
+	for (k = 0; k < n; k++)
+	{	u0 = pt0 > ph[k].t0 ? pt0 : ph[k].t0;
+		u1 = pt1 < ph[k].t1 ? pt1 : ph[k].t1;
+		if (u1 < u0 || (u1 == u0 && pt1 > pt0)) { continue; }
+		s0 = u0 - pt0;
+		x = px0 + pv0 * s0 + pacc * s0 * s0 / 2;
+		v = pv0 + pacc * (u0 - pt0);
+		span = u1 - u0;
+		dm = sound_travel(&ph[k], u0); dv = sound_speed(&ph[k], u0); da = ph[k].accel;
+		if (conflict == OWN_AHEAD)
+		{	c = x + E_X + LEN - dm; b1 = v - dv; a = (pacc - da) / 2;
+			f1 = sound_quad_max(a, b1, c + G_MIN, span);
+			f2 = sound_quad_max(a, b1 + TAU * (pacc - da), c + TAU * (v + E_V - dv), span);
+		} else if (conflict == OWN_ONCOMING)
+		{	c = x + E_X + LEN + dm; b1 = v + dv; a = (pacc + da) / 2;
+			f1 = sound_quad_max(a, b1, c + G_MIN, span);
+			f2 = sound_quad_max(a, b1 + TAU * (pacc + da), c + TAU * (v + E_V + dv), span);
+		} else
+		{	c = -(x - E_X - LEN - dm); b1 = -(v - dv); a = -(pacc - da) / 2;
+			f1 = sound_quad_max(a, b1, c + G_MIN, span);
+			f2 = sound_quad_max(a, b1 + TAU * (da - pacc), c + TAU * (dv - v + E_V), span);
+		}
+		if (f1 > best) { best = f1; }
+		if (f2 > best) { best = f2; }
+	}
+	return conflict == OWN_BEHIND ? -best : best;
+}
+
+static double sound_piece_need(int conflict, const SoundMotion *m, const SoundPiece *p, double dt, double dx)
+{	return sound_own_need(conflict, m, p->t0 + dt, p->t1 + dt, p->x0 + dx, p->v0, p->acc);
+}
+
+/* whether followers that keep their speed close in on the reference at the speed v (spec.sound.rear_binds): a
+   measured one up to its own top */
+static int sound_rear_binds(int i, double v)
+{	double top = S_MOT[i].measured && S_MOT[i].top > SAME_HIGH ? S_MOT[i].top : SAME_HIGH;
+	return FOLLOWERS_REACT == 0.0 && v < top - CLOSING_EPS;
+}
+
 /* a stretch of one occupancy, moved by (dt, dx): whether some vehicle breaks its condition */
 static int sound_stretch_refused(const SoundStretch *s, double dt, double dx, const unsigned *fol)
 {	int i, k, ahead, behind;
+	double need, allow, slowest;
 	const SoundPiece *p;
 	if (s->left && s->entering)
 	{	for (i = 0; i < n_same; i++)  /* each one certainly ahead at every piece, or certainly behind */
 		{	ahead = 1; behind = 1;
-			for (k = 0; k < s->n; k++)
-			{	p = &s->p[k];
-				if (sound_ahead_refused(i, &p->ahead, dt, dx)) { ahead = 0; }
-				if (!sound_behind_clear(i, &p->behind, dt, dx)) { behind = 0; }
-			}
+			if (S_MOT[i].measured)
+			{	need = -__builtin_inf(); allow = __builtin_inf();
+				for (k = 0; k < s->n; k++)
+				{	p = &s->p[k];
+					if (sound_piece_need(OWN_AHEAD, &S_MOT[i], p, dt, dx) > need)
+					{	need = sound_piece_need(OWN_AHEAD, &S_MOT[i], p, dt, dx);
+					}
+					if (sound_piece_need(OWN_BEHIND, &S_MOT[i], p, dt, dx) < allow)
+					{	allow = sound_piece_need(OWN_BEHIND, &S_MOT[i], p, dt, dx);
+				}	}
+				ahead = S_LO[i] >= need + EPS_M;
+				behind = S_HI[i] <= allow - EPS_M;
+			} else
+			{	for (k = 0; k < s->n; k++)
+				{	p = &s->p[k];
+					if (sound_ahead_refused(i, &p->ahead, dt, dx)) { ahead = 0; }
+					if (!sound_behind_clear(i, &p->behind, dt, dx)) { behind = 0; }
+			}	}
 			if (s->at_start)  /* already in the lane: one that cannot be clear ahead follows */
 			{	behind = S_HI[i] <= s->p[0].x0 + dx + FOLLOWER_M - EPS_M;
 			}
@@ -337,11 +488,16 @@ static int sound_stretch_refused(const SoundStretch *s, double dt, double dx, co
 	} else if (s->left)
 	{	for (k = 0; k < s->n; k++)
 		{	p = &s->p[k];
+			slowest = p->v0 < p->v0 + p->acc * (p->t1 - p->t0) ? p->v0 : p->v0 + p->acc * (p->t1 - p->t0);
 			for (i = 0; i < n_same; i++)
-			{	if (!sound_follows(fol, i) && sound_held_ahead(i, p->x0 + dx, p->t0 + dt)
-				&&  sound_ahead_refused(i, &p->ahead, dt, dx)) { return 1; }
-				if (p->rear && sound_follows(fol, i)  /* BEHIND: a follower that keeps its speed */
-				&&  !sound_behind_clear(i, &p->behind, dt, dx)) { return 1; }
+			{	if (!sound_follows(fol, i))
+				{	if (sound_held_ahead(i, p->x0 + dx, p->t0 + dt)
+					&&  (S_MOT[i].measured ? S_LO[i] < sound_piece_need(OWN_AHEAD, &S_MOT[i], p, dt, dx) + EPS_M
+						: sound_ahead_refused(i, &p->ahead, dt, dx))) { return 1; }
+				} else if (S_MOT[i].measured)  /* BEHIND: a follower that keeps its speed */
+				{	if (sound_rear_binds(i, slowest)
+					&&  S_HI[i] > sound_piece_need(OWN_BEHIND, &S_MOT[i], p, dt, dx) - EPS_M) { return 1; }
+				} else if (p->rear && !sound_behind_clear(i, &p->behind, dt, dx)) { return 1; }
 		}	}
 	}
 	if (s->right)
@@ -349,7 +505,8 @@ static int sound_stretch_refused(const SoundStretch *s, double dt, double dx, co
 		{	p = &s->p[k];
 			for (i = 0; i < n_onc; i++)
 			{	if (!sound_passed(i, p->x0 + dx, p->t0 + dt)
-				&&  sound_oncoming_refused(i, &p->oncoming, dt, dx)) { return 1; }
+				&&  (O_MOT[i].measured ? O_LO[i] < sound_piece_need(OWN_ONCOMING, &O_MOT[i], p, dt, dx) + EPS_M
+					: sound_oncoming_refused(i, &p->oncoming, dt, dx))) { return 1; }
 		}	}
 	}
 	return 0;
@@ -408,7 +565,7 @@ static void sound_take_followers(void)
 
 /* whether a plan may end here: the goal holds for every position, and the minimal-risk manoeuvre is safe for ever */
 static int sound_done(void)
-{	double dt, dx, x, t;
+{	double dt, dx, x, t, stop;
 	int i, k;
 	const SoundWindow *w = sound_window(CONTINUATION, &dt, &dx);
 	x = w->bx + dx;
@@ -423,8 +580,20 @@ GOAL
 	{	for (i = 0; i < n_onc; i++) { if (!sound_passed(i, x, t)) { return 0; } }
 	} else
 	{	for (i = 0; i < n_same; i++)
-		{	if (w->closes && !sound_follows((const unsigned *) now.fol, i) && sound_held_ahead(i, x, t)) { return 0; }
-			if (w->rear_closes && sound_follows((const unsigned *) now.fol, i)) { return 0; }
+		{	if (sound_follows((const unsigned *) now.fol, i))
+			{	if (S_MOT[i].measured ? sound_rear_binds(i, w->ev) : w->rear_closes) { return 0; }
+				continue;
+			}
+			if (!sound_held_ahead(i, x, t)) { continue; }
+			if (!S_MOT[i].measured)
+			{	if (w->closes) { return 0; }
+				continue;
+			}
+			if (w->ev > 0.0 + CLOSING_EPS) { return 0; }  /* it may stop: the AV must stand too */
+			stop = S_MOT[i].low / B_MAX;  /* still braking when the manoeuvre ends: AHEAD until it stands */
+			if (stop > t && S_LO[i] < sound_own_need(OWN_AHEAD, &S_MOT[i], t, stop, x, w->ev, 0.0) + EPS_M)
+			{	return 0;
+			}
 	}	}
 	return 1;
 }
@@ -524,6 +693,9 @@ static void sound_load_table(const char *path)
 	E_X = table_number(); LEN = table_number();
 	FOLLOWER_M = table_number(); SAME_LOW = table_number(); SAME_HIGH = table_number();
 	ONC_LOW = table_number(); ONC_HIGH = table_number(); START_ERROR_M = table_number();
+	G_MIN = table_number(); TAU = table_number(); E_V = table_number(); A_MAX = table_number();
+	B_MAX = table_number(); FOLLOWERS_REACT = table_number(); CLOSING_EPS = table_number();
+	if (!(A_MAX > 0 && B_MAX > 0)) { sound_bad_table("rates of speed change"); }
 	N_SPEEDS = table_int(1, 1000, "speeds");
 	START_SPEED = table_int(0, N_SPEEDS - 1, "the start speed");
 	SPEEDS_MPS = table_alloc(N_SPEEDS, sizeof(double));
@@ -537,6 +709,7 @@ static void sound_load_table(const char *path)
 	{	w = &WINDOWS[k];
 		w->n = table_int(0, 1000, "a window's stretches");
 		w->bt = table_number(); w->bx = table_number(); w->et = table_number(); w->ex = table_number();
+		w->ev = table_number();
 		w->closes = table_int(0, 1, "closes"); w->rear_closes = table_int(0, 1, "rear closes");
 		w->s = table_alloc(w->n, sizeof(SoundStretch));
 		for (i = 0; i < w->n; i++)
@@ -550,6 +723,7 @@ static void sound_load_table(const char *path)
 				p->t0 = table_number(); p->x0 = table_number();
 				table_at_instant(&p->ahead); table_at_instant(&p->oncoming); table_at_instant(&p->behind);
 				p->rear = table_int(0, 1, "rear");
+				p->t1 = table_number(); p->v0 = table_number(); p->acc = table_number();
 	}	}	}
 	n = N_SPEEDS * (CONTINUATION + 1) * 2 * 3;
 	RELATIVE_ = table_alloc(n, sizeof(short));
@@ -574,12 +748,15 @@ static void sound_load_table(const char *path)
 }
 
 /* the scenario: lane nl cells... nr cells... nt ft horizon, each phantom's edge (dx: where its sensor's view ends),
-   then 0, or 1 and each vehicle's sensed interval (lo hi, same-direction then oncoming), then | and the path of the
-   sound model's table; the vehicles as intervals (those, or their cells' extents), then the phantoms */
+   then 0, or 1 and each vehicle's sensed interval (lo hi, same-direction then oncoming), then 0, or 1 and for each
+   vehicle (same-direction then oncoming) 0, or 1 and its interval at the plan's start and its own dynamics there (lo
+   hi low high top: spec.sound.vehicles), then | and the path of the sound model's table; the vehicles as intervals
+   (those, or their cells' extents, widened), then the phantoms */
+#define SOUND_VALUES (18 * (ROAD_CELLS + 1) + N_PHANTOMS + 16)
 static void sound_load(void)
 {	char *text = getenv("ENV_NAME"), *end, *bar;
-	double v[6 * (ROAD_CELLS + 1) + N_PHANTOMS + 16];
-	int n = 0, at = 0, j, lane, cell, measured;
+	static double v[SOUND_VALUES];
+	int n = 0, at = 0, j, lane, cell, measured, speeds;
 	double lo, hi;
 	if (!text) { fprintf(stderr, "overtake: ENV_NAME is not set\n"); exit(2); }
 	bar = strchr(text, '|');
@@ -587,7 +764,7 @@ static void sound_load(void)
 	end = bar + 1;
 	while (*end == ' ') { end++; }
 	sound_load_table(end);
-	while (n < 6 * (ROAD_CELLS + 1) + N_PHANTOMS + 16)
+	while (n < SOUND_VALUES)
 	{	v[n] = strtod(text, &end);
 		if (end == text) { break; }
 		n++; text = end;
@@ -615,7 +792,7 @@ static void sound_load(void)
 		||  (PHANTOMS[j].lane == RIGHT && PHANTOMS[j].dx < 0.0)) { sound_malformed("a phantom's edge"); }
 	}
 	measured = (int) v[at++];
-	if ((measured != 0 && measured != 1) || at + (measured ? 2 * (n_left + n_right) : 0) != n)
+	if ((measured != 0 && measured != 1) || at + (measured ? 2 * (n_left + n_right) : 0) >= n)
 	{	sound_malformed("the sensed intervals");
 	}
 	n_same = 0;
@@ -640,11 +817,29 @@ static void sound_load(void)
 		O_HI[n_onc] = hi + START_ERROR_M;
 		n_onc++;
 	}
+	speeds = (int) v[at++];
+	if (speeds != 0 && speeds != 1) { sound_malformed("the measured speeds"); }
+	for (j = 0; j < n_same + n_onc; j++)
+	{	SoundMotion *m = j < n_same ? &S_MOT[j] : &O_MOT[j - n_same];
+		m->measured = 0;
+		if (!speeds) { continue; }
+		if (at >= n || (v[at] != 0.0 && v[at] != 1.0)) { sound_malformed("a vehicle's measured speed"); }
+		if (v[at++] == 0.0) { continue; }
+		if (at + 5 > n || !(v[at] <= v[at + 1]) || !(0 <= v[at + 2] && v[at + 2] <= v[at + 3])
+		||  !(v[at + 4] > 0) || v[at + 3] == __builtin_inf() || v[at + 4] == __builtin_inf())
+		{	sound_malformed("a vehicle's measured speed");
+		}
+		if (j < n_same) { S_LO[j] = v[at]; S_HI[j] = v[at + 1]; }
+		else { O_LO[j - n_same] = v[at]; O_HI[j - n_same] = v[at + 1]; }
+		sound_motion(m, v[at + 2], v[at + 3], v[at + 4]);
+		at += 5;
+	}
+	if (at != n) { sound_malformed("more numbers than the scenario holds"); }
 	for (j = 0; j < N_PHANTOMS; j++)  /* the unseen stretch from the view's edge outwards */
 	{	lo = PHANTOMS[j].dx > 0 ? PHANTOMS[j].dx : -__builtin_inf();
 		hi = PHANTOMS[j].dx > 0 ? __builtin_inf() : PHANTOMS[j].dx;
-		if (PHANTOMS[j].lane == LEFT) { S_LO[n_same] = lo; S_HI[n_same] = hi; n_same++; }
-		else { O_LO[n_onc] = lo; O_HI[n_onc] = hi; n_onc++; }
+		if (PHANTOMS[j].lane == LEFT) { S_LO[n_same] = lo; S_HI[n_same] = hi; S_MOT[n_same].measured = 0; n_same++; }
+		else { O_LO[n_onc] = lo; O_HI[n_onc] = hi; O_MOT[n_onc].measured = 0; n_onc++; }
 	}
 }
 }"""

@@ -166,6 +166,9 @@ class DriveConfig:
         if self.overtaken is not Overtaken.PHYSICS and self.vehicle_speeds is not VehicleSpeeds.MEASURED:
             raise OptionError("--overtaken", self.overtaken.value, "needs --vehicle-speeds measured (the profile "
                               "speaks of vehicles whose speed was measured; it applies to the sound model's drives)")
+        if self.overtaken is not Overtaken.PHYSICS and not get_engine(self.engine).overtaken_profile:
+            raise OptionError("--overtaken", self.overtaken.value, f"engine {self.engine} answers measured vehicles "
+                              "by their physics only")
 
     @property
     def stops_at_failure(self) -> bool:

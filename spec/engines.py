@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from importlib.metadata import entry_points
 
 from spec.answers import Limits, SearchResult, Strategy
+from spec.dynamics import Overtaken
 from spec.errors import OptionError, ToolMissing
 from spec.scenario import Problem, Scenario
 
@@ -40,6 +41,9 @@ class Engine:
     #: Whether it answers vehicles with their own measured speeds (``Scenario.left_mps``, ``spec.dynamics``); the
     #: others answer every vehicle at its lane's speeds only.
     measured_speeds: bool = False
+    #: Whether it answers the no-acceleration profile (``spec.dynamics.Overtaken``) for such vehicles; the others
+    #: answer their physics only.
+    overtaken_profile: bool = False
 
     def ready(self) -> None:
         """Check, before any work, that the engine can run here (exit 4 with the install command if not)."""
@@ -119,6 +123,21 @@ def check_model(engine: Engine, scenario: Scenario) -> None:
         able = ", ".join(e.name for e in load_engines().values() if e.measured_speeds) or "none"
         raise OptionError(given[0][0], [list(s) for s in given[0][1]], f"engine {engine.name} answers every vehicle "
                           f"at its lane's speeds only; vehicles with their own measured speeds are answered by: {able}")
+    if scenario.sound is not None and scenario.left_mps and scenario.sound.overtaken is not Overtaken.PHYSICS \
+            and not engine.overtaken_profile:
+        able = ", ".join(e.name for e in load_engines().values() if e.overtaken_profile) or "none"
+        raise OptionError("--overtaken", scenario.sound.overtaken.value, f"engine {engine.name} answers measured "
+                          f"vehicles by their physics only; the {scenario.sound.overtaken.value} profile is answered "
+                          f"by: {able}")
+
+
+def answers(engine: Engine, scenario: Scenario) -> bool:
+    """Whether ``engine`` answers ``scenario``'s model (``check_model`` finds nothing to refuse)."""
+    try:
+        check_model(engine, scenario)
+    except OptionError:
+        return False
+    return True
 
 
 def check_strategy(engine: Engine, strategy: Strategy) -> None:

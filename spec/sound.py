@@ -535,10 +535,13 @@ class SoundRules:
     def __init__(self, sound: Sound, lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Grid,
                  targets: tuple[int, ...], given: tuple[Vehicle, ...] | None = None,
                  left_m: tuple[Extent, ...] | None = None, right_m: tuple[Extent, ...] | None = None,
-                 left_mps: tuple[Speed, ...] | None = None, right_mps: tuple[Speed, ...] | None = None) -> None:
+                 left_mps: tuple[Speed, ...] | None = None, right_mps: tuple[Speed, ...] | None = None,
+                 hold_floor_mps: float | None = None) -> None:
         """``given``: the vehicles as intervals, when not the scenario's own (``vehicles``, of the cells or of what
         the snapshot measured, ``left_m`` and ``right_m``, and their speeds, ``left_mps`` and ``right_mps``); a
-        measurement that moves one of them passes them here."""
+        measurement that moves one of them passes them here. ``hold_floor_mps``: the speed the minimal-risk
+        manoeuvre brakes to when not the vehicles' own (``slowest_ahead_mps``): the engines' tables, which hold no
+        vehicle, ask it of scenarios whose vehicles may stop."""
         self.sound, self.grid, self.targets = sound, grid, targets
         self.vehicles = vehicles(lane, left, right, grid, sound, left_m, right_m, left_mps, right_mps) \
             if given is None else given
@@ -555,7 +558,7 @@ class SoundRules:
         #: The most the AV's nominal advance can gain on a same-direction vehicle at its highest speed in one action,
         #: and the most the first ramp can add to it (``beyond_reach``).
         #: The speed the minimal-risk manoeuvre brakes to (``slowest_ahead_mps``).
-        self.hold_floor_mps = slowest_ahead_mps(sound, self.vehicles)
+        self.hold_floor_mps = slowest_ahead_mps(sound, self.vehicles) if hold_floor_mps is None else hold_floor_mps
         #: The least speed a same-direction vehicle's fastest motion ever drives at (its lane's top; a measured one's
         #: highest measured speed, from which it only speeds up).
         high = min([sound.bounds.same_mps.high_mps] + [v.dynamics.speed_mps[1] for v in self.vehicles

@@ -66,17 +66,22 @@ class Instant:
 
 @dataclass(frozen=True, slots=True)
 class Binding:
-    """One piece of a window: the reference at its start, and at the instant each condition binds over it."""
+    """One piece of a window: the reference at its start, and at the instant each condition binds over it; and the
+    piece itself (its end and its acceleration: with ``start`` its motion), for a vehicle measured to move by its own
+    dynamics, whose thresholds an engine forms over the piece itself (``spec.sound.SoundRules._own_need``)."""
 
     start: Instant
     ahead: Instant
     oncoming: Instant
     behind: Instant
     rear: bool  # the followers are in conflict over this piece (``spec.sound.rear_binds``): ``behind`` holds them
+    end_s: float
+    acc_mps2: float
 
     def shifted(self, dt_s: float, dx_m: float) -> Binding:
         return Binding(self.start.shifted(dt_s, dx_m), self.ahead.shifted(dt_s, dx_m),
-                       self.oncoming.shifted(dt_s, dx_m), self.behind.shifted(dt_s, dx_m), self.rear)
+                       self.oncoming.shifted(dt_s, dx_m), self.behind.shifted(dt_s, dx_m), self.rear,
+                       self.end_s + dt_s, self.acc_mps2)
 
 
 @dataclass(frozen=True, slots=True)
@@ -154,7 +159,7 @@ def _instant(b: Bounded, t_s: float) -> Instant:
 def _binding(b: Bounded) -> Binding:
     p = b.piece
     return Binding(Instant(p.t0_s, p.x0_m, p.v0_mps), _instant(b, b.ahead[1]), _instant(b, b.oncoming[1]),
-                   _instant(b, b.behind[1]), b.rear)
+                   _instant(b, b.behind[1]), b.rear, p.t1_s, p.acc_mps2)
 
 
 def declared(window: list[tuple[Segment, list[Bounded]]], boundary: Instant) -> Window:
@@ -166,10 +171,12 @@ def declared(window: list[tuple[Segment, list[Bounded]]], boundary: Instant) -> 
 
 
 @functools.lru_cache(maxsize=16)
-def sound_table(sound: Sound, grid: Grid) -> SoundTable:
+def sound_table(sound: Sound, grid: Grid, standstill: bool = False) -> SoundTable:
     """The table of ``sound`` on ``grid``: every shape, every window while the first ramp runs (from either lane,
-    every action order the lanes allow), the start."""
-    rules = SoundRules(sound, Lane.RIGHT, (), (), grid, ())  # windows never read the vehicles
+    every action order the lanes allow), the start. ``standstill``: for scenarios with a same-direction vehicle
+    whose speed was measured, which may stop, so the minimal-risk manoeuvre brakes to a standstill
+    (``spec.sound.slowest_ahead_mps``); the windows never read the vehicles otherwise."""
+    rules = _rules(sound, grid, standstill)
     action_speeds = {a: rules.speeds[a] for a in Action}
     speeds = tuple(sorted({*action_speeds.values(), rules.start_mps}))
     index = {v: i for i, v in enumerate(speeds)}
@@ -177,7 +184,7 @@ def sound_table(sound: Sound, grid: Grid) -> SoundTable:
     # after the start speed (when no action drives at it) only the continuation from the start is ever looked up
     relative: dict[ShapeKey, Window] = {
         (index[before], *key): w for before in speeds
-        for key, w in shapes(unstarted, grid, before, before not in action_speeds.values()).items()}
+        for key, w in shapes(unstarted, grid, before, before not in action_speeds.values(), standstill).items()}
     early_windows: dict[EarlyKey, Window] = {}
     first_end_s = max(ramp_s(rules.start_mps, v) for v in speeds)
     half_ramp_s = max(ramp_s(a, b) for a in speeds for b in speeds) / 2
@@ -209,14 +216,20 @@ def sound_table(sound: Sound, grid: Grid) -> SoundTable:
 
 
 @functools.lru_cache(maxsize=64)
-def shapes(sound: Sound, grid: Grid, before_mps: float, continuation_only: bool = False) -> dict[
-        tuple[Action | None, Lane, Lane | None], Window]:
+def _rules(sound: Sound, grid: Grid, standstill: bool) -> SoundRules:
+    """The rules the table asks its windows of: no vehicle, the minimal-risk manoeuvre's hold speed a standstill or
+    the lane's slowest."""
+    return SoundRules(sound, Lane.RIGHT, (), (), grid, (), hold_floor_mps=0.0 if standstill else None)
+
+
+def shapes(sound: Sound, grid: Grid, before_mps: float, continuation_only: bool = False,
+           standstill: bool = False) -> dict[tuple[Action | None, Lane, Lane | None], Window]:
     """Every window's shape after the speed ``before_mps`` (``SoundRules.relative_window``), by action (None: the
     continuation), lane and the lane the action before moved into; ``continuation_only``: the continuation's alone
     (after a start speed no action drives at, the only shape ever looked up). A shape never reads the AV's start
     speed: the closed loop's every new measured speed reuses the shapes of the actions' speeds (``sound`` comes with
-    ``start_mps`` None)."""
-    rules = SoundRules(sound, Lane.RIGHT, (), (), grid, ())
+    ``start_mps`` None); ``standstill`` as ``sound_table``'s."""
+    rules = _rules(sound, grid, standstill)
     found: dict[tuple[Action | None, Lane, Lane | None], Window] = {}
     for lane in Lane:
         for moved in (None, lane):

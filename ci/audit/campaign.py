@@ -41,7 +41,7 @@ from sim.simulator import run_drive
 from sim.summary import RunSummary
 from sim.tolerance import HISTOGRAM_BIN, histogram_quantile
 from spec.answers import Limits, Status, Strategy
-from spec.engines import get_engine
+from spec.engines import answers, get_engine
 from spec.errors import OptionError
 from spec.files import scenario_from_dict
 from spec.grid import STANDARD_CELLS_M
@@ -370,8 +370,9 @@ MAX_SOUND_SNAPSHOTS = 40
 
 def planning_cost(results: Iterable[Done], engines: Iterable[str], timeout_s: float = 10.0) -> list[Cost]:
     """Every engine's shortest plan for the scenarios the planner saw, per cell size and model (an untimed run first
-    for each shape of problem: a verifier compiles once per shape); an engine that moves every vehicle at its lane's
-    speeds is timed on the scenarios without measured speeds only (its count says how many)."""
+    for each shape of problem: a verifier compiles once per shape); an engine is timed on the scenarios it answers
+    only (``spec.engines.answers``: one that moves every vehicle at its lane's speeds, on those without measured
+    speeds; its count says how many)."""
     by_cell: dict[tuple[float, str], list[dict[str, Any]]] = {}
     for done in results:
         by_cell.setdefault((done.config.cell_m, done.config.model), []).extend(done.summary.snapshots)
@@ -382,8 +383,7 @@ def planning_cost(results: Iterable[Done], engines: Iterable[str], timeout_s: fl
             scenarios = scenarios[:MAX_SOUND_SNAPSHOTS]
         seen = scenarios
         for engine in engines:
-            scenarios = seen if get_engine(engine).measured_speeds else [
-                s for s in seen if s.left_mps is None and s.right_mps is None]
+            scenarios = [s for s in seen if answers(get_engine(engine), s)]
             if not scenarios:
                 costs.append(Cost(cell_m, engine, 0, None, None, None, 0, model))
                 continue

@@ -31,12 +31,13 @@ from ci.shared.records import campaign_lock
 from spec import assumptions
 from spec.assumptions import Bounds, SpeedBounds
 from spec.constants import DEFAULT_HORIZON
+from spec.engines import get_engine
 from spec.errors import ScenarioError
 from spec.files import scenario_from_dict
 from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
 from spec.physical import LOOP
-from spec.scenario import Scenario, make_scenario, sensed
+from spec.scenario import Scenario, make_scenario, measured_speeds, sensed
 from spec.sound import Sound, sensed_extents
 
 #: The campaign's own profiles (the tests register theirs in tests/conftest.py), picked by ``PROFILE_VAR``.
@@ -101,11 +102,33 @@ def drawn_sound(draw: st.DrawFn) -> Sound:
     return Sound(Bounds(name, same, oncoming, error, phantoms, source, react, latency))
 
 
-def scenarios(grid: Grid, horizon: int | None, model: Sound | str | None = None) -> st.SearchStrategy[Scenario]:
+def speeds(lane: SpeedBounds, count: int) -> st.SearchStrategy[list[tuple[float, float]]]:
+    """Measured speed intervals for ``count`` vehicles of a lane with ``lane``'s speeds: standing, anything from a
+    standstill to the top, narrow readings anywhere from below the lane's slowest to above its top."""
+    narrow = st.tuples(st.floats(0.0, lane.high_mps + 1.0), st.floats(0.0, 1.5)).map(lambda p: (p[0], p[0] + p[1]))
+    one = st.one_of(st.just((0.0, 0.0)), st.just((0.0, lane.high_mps)), narrow)
+    return st.lists(one, min_size=count, max_size=count)
+
+
+@st.composite
+def with_speeds(draw: st.DrawFn, scenario: Scenario) -> Scenario:
+    """``scenario`` (under the sound model) with its same-direction vehicles' speeds measured, and, half the time,
+    the oncoming ones' too (``spec.scenario.measured_speeds``)."""
+    assert scenario.sound is not None
+    b = scenario.sound.bounds
+    left = draw(speeds(b.same_mps, len(scenario.left_lane)))
+    right = draw(st.none() | speeds(b.oncoming_mps, len(scenario.right_lane)))
+    return measured_speeds(scenario, left, right)
+
+
+def scenarios(grid: Grid, horizon: int | None, model: Sound | str | None = None,
+              measured: bool = False) -> st.SearchStrategy[Scenario]:
     """Valid scenarios on ``grid``: up to 4 same-direction and 2 oncoming vehicles anywhere in the window, either
     lane, any target count; drawn near the AV first (hypothesis shrinks towards small cells, so the window's
     start is put at the AV's cell and cells count outwards from it). Under ``model`` (``Campaign.sound``): the
-    paper's rules (None), that sound model, or one drawn with each scenario (``DRAWN``)."""
+    paper's rules (None), that sound model, or one drawn with each scenario (``DRAWN``); under the sound model, half
+    the time what the snapshot measured of each vehicle's place, and with ``measured`` (every engine of the
+    campaign answers it) half the time each vehicle's own speed (``with_speeds``)."""
     cells = st.integers(0, grid.road_cells)
 
     @st.composite
@@ -127,15 +150,17 @@ def scenarios(grid: Grid, horizon: int | None, model: Sound | str | None = None)
 
             reject()
             raise  # unreachable: reject() raises
-        if sound is None or not draw(st.booleans()):
+        if sound is None:
             return scenario
-        return draw(measured(scenario))
+        if draw(st.booleans()):
+            scenario = draw(sensed_places(scenario))
+        return draw(with_speeds(scenario)) if measured and draw(st.booleans()) else scenario
 
     return build()
 
 
 @st.composite
-def measured(draw: st.DrawFn, scenario: Scenario) -> Scenario:
+def sensed_places(draw: st.DrawFn, scenario: Scenario) -> Scenario:
     """``scenario`` with what a snapshot measured (``spec.scenario.sensed``): per vehicle a reading anywhere in its
     cell's extent, or an interval inside it (a kept track); shrinking towards the cell's extent itself."""
     same, oncoming = sensed_extents(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid)
@@ -169,7 +194,8 @@ def hypothesis_job(name: str, campaign: Campaign, out_dir: str, profile_name: st
     @hypothesis_seed((campaign.seed or 0) + offset)
     @settings(PROFILES[profile_name], max_examples=campaign.count or PROFILES[profile_name].max_examples,
               database=DirectoryBasedExampleDatabase(str(out / "hypothesis" / name)))
-    @given(scenarios(grid, campaign.horizon, campaign.sound))
+    @given(scenarios(grid, campaign.horizon, campaign.sound,
+                     all(get_engine(e).measured_speeds for e in campaign.engines)))
     def test(scenario: Scenario) -> None:
         result = check_scenario(scenario, [prop], campaign.engines, campaign.timeout_s)
         if name not in done.get(result["key"], {}).get("verdicts", {}):

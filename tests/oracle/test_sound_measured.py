@@ -14,11 +14,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from ci.conformance.hypo import with_speeds
 from oracle import commit, reach
 from oracle.planner import plan
 from spec.actions import Action
 from spec.answers import Status, Strategy
-from spec.assumptions import SpeedBounds
 from spec.cells import left_extent_m
 from spec.dynamics import Overtaken
 from spec.escapes import COMMIT
@@ -34,24 +34,12 @@ from tests.oracle.test_sound import _check as check_whole
 from tests.oracle.test_sound import sound_scenarios
 
 
-def speeds(lane: SpeedBounds, count: int) -> st.SearchStrategy[list[tuple[float, float]]]:
-    """Measured speed intervals for ``count`` vehicles of a lane with ``lane``'s speeds: standing, anything from a
-    standstill to the top, narrow readings anywhere from below the lane's slowest to above its top."""
-    narrow = st.tuples(st.floats(0.0, lane.high_mps + 1.0), st.floats(0.0, 1.5)).map(lambda p: (p[0], p[0] + p[1]))
-    one = st.one_of(st.just((0.0, 0.0)), st.just((0.0, lane.high_mps)), narrow)
-    return st.lists(one, min_size=count, max_size=count)
-
-
 @st.composite
 def measured_scenarios(draw: st.DrawFn) -> Scenario:
     """A sound scenario on a standard grid whose same-direction vehicles' speeds were measured, and, half the time,
-    the oncoming ones' too."""
+    the oncoming ones' too (the crossval source's ``with_speeds``)."""
     scenario = draw(st.sampled_from(STANDARD_CELLS_M).flatmap(lambda c: sound_scenarios(Grid(c))))
-    assert scenario.sound is not None
-    b = scenario.sound.bounds
-    left = draw(speeds(b.same_mps, len(scenario.left_lane)))
-    right = draw(st.none() | speeds(b.oncoming_mps, len(scenario.right_lane)))
-    return measured_speeds(scenario, left, right)
+    return draw(with_speeds(scenario))
 
 
 @settings(max_examples=100 if CI_PROFILE else 25)

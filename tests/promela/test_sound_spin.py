@@ -20,20 +20,26 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from ci.conformance.hypo import VIEWS_M
+from ci.conformance.hypo import VIEWS_M, with_speeds
 from oracle import planner, sound
 from promela import runner
 from promela import sound as sound_model
 from spec.answers import Limits, Status, Strategy
 from spec.assumptions import Bounds, SpeedBounds, profile
-from spec.errors import EngineError
-from spec.grid import PAPER_GRID, Grid, grid_for
+from spec.cells import left_extent_m
+from spec.dynamics import Overtaken
+from spec.errors import EngineError, OptionError
+from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid, grid_for
 from spec.lanes import Lane
 from spec.models import ModelKind
-from spec.scenario import Scenario, make_scenario, problem_for
-from spec.sound import Checks, Sound
-from tests.conftest import AGED_SHORTEST_LENGTH, check_aged_witness, measured_like, measured_pinned
+from spec.scenario import Scenario, make_scenario, measured_speeds, problem_for, sensed
+from spec.sound import Checks, Sound, sound_from
+from tests.conftest import AGED_SHORTEST_LENGTH, CI_PROFILE, check_aged_witness, measured_like, measured_pinned
+from tests.oracle.test_sound import sound_scenarios
+from tests.oracle.test_sound_measured import _least_accepted_m, _overtaking, _standing_ahead
 
 pytestmark = pytest.mark.requires_spin
 
@@ -284,3 +290,86 @@ def test_spin_plans_for_the_snapshots_age_where_it_decides_the_plan(latency_s: f
     """Spin reads the snapshot's age (``Sound.start_error_m``, the aged phantoms) as the interpreter does: where one
     control step of age (the loop's budget) makes the shortest overtake one action longer, both answer that."""
     check_aged_witness("spin", latency_s)
+
+
+# -- vehicles with their own measured speeds (spec.dynamics) -----------------------------------------------------
+@settings(max_examples=80 if CI_PROFILE else 25, deadline=None)
+@given(st.sampled_from(STANDARD_CELLS_M).flatmap(lambda c: sound_scenarios(Grid(c))).flatmap(with_speeds),
+       st.sampled_from([Strategy.SENSIBLE, Strategy.SHORTEST]))
+def test_measured_speeds_agree_with_the_interpreter(scenario: Scenario, strategy: Strategy) -> None:
+    """Each measured vehicle moves by its own dynamics in Spin's C as in the interpreter: braking to a standstill,
+    speeding up to its own top, its own error at the start, the minimal-risk manoeuvre braking to a stop."""
+    _agree(scenario, strategy)
+
+
+def test_the_measured_witnesses_agree() -> None:
+    """The interpreter's pinned measured cases: a vehicle standing ahead at every cell and start speed, a follower
+    faster than its lane's top, the AV beside a target that may speed up; each answered alike (a start that breaks
+    the specification included)."""
+    cases = [_standing_ahead(cell, start) for cell in range(11, 19) for start in (None, 3.5, 12.0)]
+    cases += [_overtaking(Overtaken.PHYSICS)]
+    base = measured_speeds(sensed(make_scenario("left", [9], [], 0), [(-12.0, -12.0)]), [(10.0, 10.0)])
+    cases.append(replace(base, sound=sound_from(None, "paper", phantoms=False)))
+    for scenario in map(_whole, cases):
+        for strategy in (Strategy.SENSIBLE, Strategy.SHORTEST):
+            spin = planner.solve(scenario, strategy, engine="spin")
+            ours = planner.solve(scenario, strategy, engine="interpreter")
+            assert (spin.status, spin.actions if strategy is Strategy.SENSIBLE else len(spin.actions)) == \
+                (_within_horizon(ours.status), ours.actions if strategy is Strategy.SENSIBLE else len(ours.actions))
+
+
+def test_a_vehicle_still_braking_when_the_av_stands_is_held_to_its_gap_in_spin_too() -> None:
+    """The interpreter's nearest accepted reading of a vehicle ahead at 2.3 m/s, the AV at 1.08 m/s (a stop behind
+    it, proved from the start: the empty plan): Spin accepts it and not a millimetre nearer, as the interpreter."""
+    def at(dx_m: float) -> Scenario:
+        base = sensed(make_scenario("left", [11], [], 0), [(dx_m, dx_m)])
+        return replace(measured_speeds(base, [(2.3, 2.3)]), sound=replace(
+            sound_from(None, "default", semantics="whole"), start_mps=1.08))
+
+    lo_m, hi_m = left_extent_m(11, Lane.LEFT, PAPER_GRID)
+    nearest = _least_accepted_m(at, lo_m, hi_m)
+    answers = {}
+    for dx_m in (nearest, nearest - 1e-3):
+        spin = planner.solve(at(dx_m), Strategy.SENSIBLE, engine="spin")
+        ours = planner.solve(at(dx_m), Strategy.SENSIBLE, engine="interpreter")
+        assert (spin.status, spin.actions) == (_within_horizon(ours.status), ours.actions)
+        answers[dx_m] = (spin.status, spin.actions)
+    assert answers[nearest] == (Status.PLAN, ())
+    assert answers[nearest - 1e-3] != (Status.PLAN, ())
+
+
+def _within_horizon(status: Status) -> Status:
+    """The interpreter proves "no plan" at any horizon; Spin answers within its horizon only."""
+    return Status.NO_PLAN_WITHIN_HORIZON if status is Status.NO_PLAN else status
+
+
+def _whole(scenario: Scenario) -> Scenario:
+    """``scenario`` under the whole-plan semantics (Spin's)."""
+    assert scenario.sound is not None
+    return replace(scenario, sound=replace(scenario.sound, commitment=None))
+
+
+def test_the_no_acceleration_profile_is_the_interpreters_only() -> None:
+    scenario = _whole(_overtaking(Overtaken.NO_ACCELERATION))
+    with pytest.raises(OptionError, match=r"--overtaken.*physics only"):
+        planner.solve(scenario, Strategy.SENSIBLE, engine="spin")
+
+
+@pytest.mark.parametrize(("values", "why"), [
+    (lambda v: v + " 1", "more numbers than the scenario holds"),
+    (lambda v: v[: v.rindex(" 1 ")] + " 2" + v[v.rindex(" 1 ") + 2:], "a vehicle's measured speed"),
+    (lambda v: v.rsplit(" ", 1)[0], "a vehicle's measured speed"),
+    (lambda v: " ".join([*v.split(" ")[:-3], "5.0", "4.0", v.split(" ")[-1]]), "a vehicle's measured speed"),
+    (lambda v: v.rsplit(" ", 1)[0] + " inf", "a vehicle's measured speed"),
+])
+def test_a_malformed_measured_speed_is_refused_in_one_line(tmp_path: Path, values: Callable[[str], str],
+                                                            why: str) -> None:
+    """Injected by hand: the verifier exits 2 naming what is malformed, never a plan."""
+    scenario = measured_speeds(make_scenario("left", [13], [], 1), [(6.0, 7.5)])
+    problem = problem_for(replace(scenario, sound=Sound(profile("default"))), ModelKind.FINAL)
+    built = runner.verifier(sound_model.shape_of(problem), Strategy.SENSIBLE)
+    given_values = runner.scenario_values(problem)
+    env = {**os.environ, "OVERTAKE_SCENARIO": f"{values(given_values)} | {runner.table_file(problem)}"}
+    done = subprocess.run([str(built.path), "-E"], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2, (given_values, values(given_values), done.stdout[-300:])
+    assert done.stderr.strip() == f"overtake: malformed OVERTAKE_SCENARIO ({why})"
