@@ -17,4 +17,5 @@ def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult
 
 SPIN = register(Engine("spin", (Strategy.SENSIBLE, Strategy.SHORTEST), _solve,
                        "Spin model checker, verifier compiled once per model and cached",
-                       check_tools=runner.check_tools, sound=True, measured_speeds=True))
+                       check_tools=runner.check_tools, sound=True, measured_speeds=True,
+                       overtaken_profile=True))

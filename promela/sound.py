@@ -42,6 +42,7 @@ from dataclasses import dataclass, replace
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.cells import left_extent_m, oncoming_extent_m
 from spec.constants import MAX_HORIZON
+from spec.dynamics import Overtaken
 from spec.envelope import CLOSING_EPS_MPS
 from spec.errors import EngineError
 from spec.grid import Grid
@@ -194,7 +195,8 @@ def table_text(sound: Sound, grid: Grid, standstill: bool = False) -> str:
                                       follower_limit_m(0.0, s, tr), b.same_mps.low_mps, b.same_mps.high_mps,
                                       b.oncoming_mps.low_mps, b.oncoming_mps.high_mps, sound.start_error_m)),
              " ".join(_f(x) for x in (s.min_gap_m, s.time_gap_s, tr.speed_mps, change.accel_mps2, change.brake_mps2,
-                                      float(b.followers_react), CLOSING_EPS_MPS)),
+                                      float(b.followers_react), CLOSING_EPS_MPS)) +
+             f" {int(sound.overtaken is Overtaken.NO_ACCELERATION)}",
              f"{len(table.speeds_mps)} {table.start_speed}",
              " ".join(map(_f, table.speeds_mps)),
              " ".join(map(_f, table.gain_m)),
@@ -274,6 +276,8 @@ def _tables(shape: SoundShape) -> str:
         "static double E_X, LEN, FOLLOWER_M, SAME_LOW, SAME_HIGH, ONC_LOW, ONC_HIGH;",
         "static double START_ERROR_M;  /* sensing error + age */",
         "static double G_MIN, TAU, E_V, A_MAX, B_MAX, FOLLOWERS_REACT, CLOSING_EPS;  /* for measured vehicles */",
+        "static int NO_ACCELERATION;  /* measured same-direction vehicles do not speed up while the AV is out */",
+        "static int held_passing;  /* that profile, and a measured same-direction vehicle it speaks of */",
         "static int N_SPEEDS, START_SPEED, N_WINDOWS, N_EARLY, START_WINDOW[2], ACTION_SPEED[CONTINUATION];",
         "static double *SPEEDS_MPS, *GAIN_M;",
         "static SoundWindow *WINDOWS;",
@@ -334,9 +338,27 @@ static double sound_travel(const SoundPhase *p, double t)
 
 static double sound_speed(const SoundPhase *p, double t) { return p->speed + p->accel * (t - p->t0); }
 
+/* speeding up at A_MAX from high to its top m->top, or until hold_s (infinite: never held), then holding the speed
+   reached (spec.dynamics._fastest) */
+static void sound_fast(SoundMotion *m, double high, double hold_s)
+{	double top_s, reached;
+	if (high >= m->top || hold_s <= 0)
+	{	m->nf = 1; m->fast[0].t0 = 0.0; m->fast[0].t1 = __builtin_inf(); m->fast[0].travel = 0.0;
+		m->fast[0].speed = high; m->fast[0].accel = 0.0;
+		return;
+	}
+	top_s = (m->top - high) / A_MAX;
+	if (hold_s < top_s) { top_s = hold_s; }
+	reached = high + A_MAX * top_s;
+	m->nf = 2; m->fast[0].t0 = 0.0; m->fast[0].t1 = top_s; m->fast[0].travel = 0.0; m->fast[0].speed = high;
+	m->fast[0].accel = A_MAX;
+	m->fast[1].t0 = top_s; m->fast[1].t1 = __builtin_inf(); m->fast[1].travel = (high + reached) / 2 * top_s;
+	m->fast[1].speed = reached; m->fast[1].accel = 0.0;
+}
+
 /* braking at B_MAX from low to a standstill; speeding up at A_MAX from high to its top (spec.dynamics) */
 static void sound_motion(SoundMotion *m, double low, double high, double top)
-{	double stop, top_s, reached, most = top > high ? top : high;
+{	double stop, most = top > high ? top : high;
 	m->measured = 1; m->low = low; m->top = most;
 	if (low <= 0)
 	{	m->ns = 1; m->slow[0].t0 = 0.0; m->slow[0].t1 = __builtin_inf(); m->slow[0].travel = 0.0;
@@ -348,17 +370,7 @@ static void sound_motion(SoundMotion *m, double low, double high, double top)
 		m->slow[1].t0 = stop; m->slow[1].t1 = __builtin_inf(); m->slow[1].travel = low * low / (2 * B_MAX);
 		m->slow[1].speed = 0.0; m->slow[1].accel = 0.0;
 	}
-	if (high >= most)
-	{	m->nf = 1; m->fast[0].t0 = 0.0; m->fast[0].t1 = __builtin_inf(); m->fast[0].travel = 0.0;
-		m->fast[0].speed = high; m->fast[0].accel = 0.0;
-	} else
-	{	top_s = (most - high) / A_MAX;
-		reached = high + A_MAX * top_s;
-		m->nf = 2; m->fast[0].t0 = 0.0; m->fast[0].t1 = top_s; m->fast[0].travel = 0.0; m->fast[0].speed = high;
-		m->fast[0].accel = A_MAX;
-		m->fast[1].t0 = top_s; m->fast[1].t1 = __builtin_inf(); m->fast[1].travel = (high + reached) / 2 * top_s;
-		m->fast[1].speed = reached; m->fast[1].accel = 0.0;
-	}
+	sound_fast(m, high, __builtin_inf());
 }
 
 static double sound_least(const SoundMotion *m, double t) { return sound_travel(sound_phase(m->slow, m->ns, t), t); }
@@ -454,23 +466,28 @@ static int sound_rear_binds(int i, double v)
 	return FOLLOWERS_REACT == 0.0 && v < top - CLOSING_EPS;
 }
 
-/* a stretch of one occupancy, moved by (dt, dx): whether some vehicle breaks its condition */
-static int sound_stretch_refused(const SoundStretch *s, double dt, double dx, const unsigned *fol)
+/* a stretch of one occupancy, moved by (dt, dx): whether some vehicle breaks its condition; held_s (negative: none):
+   a move back from the passing lane under the no-acceleration profile, measured vehicles not speeding up since then
+   (spec.sound.SoundRules._check_entering) */
+static int sound_stretch_refused(const SoundStretch *s, double dt, double dx, const unsigned *fol, double held_s)
 {	int i, k, ahead, behind;
 	double need, allow, slowest;
 	const SoundPiece *p;
+	SoundMotion held;
 	if (s->left && s->entering)
 	{	for (i = 0; i < n_same; i++)  /* each one certainly ahead at every piece, or certainly behind */
 		{	ahead = 1; behind = 1;
 			if (S_MOT[i].measured)
 			{	need = -__builtin_inf(); allow = __builtin_inf();
+				held = S_MOT[i];
+				if (held_s >= 0) { sound_fast(&held, S_MOT[i].fast[0].speed, held_s); }
 				for (k = 0; k < s->n; k++)
 				{	p = &s->p[k];
 					if (sound_piece_need(OWN_AHEAD, &S_MOT[i], p, dt, dx) > need)
 					{	need = sound_piece_need(OWN_AHEAD, &S_MOT[i], p, dt, dx);
 					}
-					if (sound_piece_need(OWN_BEHIND, &S_MOT[i], p, dt, dx) < allow)
-					{	allow = sound_piece_need(OWN_BEHIND, &S_MOT[i], p, dt, dx);
+					if (sound_piece_need(OWN_BEHIND, &held, p, dt, dx) < allow)
+					{	allow = sound_piece_need(OWN_BEHIND, &held, p, dt, dx);
 				}	}
 				ahead = S_LO[i] >= need + EPS_M;
 				behind = S_HI[i] <= allow - EPS_M;
@@ -537,9 +554,12 @@ static const SoundWindow *sound_window(int action, double *dt, double *dx)
 
 /* whether an action keeps every condition over its window; its followers are left in step_fol */
 static int sound_step_ok(int action)
-{	double dt, dx;
+{	double dt, dx, held_s = -1.0;
 	int i, k;
 	const SoundWindow *w = sound_window(action, &dt, &dx);
+	if (INTO_LEFT[action] && held_passing)  /* when the passing window began (spec.sound.SoundRules.passing_from_s) */
+	{	held_s = now.out >= 0 ? now.out * UNIT_S : (now.lane == RIGHT ? 0.0 : -1.0);
+	}
 	for (k = 0; k < FW; k++) { step_fol[k] = (unsigned) now.fol[k]; }
 	if (INTO_LEFT[action])  /* those not held ahead at the boundary follow the AV from now on */
 	{	for (k = 0; k < FW; k++) { step_fol[k] = 0; }
@@ -547,7 +567,7 @@ static int sound_step_ok(int action)
 		{	if (!sound_held_ahead(i, w->bx + dx, w->bt + dt)) { step_fol[i / 32] |= 1u << (i % 32); }
 	}	}
 	for (k = 0; k < w->n; k++)
-	{	if (sound_stretch_refused(&w->s[k], dt, dx, step_fol)) { return 0; }
+	{	if (sound_stretch_refused(&w->s[k], dt, dx, step_fol, held_s)) { return 0; }
 	}
 	return 1;
 }
@@ -572,7 +592,7 @@ static int sound_done(void)
 	t = w->bt + dt;
 GOAL
 	for (k = 0; k < w->n; k++)
-	{	if (sound_stretch_refused(&w->s[k], dt, dx, (const unsigned *) now.fol)) { return 0; }
+	{	if (sound_stretch_refused(&w->s[k], dt, dx, (const unsigned *) now.fol, -1.0)) { return 0; }
 	}
 	x = w->ex + dx;
 	t = w->et + dt;
@@ -609,7 +629,7 @@ static void sound_start(void)
 	}
 	now.refused = 0;
 	for (k = 0; k < w->n; k++)
-	{	if (sound_stretch_refused(&w->s[k], 0.0, 0.0, none)) { now.refused = 1; }
+	{	if (sound_stretch_refused(&w->s[k], 0.0, 0.0, none, -1.0)) { now.refused = 1; }
 	}
 }
 
@@ -695,6 +715,7 @@ static void sound_load_table(const char *path)
 	ONC_LOW = table_number(); ONC_HIGH = table_number(); START_ERROR_M = table_number();
 	G_MIN = table_number(); TAU = table_number(); E_V = table_number(); A_MAX = table_number();
 	B_MAX = table_number(); FOLLOWERS_REACT = table_number(); CLOSING_EPS = table_number();
+	NO_ACCELERATION = table_int(0, 1, "the no-acceleration profile");
 	if (!(A_MAX > 0 && B_MAX > 0)) { sound_bad_table("rates of speed change"); }
 	N_SPEEDS = table_int(1, 1000, "speeds");
 	START_SPEED = table_int(0, N_SPEEDS - 1, "the start speed");
@@ -835,6 +856,8 @@ static void sound_load(void)
 		at += 5;
 	}
 	if (at != n) { sound_malformed("more numbers than the scenario holds"); }
+	held_passing = 0;
+	for (j = 0; j < n_same; j++) { if (NO_ACCELERATION && S_MOT[j].measured) { held_passing = 1; } }
 	for (j = 0; j < N_PHANTOMS; j++)  /* the unseen stretch from the view's edge outwards */
 	{	lo = PHANTOMS[j].dx > 0 ? PHANTOMS[j].dx : -__builtin_inf();
 		hi = PHANTOMS[j].dx > 0 ? __builtin_inf() : PHANTOMS[j].dx;
@@ -856,7 +879,9 @@ def _option(action: Action, grid: Grid) -> str:
         guard.append("lc < MAX_LC")
     effect = []
     if rule.to_lane is Lane.LEFT:
-        effect.append("c_code { sound_take_followers(); }")
+        effect += ["c_code { sound_take_followers(); }", "out = -1"]
+    if rule.to_lane is Lane.RIGHT:  # the passing window starts (spec.sound.SoundRules.after)
+        effect.append("c_code { if (held_passing) { now.out = now.t; } }")
     if rule.to_lane is not None:
         effect += [f"lane = {rule.to_lane.name}", "lc++"]
     units = grid.units(action)
@@ -891,6 +916,7 @@ def render(shape: SoundShape) -> str:
         "bit lane; byte lc; byte steps; short t; short d;  /* time units, cells of nominal advance */",
         f"short first = {NO_SPEED}; short last = {NO_SPEED};  /* speed indices */",
         "byte moved;  /* the lane the last action moved into: 0 none, 1 left, 2 right */",
+        "short out = -1;  /* when the move into the passing lane the AV is in began, time units (-1: none) */",
         "int fol[FW];  /* followers: bit i of word i / 32 for the same-direction vehicle i */",
         "bool refused; bool reached; byte horizon;  /* the horizon: constant after the start */",
         "",

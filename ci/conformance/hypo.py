@@ -31,6 +31,7 @@ from ci.shared.records import campaign_lock
 from spec import assumptions
 from spec.assumptions import Bounds, SpeedBounds
 from spec.constants import DEFAULT_HORIZON
+from spec.dynamics import Overtaken
 from spec.engines import get_engine
 from spec.errors import ScenarioError
 from spec.files import scenario_from_dict
@@ -111,24 +112,28 @@ def speeds(lane: SpeedBounds, count: int) -> st.SearchStrategy[list[tuple[float,
 
 
 @st.composite
-def with_speeds(draw: st.DrawFn, scenario: Scenario) -> Scenario:
+def with_speeds(draw: st.DrawFn, scenario: Scenario, profiles: bool = True) -> Scenario:
     """``scenario`` (under the sound model) with its same-direction vehicles' speeds measured, and, half the time,
-    the oncoming ones' too (``spec.scenario.measured_speeds``)."""
+    the oncoming ones' too (``spec.scenario.measured_speeds``); with ``profiles``, under either profile of vehicles
+    overtaken (``spec.dynamics.Overtaken``)."""
     assert scenario.sound is not None
     b = scenario.sound.bounds
     left = draw(speeds(b.same_mps, len(scenario.left_lane)))
     right = draw(st.none() | speeds(b.oncoming_mps, len(scenario.right_lane)))
+    if profiles:
+        scenario = replace(scenario, sound=replace(scenario.sound, overtaken=draw(st.sampled_from(list(Overtaken)))))
     return measured_speeds(scenario, left, right)
 
 
-def scenarios(grid: Grid, horizon: int | None, model: Sound | str | None = None,
-              measured: bool = False) -> st.SearchStrategy[Scenario]:
+def scenarios(grid: Grid, horizon: int | None, model: Sound | str | None = None, measured: bool = False,
+              profiles: bool = False) -> st.SearchStrategy[Scenario]:
     """Valid scenarios on ``grid``: up to 4 same-direction and 2 oncoming vehicles anywhere in the window, either
     lane, any target count; drawn near the AV first (hypothesis shrinks towards small cells, so the window's
     start is put at the AV's cell and cells count outwards from it). Under ``model`` (``Campaign.sound``): the
     paper's rules (None), that sound model, or one drawn with each scenario (``DRAWN``); under the sound model, half
     the time what the snapshot measured of each vehicle's place, and with ``measured`` (every engine of the
-    campaign answers it) half the time each vehicle's own speed (``with_speeds``)."""
+    campaign answers it) half the time each vehicle's own speed (``with_speeds``; under either profile of vehicles
+    overtaken with ``profiles``, every engine answering both)."""
     cells = st.integers(0, grid.road_cells)
 
     @st.composite
@@ -154,7 +159,7 @@ def scenarios(grid: Grid, horizon: int | None, model: Sound | str | None = None,
             return scenario
         if draw(st.booleans()):
             scenario = draw(sensed_places(scenario))
-        return draw(with_speeds(scenario)) if measured and draw(st.booleans()) else scenario
+        return draw(with_speeds(scenario, profiles)) if measured and draw(st.booleans()) else scenario
 
     return build()
 
@@ -195,7 +200,8 @@ def hypothesis_job(name: str, campaign: Campaign, out_dir: str, profile_name: st
     @settings(PROFILES[profile_name], max_examples=campaign.count or PROFILES[profile_name].max_examples,
               database=DirectoryBasedExampleDatabase(str(out / "hypothesis" / name)))
     @given(scenarios(grid, campaign.horizon, campaign.sound,
-                     all(get_engine(e).measured_speeds for e in campaign.engines)))
+                     all(get_engine(e).measured_speeds for e in campaign.engines),
+                     all(get_engine(e).overtaken_profile for e in campaign.engines)))
     def test(scenario: Scenario) -> None:
         result = check_scenario(scenario, [prop], campaign.engines, campaign.timeout_s)
         if name not in done.get(result["key"], {}).get("verdicts", {}):

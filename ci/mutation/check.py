@@ -130,7 +130,7 @@ DETECTORS: tuple[Detector, ...] = (
     Detector("crossval sound hypothesis 10.5 m (CI's)",
              lambda m, work: _crossval(work / "sound-hypothesis-10.5m", "--source", "hypothesis", "--seed",
                                        _ci_seed(), "--cell-m", "10.5", "--model", "sound", "--engines",
-                                       "interpreter,spin", "--properties", CI_FINE_PROPERTIES),
+                                       "interpreter,spin", "--properties", CI_FINE_PROPERTIES, "--timeout", "60"),
              FAILS_CI, (("HYPOTHESIS_PROFILE", "ci"),)),
     Detector("tests (all)", lambda m, work: _pytest("tests", SELF_CHECK), (1,), tests=True),
 )

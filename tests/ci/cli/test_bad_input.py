@@ -103,10 +103,7 @@ def vehicle_speeds(command: str) -> list[Case]:
             _case(command, *measured, "--tracking=on", "--engine=z3", named="--vehicle-speeds"),
             *([_case(command, *measured, "--tracking=on", named="--vehicle-speeds")] if command == "simulate" else []),
             # the no-acceleration profile speaks of measured vehicles: lane speeds are refused
-            *choices(command, "--overtaken"), _case(command, "--overtaken=no-acceleration", named="--overtaken"),
-            # Spin answers measured vehicles by their physics only
-            _case(command, *measured, "--tracking=on", "--engine=spin", "--overtaken=no-acceleration",
-                  named="--overtaken")]
+            *choices(command, "--overtaken"), _case(command, "--overtaken=no-acceleration", named="--overtaken")]
 
 
 def faults(command: str) -> list[Case]:
