@@ -185,6 +185,11 @@ MUTANTS: tuple[Mutant, ...] = (
            "        return sound.bounds.same_mps.low_mps\n    return sound.bounds.same_mps.low_mps",
            "the minimal-risk manoeuvre holds the lane's slowest speed where a measured vehicle ahead may stop",
            ("tests/oracle/test_sound_measured.py",)),
+    Mutant("sound-measured-speeds-not-aged", "spec/sound.py",
+           "None if own is None else own.aged(sound.bounds.latency_s)))", "None if own is None else own))",
+           "a measured vehicle's speed interval not aged by the snapshot's age, in the one place the interpreter and "
+           "Spin read it from: cross-validation cannot see it, the motions (which age it themselves) do",
+           ("tests/oracle/test_sound_measured.py",)),
     Mutant("dynamics-held-from-the-snapshot", "spec/dynamics.py",
            "    if high_mps >= top_mps or hold_from_s <= 0:",
            "    if high_mps >= top_mps or hold_from_s < math.inf:",

@@ -25,6 +25,7 @@ from spec.escapes import COMMIT
 from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
 from spec.models import ModelKind
+from spec.physical import LOOP
 from spec.safety import Conflict
 from spec.scenario import Scenario, make_scenario, measured_speeds, problem_for, sensed
 from spec.sound import sound_from
@@ -168,3 +169,18 @@ def test_the_no_acceleration_profile_returns_ahead_of_a_vehicle_that_could_speed
     corners = reach.motions(physics, actions, random.Random(5), 0)
     fastest = next(m for m in corners if "fastest, readings high" in m.name)
     assert reach.run_motion(physics, actions, fastest) is not None
+
+
+def test_a_measured_vehicles_speed_ages_with_the_snapshot() -> None:
+    """The braking witness one control step of age later (the loop's budget): the vehicle ahead may have slowed by b
+    x the age before the plan starts. The nearest reading the model accepts survives the exact check and every
+    motion, which age its speed themselves (``oracle.reach``)."""
+    def at(dx_m: float) -> Scenario:
+        base = sensed(make_scenario("left", [11], [], 1, cell_m=21), [(dx_m, dx_m)])
+        sound = replace(sound_from(None, "default", latency_s=LOOP.plan_budget_s), start_mps=1.08)
+        return replace(measured_speeds(base, [(2.3, 2.3)]), sound=sound)
+
+    lo_m, hi_m = left_extent_m(11, Lane.LEFT, PAPER_GRID)
+    nearest = at(_least_accepted_m(at, lo_m, hi_m))
+    assert reach.exact_check(nearest, ()) is None
+    assert all(reach.run_motion(nearest, (), m) is None for m in reach.motions(nearest, (), random.Random(3), 8))
