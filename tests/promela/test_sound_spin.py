@@ -35,6 +35,7 @@ from spec.errors import EngineError
 from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid, grid_for
 from spec.lanes import Lane
 from spec.models import ModelKind
+from spec.physical import LOOP
 from spec.scenario import Scenario, make_scenario, measured_speeds, problem_for, sensed
 from spec.sound import Checks, Sound, sound_from
 from tests.conftest import AGED_SHORTEST_LENGTH, CI_PROFILE, check_aged_witness, measured_like, measured_pinned
@@ -318,13 +319,17 @@ def test_the_measured_witnesses_agree() -> None:
                 (_within_horizon(ours.status), ours.actions if strategy is Strategy.SENSIBLE else len(ours.actions))
 
 
-def test_a_vehicle_still_braking_when_the_av_stands_is_held_to_its_gap_in_spin_too() -> None:
-    """The interpreter's nearest accepted reading of a vehicle ahead at 2.3 m/s, the AV at 1.08 m/s (a stop behind
-    it, proved from the start: the empty plan): Spin accepts it and not a millimetre nearer, as the interpreter."""
+@pytest.mark.parametrize(("speed_mps", "latency_s", "start_mps"), [(2.3, 0.0, 1.08), (10.0, LOOP.plan_budget_s, 7.0)])
+def test_the_nearest_reading_accepted_of_a_measured_vehicle_ahead_is_spins_too(
+        speed_mps: float, latency_s: float, start_mps: float) -> None:
+    """The interpreter's nearest accepted reading of a vehicle ahead (the start and a stop behind it proved: the empty
+    plan): Spin accepts it and not a millimetre nearer, as the interpreter. At 2.3 m/s, the AV at 1.08 m/s: the vehicle
+    still braking when the AV stands. At 10 m/s, above its lane's top, one control step of age: its own error at the
+    plan's start (``Sound.measured_error_m``), 3 cm wider than the lane's."""
     def at(dx_m: float) -> Scenario:
         base = sensed(make_scenario("left", [11], [], 0), [(dx_m, dx_m)])
-        return replace(measured_speeds(base, [(2.3, 2.3)]), sound=replace(
-            sound_from(None, "default", semantics="whole"), start_mps=1.08))
+        sound_ = sound_from(None, "default", semantics="whole", latency_s=latency_s)
+        return replace(measured_speeds(base, [(speed_mps, speed_mps)]), sound=replace(sound_, start_mps=start_mps))
 
     lo_m, hi_m = left_extent_m(11, Lane.LEFT, PAPER_GRID)
     nearest = _least_accepted_m(at, lo_m, hi_m)
