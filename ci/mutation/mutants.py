@@ -14,7 +14,13 @@ escape's end taken as safe for ever unchecked (after an escape's own steps the m
 slows the AV, and no answer changed where the checks could see it), a step's window known whole cut a whole ramp
 before its boundary instead of half (the stretch it leaves unchecked is never the worst instant: the next window
 starts later and holds it), and every escape tried from either lane (a physically empty manoeuvre the model
-checks as consistently as the motions do: a fault of progress, not of safety).
+checks as consistently as the motions do: a fault of progress, not of safety). One of Spin's translation of measured
+speeds was measured and left out (2026-12-04): a measured follower held to its lane's top instead of its own changes
+no answer, since wherever followers keep their speed and a same-direction speed was measured the minimal-risk
+manoeuvre brakes to a standstill, below every top, so a plan never ends in the left lane with a follower, and a
+follower faster than the lane's top refuses the steps beside it either way. For the same reason (the manoeuvre
+ends at a standstill) so does Spin's plan end behind a measured vehicle checked as the lane's vehicles are (closing in
+only above the lane's slowest speed).
 """
 
 from __future__ import annotations
@@ -252,13 +258,6 @@ MUTANTS: tuple[Mutant, ...] = (
            "if (0) { S_LO[j] = v[at]; S_HI[j] = v[at + 1]; }",
            "Spin widens a measured same-direction vehicle by the lane-wide error, not by its own (its speed's reach "
            "while the snapshot ages)"),
-    Mutant("spin-measured-standstill-unchecked", "promela/sound.py",
-           "if (w->ev > 0.0 + CLOSING_EPS) { return 0; }", "if (w->closes) { return 0; }",
-           "Spin's plan ends behind a measured vehicle that may stop while the AV still drives, closing in for ever"),
-    Mutant("spin-measured-follower-lane-top", "promela/sound.py",
-           "double top = S_MOT[i].measured && S_MOT[i].top > SAME_HIGH ? S_MOT[i].top : SAME_HIGH;",
-           "double top = SAME_HIGH;",
-           "Spin holds a measured follower faster than its lane's top to the lane's top"),
     Mutant("spin-overtaken-held-from-the-snapshot", "promela/sound.py",
            "held_s = now.out >= 0 ? now.out * UNIT_S : (now.lane == RIGHT ? 0.0 : -1.0);", "held_s = 0.0;",
            "Spin holds a measured vehicle cut in ahead of from the snapshot on, not from when the AV moved out"),

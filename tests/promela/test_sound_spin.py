@@ -27,6 +27,7 @@ from ci.conformance.hypo import VIEWS_M, with_speeds
 from oracle import planner, sound
 from promela import runner
 from promela import sound as sound_model
+from spec.actions import Action
 from spec.answers import Limits, Status, Strategy
 from spec.assumptions import Bounds, SpeedBounds, profile
 from spec.cells import left_extent_m
@@ -365,6 +366,21 @@ def test_the_no_acceleration_profile_agrees(overtaken: Overtaken) -> None:
         assert (spin.status, spin.actions if strategy is Strategy.SENSIBLE else len(spin.actions)) == \
             (_within_horizon(ours.status), ours.actions if strategy is Strategy.SENSIBLE else len(ours.actions))
         assert (spin.status is Status.PLAN) == (overtaken is Overtaken.NO_ACCELERATION)
+
+
+def test_the_no_acceleration_profile_holds_a_vehicle_from_the_move_out_not_from_the_snapshot() -> None:
+    """A target measured standing 126 m ahead may speed up until the AV starts its move out, two actions in: Spin's
+    sensible plan passes it as the interpreter's does, not cutting in early as one held from the snapshot would."""
+    scenario = replace(measured_speeds(make_scenario("left", [16], [], 1), [(0.0, 0.0)]), sound=sound_from(
+        None, "default", semantics="whole", overtaken="no-acceleration", phantoms=False, sensing_error_m=1.5))
+    for strategy in (Strategy.SENSIBLE, Strategy.SHORTEST):
+        spin = planner.solve(scenario, strategy, engine="spin")
+        ours = planner.solve(scenario, strategy, engine="interpreter")
+        assert (spin.status, spin.actions) == (ours.status, ours.actions)
+        assert spin.status is Status.PLAN
+    assert spin.actions[:1] == (Action.RIGHT_LANE_CHANGE,)  # shortest: out at once
+    sensible = planner.solve(scenario, Strategy.SENSIBLE, engine="spin").actions
+    assert sensible.index(Action.RIGHT_LANE_CHANGE) == 2
 
 
 @pytest.mark.parametrize(("values", "why"), [
