@@ -243,7 +243,7 @@ def table_file(problem: Problem) -> Path:
     """The sound model's table for ``problem`` (``promela.sound.table_text``), in the cache and named by the hash of
     its text: written once (atomically: a concurrent writer of the same text wins or loses whole), found whole
     after, rewritten when damaged. Its path goes to the verifier with the scenario."""
-    data, name = _table_data(sound_model.table_sound(problem), problem.grid, sound_model.standstill(problem))
+    data, name = _table_data(sound_model.table_sound(problem), problem.grid, sound_model.hold_floor_mps(problem))
     path = cache_dir() / "sound-tables" / name
     if path in _WRITTEN:
         return path
@@ -264,10 +264,10 @@ def table_file(problem: Problem) -> Path:
 
 
 @lru_cache(maxsize=64)
-def _table_data(sound: Sound, grid: Grid, standstill: bool) -> tuple[bytes, str]:
+def _table_data(sound: Sound, grid: Grid, hold_floor_mps: float | None) -> tuple[bytes, str]:
     """A sound model's table as bytes and its file's name (the hash of its text), made once per process: every
     search of the closed loop asks again."""
-    data = sound_model.table_text(sound, grid, standstill).encode()
+    data = sound_model.table_text(sound, grid, hold_floor_mps).encode()
     return data, f"{hashlib.sha256(data).hexdigest()[:24]}.txt"
 
 

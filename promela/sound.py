@@ -49,7 +49,7 @@ from spec.grid import Grid
 from spec.lanes import Lane
 from spec.models import GoalRule, ModelRules
 from spec.scenario import Problem
-from spec.sound import EPS_M, Checks, Sound, follower_limit_m, rear_binds
+from spec.sound import EPS_M, Checks, Sound, follower_limit_m, rear_binds, slowest_ahead_mps, vehicles
 from spec.windows import NO_SPEED, Binding, Instant, Window, shapes, sound_table
 
 ENV_VAR = "OVERTAKE_SCENARIO"
@@ -110,10 +110,15 @@ def table_sound(problem: Problem) -> Sound:
     return replace(sound, oncoming_view_m=None)
 
 
-def standstill(problem: Problem) -> bool:
-    """Whether ``problem``'s minimal-risk manoeuvre brakes to a standstill: a same-direction vehicle's speed was
-    measured (``spec.sound.slowest_ahead_mps``), so its table's windows are those (``spec.windows.sound_table``)."""
-    return bool(problem.scenario.left_mps)
+def hold_floor_mps(problem: Problem) -> float:
+    """The speed ``problem``'s minimal-risk manoeuvre brakes to (``spec.sound.slowest_ahead_mps``: a standstill where
+    a same-direction vehicle's speed was measured, else its lane's slowest): its table's windows
+    (``spec.windows.sound_table``) are its vehicles'."""
+    s = problem.scenario
+    if s.sound is None:
+        raise ValueError("the problem's scenario has no sound model")
+    return slowest_ahead_mps(s.sound, vehicles(s.lane, s.left_lane, s.right_lane, s.grid, s.sound, s.left_m,
+                                               s.right_m, s.left_mps, s.right_mps))
 
 
 def shape_of(problem: Problem) -> SoundShape:
@@ -173,18 +178,18 @@ def _action_code(action: Action | None) -> int:
 
 
 @functools.lru_cache(maxsize=64)
-def table_text(sound: Sound, grid: Grid, standstill: bool = False) -> str:
+def table_text(sound: Sound, grid: Grid, hold_floor_mps: float | None = None) -> str:
     """Every number of the sound model a verifier reads when it starts (``sound_load_table``), from
     ``spec.windows.sound_table``: the bounds, the envelope, each window (shapes, early windows, start windows) with
     the gap required at each instant a condition binds (``SafetySpec.required_gap_m`` of the closing speed this
     module forms from the instant's speed, the speed error and the lane's bound), the speeds and gains. Its first
     line names it; its second checks it against the verifier (format, road cells, actions, the phantoms' lanes), as
     do the grid's time unit and cell that open the third; a sentinel ends it. Doubles as Python's ``repr`` writes
-    them: ``strtod`` reads each back exactly. ``standstill``: the windows of scenarios whose minimal-risk manoeuvre
-    brakes to a standstill (``spec.windows.sound_table``); the fourth line holds what a vehicle measured to move by
-    its own dynamics is checked with (the specification's gaps, the speed error, its rates of speed change, whether
-    followers react)."""
-    table = sound_table(sound, grid, standstill)
+    them: ``strtod`` reads each back exactly. ``hold_floor_mps``: the speed the minimal-risk manoeuvre brakes to in
+    the scenarios it serves (``spec.windows.sound_table``; None: the lane's slowest); the fourth line holds what a
+    vehicle measured to move by its own dynamics is checked with (the specification's gaps, the speed error, its
+    rates of speed change, whether followers react)."""
+    table = sound_table(sound, grid, hold_floor_mps)
     change = sound.speed_change
     b, s, tr = sound.bounds, sound.safety, sound.tracking
     start = "" if sound.start_mps is None else f", measured start speed {sound.start_mps:g} m/s"
@@ -204,11 +209,12 @@ def table_text(sound: Sound, grid: Grid, standstill: bool = False) -> str:
     windows: list[list[str]] = []
     relative = [[[[-1] * 3 for _ in Lane] for _ in range(CONTINUATION + 1)] for _ in table.speeds_mps]
     unstarted = replace(sound, start_mps=None)
+    shape_lines = [_shape_lines(unstarted, grid, v, i not in table.action_speed.values(), hold_floor_mps)
+                   for i, v in enumerate(table.speeds_mps)]
     for before, action, lane, moved in sorted(table.relative, key=lambda k: (
             k[0], _action_code(k[1]), LANE_CODE[k[2]], MOVED_CODE[k[3]])):
         relative[before][_action_code(action)][LANE_CODE[lane]][MOVED_CODE[moved]] = len(windows)
-        only = before not in table.action_speed.values()
-        windows.append(_shape_lines(unstarted, grid, table.speeds_mps[before], only, standstill)[action, lane, moved])
+        windows.append(shape_lines[before][action, lane, moved])
     early = []
     for (lane, t, d, first, last, moved, action), w in sorted(table.early.items(), key=lambda kv: (
             LANE_CODE[kv[0][0]], *kv[0][1:5], MOVED_CODE[kv[0][5]], _action_code(kv[0][6]))):
@@ -228,12 +234,13 @@ def table_text(sound: Sound, grid: Grid, standstill: bool = False) -> str:
 
 
 @functools.lru_cache(maxsize=64)
-def _shape_lines(sound: Sound, grid: Grid, before_mps: float, continuation_only: bool, standstill: bool) -> dict[
+def _shape_lines(sound: Sound, grid: Grid, before_mps: float, continuation_only: bool,
+                 hold_floor_mps: float | None) -> dict[
         tuple[Action | None, Lane, Lane | None], list[str]]:
     """The table's lines of the shapes after ``before_mps`` (``spec.windows.shapes``; ``sound`` without a start
     speed), written once: a new measured start speed adds its own continuation and early windows only."""
     return {key: _window(w, sound) for key, w in shapes(sound, grid, before_mps, continuation_only,
-                                                        standstill).items()}
+                                                        hold_floor_mps).items()}
 
 
 def _tables(shape: SoundShape) -> str:
@@ -471,7 +478,7 @@ static int sound_rear_binds(int i, double v)
    (spec.sound.SoundRules._check_entering) */
 static int sound_stretch_refused(const SoundStretch *s, double dt, double dx, const unsigned *fol, double held_s)
 {	int i, k, ahead, behind;
-	double need, allow, slowest;
+	double need, allow, bound, slowest;
 	const SoundPiece *p;
 	SoundMotion held;
 	if (s->left && s->entering)
@@ -481,14 +488,13 @@ static int sound_stretch_refused(const SoundStretch *s, double dt, double dx, co
 			{	need = -__builtin_inf(); allow = __builtin_inf();
 				held = S_MOT[i];
 				if (held_s >= 0) { sound_fast(&held, S_MOT[i].fast[0].speed, held_s); }
-				for (k = 0; k < s->n; k++)
+				for (k = 0; k < s->n; k++)  /* the most lo needed over the move, the least hi allowed */
 				{	p = &s->p[k];
-					if (sound_piece_need(OWN_AHEAD, &S_MOT[i], p, dt, dx) > need)
-					{	need = sound_piece_need(OWN_AHEAD, &S_MOT[i], p, dt, dx);
-					}
-					if (sound_piece_need(OWN_BEHIND, &held, p, dt, dx) < allow)
-					{	allow = sound_piece_need(OWN_BEHIND, &held, p, dt, dx);
-				}	}
+					bound = sound_piece_need(OWN_AHEAD, &S_MOT[i], p, dt, dx);
+					if (bound > need) { need = bound; }
+					bound = sound_piece_need(OWN_BEHIND, &held, p, dt, dx);
+					if (bound < allow) { allow = bound; }
+				}
 				ahead = S_LO[i] >= need + EPS_M;
 				behind = S_HI[i] <= allow - EPS_M;
 			} else

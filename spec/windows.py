@@ -171,12 +171,12 @@ def declared(window: list[tuple[Segment, list[Bounded]]], boundary: Instant) -> 
 
 
 @functools.lru_cache(maxsize=16)
-def sound_table(sound: Sound, grid: Grid, standstill: bool = False) -> SoundTable:
+def sound_table(sound: Sound, grid: Grid, hold_floor_mps: float | None = None) -> SoundTable:
     """The table of ``sound`` on ``grid``: every shape, every window while the first ramp runs (from either lane,
-    every action order the lanes allow), the start. ``standstill``: for scenarios with a same-direction vehicle
-    whose speed was measured, which may stop, so the minimal-risk manoeuvre brakes to a standstill
-    (``spec.sound.slowest_ahead_mps``); the windows never read the vehicles otherwise."""
-    rules = _rules(sound, grid, standstill)
+    every action order the lanes allow), the start. ``hold_floor_mps``: the speed the minimal-risk manoeuvre brakes to
+    in the scenarios it serves (``spec.sound.slowest_ahead_mps``: a standstill where a same-direction vehicle's speed
+    was measured; None: the lane's slowest); the windows never read the vehicles otherwise."""
+    rules = _rules(sound, grid, hold_floor_mps)
     action_speeds = {a: rules.speeds[a] for a in Action}
     speeds = tuple(sorted({*action_speeds.values(), rules.start_mps}))
     index = {v: i for i, v in enumerate(speeds)}
@@ -184,7 +184,7 @@ def sound_table(sound: Sound, grid: Grid, standstill: bool = False) -> SoundTabl
     # after the start speed (when no action drives at it) only the continuation from the start is ever looked up
     relative: dict[ShapeKey, Window] = {
         (index[before], *key): w for before in speeds
-        for key, w in shapes(unstarted, grid, before, before not in action_speeds.values(), standstill).items()}
+        for key, w in shapes(unstarted, grid, before, before not in action_speeds.values(), hold_floor_mps).items()}
     early_windows: dict[EarlyKey, Window] = {}
     first_end_s = max(ramp_s(rules.start_mps, v) for v in speeds)
     half_ramp_s = max(ramp_s(a, b) for a in speeds for b in speeds) / 2
@@ -215,21 +215,21 @@ def sound_table(sound: Sound, grid: Grid, standstill: bool = False) -> SoundTabl
                       index[rules.start_mps], gains, relative, early_windows, start)
 
 
+def _rules(sound: Sound, grid: Grid, hold_floor_mps: float | None) -> SoundRules:
+    """The rules the table asks its windows of: no vehicle, the minimal-risk manoeuvre's hold speed given (None: the
+    lane's slowest)."""
+    return SoundRules(sound, Lane.RIGHT, (), (), grid, (), hold_floor_mps=hold_floor_mps)
+
+
 @functools.lru_cache(maxsize=64)
-def _rules(sound: Sound, grid: Grid, standstill: bool) -> SoundRules:
-    """The rules the table asks its windows of: no vehicle, the minimal-risk manoeuvre's hold speed a standstill or
-    the lane's slowest."""
-    return SoundRules(sound, Lane.RIGHT, (), (), grid, (), hold_floor_mps=0.0 if standstill else None)
-
-
 def shapes(sound: Sound, grid: Grid, before_mps: float, continuation_only: bool = False,
-           standstill: bool = False) -> dict[tuple[Action | None, Lane, Lane | None], Window]:
+           hold_floor_mps: float | None = None) -> dict[tuple[Action | None, Lane, Lane | None], Window]:
     """Every window's shape after the speed ``before_mps`` (``SoundRules.relative_window``), by action (None: the
     continuation), lane and the lane the action before moved into; ``continuation_only``: the continuation's alone
     (after a start speed no action drives at, the only shape ever looked up). A shape never reads the AV's start
     speed: the closed loop's every new measured speed reuses the shapes of the actions' speeds (``sound`` comes with
-    ``start_mps`` None); ``standstill`` as ``sound_table``'s."""
-    rules = _rules(sound, grid, standstill)
+    ``start_mps`` None); ``hold_floor_mps`` as ``sound_table``'s."""
+    rules = _rules(sound, grid, hold_floor_mps)
     found: dict[tuple[Action | None, Lane, Lane | None], Window] = {}
     for lane in Lane:
         for moved in (None, lane):
