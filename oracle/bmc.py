@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import time
 from collections import OrderedDict
-from collections.abc import Callable, Hashable, Iterator
+from collections.abc import Callable, Hashable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TypeVar
@@ -357,8 +357,15 @@ def _solver_for(kind: type[K], problem: Problem) -> Iterator[K]:
             _kept.popitem(last=False)
 
 
-def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
-    """The smallest k whose bound is satisfiable, incrementally, or a proof that none is up to the horizon.
+def _first_in(action_var: z3.ArithRef, firsts: Sequence[Action]) -> z3.BoolRef:
+    """The action numbered ``action_var`` is one of ``firsts``."""
+    return z3.Or(*[action_var == ACTION_ORDER.index(a) for a in firsts]) if firsts else z3.BoolVal(False)
+
+
+def shortest(problem: Problem, limits: Limits | None = None, firsts: Sequence[Action] | None = None) -> SearchResult:
+    """The smallest k whose bound is satisfiable, incrementally, or a proof that none is up to the horizon. With
+    ``firsts`` (the commitment semantics' prediction, ``spec.commitment``): at least one action, the first one of
+    ``firsts``; no warm start.
 
     Warm start: a kept solver remembers the last problem's first satisfiable bound g (in a campaign,
     often this one's too) and first asks whether the goal holds anywhere below it, one check for
@@ -368,7 +375,11 @@ def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
     horizon = problem.horizon
     with _solver_for(Shortest, problem) as kept:
         fixed, not_before, start = kept.fixing(problem.scenario), list[z3.BoolRef](), 0
-        guess = None if kept.last_bound is None else min(kept.last_bound, horizon + 1)
+        if firsts is not None:
+            kept.goal(1)
+            fixed.append(kept.literal(_first_in(kept.enc.actions[0], firsts)))
+            start = 1
+        guess = None if kept.last_bound is None or firsts is not None else min(kept.last_bound, horizon + 1)
         if guess is not None and guess > 1:
             verdict = kept.check(limits, started, *fixed, kept.goal_before(guess))
             if verdict == z3.unknown:
@@ -379,13 +390,13 @@ def shortest(problem: Problem, limits: Limits | None = None) -> SearchResult:
             reached = kept.goal(k)
             verdict = kept.check(limits, started, *fixed, *not_before, reached)
             if verdict == z3.sat:
-                kept.last_bound = k
+                kept.last_bound = k if firsts is None else kept.last_bound
                 actions, states = kept.enc.decode(kept.checked_model(), k)
                 return SearchResult(Status.PLAN, actions, k + 1, f"shortest: bound {k} satisfiable", states)
             if verdict == z3.unknown:
                 return SearchResult(Status.INCOMPLETE, (), k, f"z3: {kept.solver.reason_unknown()} at bound {k}")
             not_before.append(z3.Not(reached))
-        kept.last_bound = horizon + 1
+        kept.last_bound = horizon + 1 if firsts is None else kept.last_bound
     return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), horizon + 1,
                         f"proved: every bound up to {horizon} is unsatisfiable")
 
@@ -425,8 +436,9 @@ def bounded(enc: Encoding) -> tuple[z3.ArithRef, list[z3.BoolRef], dict[str, z3.
     return length, constraints, terms, counted
 
 
-def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
-    """The plan of least cost (COST_DOC) among all plans of at most ``horizon`` actions.
+def optimal(problem: Problem, limits: Limits | None = None, firsts: Sequence[Action] | None = None) -> SearchResult:
+    """The plan of least cost (COST_DOC) among all plans of at most ``horizon`` actions (with ``firsts``, as
+    ``shortest``'s: at least one action, the first one of ``firsts``).
 
     Lexicographic, term by term in COST_TERMS order, by bisection: any plan first; then for each
     term, between a floor (0, then one above the last unsatisfiable bound) and the best value a
@@ -445,6 +457,11 @@ def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
     started = time.perf_counter()
     with _solver_for(Optimal, problem) as kept:
         solver, terms, assumed = kept.solver, kept.terms, kept.fixing(problem.scenario)
+        if firsts is not None:
+            if problem.horizon < 1:
+                return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 0, "proved: no plan of at least one action "
+                                    "within a horizon of 0")
+            assumed.append(kept.literal(z3.And(kept.length >= 1, _first_in(kept.enc.actions[0], firsts))))
         guess, model, checks = kept.last_cost, None, 0
         if guess is not None:
             verdict, checks = kept.check(limits, started, *assumed, *kept.costing(guess)), 1

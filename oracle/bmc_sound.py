@@ -70,7 +70,7 @@ from spec.errors import EngineError
 from spec.lanes import Lane
 from spec.motion import ramp_s
 from spec.scenario import Problem, Scenario
-from spec.sound import EPS_M, Checks, follower_limit_m, rear_binds, sensed_extents
+from spec.sound import EPS_M, Checks, SoundState, advance, follower_limit_m, rear_binds, sensed_extents
 from spec.state import State
 from spec.windows import NO_SPEED, Instant, Stretch, Window, sound_table
 
@@ -560,8 +560,37 @@ class SoundEncoding:
 
     def start_refused(self, scenario: Scenario) -> bool:
         """Whether ``scenario``'s start is refused (the start's conditions on its values, simplified to a constant)."""
+        return z3.is_false(self._at(scenario, self.start_safe))
+
+    def _at(self, scenario: Scenario, term: z3.BoolRef) -> z3.BoolRef:
+        """``term`` at ``scenario``'s interval ends, simplified (to a constant: they are its only unknowns)."""
         fixed = [(p, z3.RealVal(v)) for p, v in self.values(scenario)]
-        return z3.is_false(z3.simplify(z3.substitute(self.start_safe, *fixed) if fixed else self.start_safe))
+        return z3.simplify(z3.substitute(term, *fixed) if fixed else term)
+
+    def holds(self, scenario: Scenario, actions: Sequence[Action], goal: bool) -> bool:
+        """Whether ``actions``, a sequence known whole (``spec.commitment.Proofs.holds``), keep every condition from
+        ``scenario``'s start: each step's window (``SoundTable.window`` at the step's own state, its lookup rule
+        evaluated here, every state being known; cut where the ramp into the next action starts), the followers
+        classified at each move into the left lane as ``transition`` does, then the continuation (its window and its
+        end; with ``goal``, the goal at its boundary). No prune and no count of lane changes: an escape is neither
+        a plan's step nor a move towards the goal."""
+        table, lane = self.table, scenario.lane
+        state = SoundState(lane, 0, 0, 0, 0, None, None)
+        start = table.start[lane]
+        follows: list[Cond] = [_not(self._held(v, start.boundary, ABSOLUTE)) for v in self.same]
+        conditions: list[Cond] = []
+        for k, action in enumerate(actions):
+            following = actions[k + 1] if k + 1 < len(actions) else None
+            window = table.state_window(state, action, following)
+            if ACTION_RULES[action].to_lane is Lane.LEFT:
+                follows = [_not(self._held(v, window.boundary, ABSOLUTE)) for v in self.same]
+            conditions += self._safe(window, ABSOLUTE, follows)
+            state = advance(state, action, self.grid, table.speeds_mps[table.action_speed[action]])
+        window = table.state_window(state, None)
+        if goal:
+            conditions += self._goal(window, ABSOLUTE, state.lane)
+        conditions += [*self._safe(window, ABSOLUTE, follows), *self._end(window, ABSOLUTE, state.lane, follows)]
+        return z3.is_true(self._at(scenario, _term(_and(*conditions))))
 
 
 class Unrolling:

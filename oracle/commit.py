@@ -1,19 +1,9 @@
-"""The sound model's commitment semantics in the interpreter: committed actions, a proved escape, a predicted
-continuation (``spec.escapes``).
+"""The sound model's commitment semantics in the interpreter: its proofs (``Proofs``) for the answer
+``spec.commitment`` composes, and the checker every engine's answer is validated by (``validate``).
 
-An answer is found in three steps, each on the rules ``spec`` states:
-
-1. the start: one that already breaks the specification is ``unsafe_start`` (its violation, and the lane's first
-   escape to take at once); one where the goal holds for every position and which is safe for ever is the empty
-   plan, whole;
-2. the **committable** first actions: enabled, safe at every instant (``SoundRules.step_violation``) and with an
-   escape proved from where they end (``escape_from``); none is "no plan" naming, per action, what refuses it;
-3. the **predicted** plan: the strategy's search (sensible, shortest, optimal) under nominal motion
-   (``spec.escapes.nominal``), its first action one of the committable ones. Its **committed** part is its longest
-   prefix (at most ``Commitment.most_actions``) whose steps are safe and from whose end an escape is proved; the
-   whole plan when the sound model proves it to its goal and for ever after (no escape needed). The rest is the
-   prediction.
-
+The proofs are ``spec.sound``'s: a sequence known whole is checked step by step, each step's window ending where the
+ramp into the next starts (``SoundRules.step_violation``'s ``following``), and its end by the minimal-risk manoeuvre
+(``continuation_violation``); the prediction is the paper's rules over integer offsets (``oracle.offsets``).
 The pipeline (``oracle.planner``) asks the final model, then the preparations model, as for any answer.
 """
 
@@ -21,7 +11,7 @@ from __future__ import annotations
 
 import heapq
 from collections.abc import Container, Iterable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import lru_cache
 
 from oracle import bitplan, sound
@@ -29,20 +19,15 @@ from oracle.interpreter import problem_goal, problem_step
 from oracle.offsets import OffsetSearch
 from oracle.search import depth_first
 from oracle.sound import Refusal, rules_for, start
-from spec.actions import ACTION_RULES, Action
+from spec.actions import Action
 from spec.answers import Commit, Limits, SearchResult, Status, Strategy
+from spec.commitment import answer, commitment, lane_after, split
 from spec.cost import COST_DOC, COST_TERMS, action_cost
-from spec.escapes import COMMIT, Commitment, Escape, unsafe_start_escape
-from spec.lanes import Lane
+from spec.escapes import Escape
 from spec.rules import disabled_reason
 from spec.scenario import Problem
 from spec.sound import SoundRules, SoundState, Violation
 from spec.state import Collision, State
-
-
-def commitment(problem: Problem) -> Commitment:
-    sc = problem.scenario.sound
-    return COMMIT if sc is None or sc.commitment is None else sc.commitment
 
 
 def _sound_rules(problem: Problem) -> SoundRules:
@@ -79,7 +64,7 @@ def escape_after(rules: SoundRules, state: SoundState, committed: Sequence[Actio
     """The first of ``allowed`` escapes from the lane ``committed`` ends in such that the committed actions and the
     escape's, as one sequence, are safe at every instant and end safe for ever under the minimal-risk manoeuvre
     (an escape keeps its actions' lane guards but not the model's count of lane changes)."""
-    lane = _lane_after(state.lane, committed)
+    lane = lane_after(state.lane, committed)
     for escape in allowed:
         if escape.from_lane is not lane:
             continue
@@ -89,17 +74,11 @@ def escape_after(rules: SoundRules, state: SoundState, committed: Sequence[Actio
     return None
 
 
-def _lane_after(lane: Lane, actions: Sequence[Action]) -> Lane:
-    for action in actions:
-        lane = ACTION_RULES[action].to_lane or lane
-    return lane
-
-
 def no_escape_reason(rules: SoundRules, state: SoundState, committed: Sequence[Action],
                      allowed: Sequence[Escape]) -> str:
     """Why no escape of ``allowed`` is proved after ``committed``: each one's first refusal, in short (the conflict,
     the vehicle, when)."""
-    lane, reasons = _lane_after(state.lane, committed), []
+    lane, reasons = lane_after(state.lane, committed), []
     for escape in allowed:
         if escape.from_lane is not lane:
             continue
@@ -116,27 +95,6 @@ def _short(found: Refusal) -> str:
             else found.describe())
 
 
-def _first(rules: SoundRules, allowed: Commitment, state: SoundState, action: Action) -> Proved | None:
-    """The escape proved after ``action`` as the first committed one from ``state``, if any."""
-    return escape_after(rules, state, (action,), allowed.allowed(_lane_after(state.lane, (action,))))
-
-
-class Firsts:
-    """The committable first actions from ``state`` as a set a search asks about: each one proved the first time it
-    is asked (a depth-first search asks only until the first live one that commits)."""
-
-    def __init__(self, problem: Problem, state: SoundState) -> None:
-        self.rules, self.allowed, self.state = _sound_rules(problem), commitment(problem), state
-        self.proved: dict[Action, Proved | None] = {}
-
-    def __contains__(self, action: object) -> bool:
-        if not isinstance(action, Action):
-            return False
-        if action not in self.proved:
-            self.proved[action] = _first(self.rules, self.allowed, self.state, action)
-        return self.proved[action] is not None
-
-
 def committable(problem: Problem, state: SoundState) -> tuple[dict[Action, Proved], dict[Action, str]]:
     """The first actions from the start that the sound model commits to (safe, with a proved escape after them),
     and for every other enabled action why not."""
@@ -146,8 +104,8 @@ def committable(problem: Problem, state: SoundState) -> tuple[dict[Action, Prove
     for action in Action:
         if disabled_reason(State(state.lane, (), (), state.lane_changes, 0), action, problem.rules) is not None:
             continue
-        escapes = allowed.allowed(_lane_after(state.lane, (action,)))
-        proved = _first(rules, allowed, state, action)
+        escapes = allowed.allowed(lane_after(state.lane, (action,)))
+        proved = escape_after(rules, state, (action,), escapes)
         if proved is not None:
             ok[action] = proved
             continue
@@ -182,34 +140,34 @@ def predict(problem: Problem, strategy: Strategy, firsts: Container[Action], lim
                                                            limits.timeout_s)
         return SearchResult(status, actions, explored, detail)
     if strategy is Strategy.SHORTEST:
-        parent: dict[tuple[int, int, int], tuple[tuple[int, int, int], Action] | None] = {begin[:3]: None}
+        parent: dict[Node, tuple[Node, Action] | None] = {_node(begin): None}
         layer = [begin]
         while layer:
             following = []
             for key in layer:
                 for action, nxt in successors(key):
-                    if nxt[:3] in parent:
+                    if _node(nxt) in parent:
                         continue
-                    parent[nxt[:3]] = (key[:3], action)
+                    parent[_node(nxt)] = (_node(key), action)
                     if search.goal(nxt):
-                        return SearchResult(Status.PLAN, _back(parent, nxt[:3]), len(parent))
+                        return SearchResult(Status.PLAN, _back(parent, _node(nxt)), len(parent))
                     following.append(nxt)
             layer = following
         return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(parent))
     queue: list[tuple[tuple[int, ...], int, Key, tuple[Action, ...]]] = [((0,) * len(COST_TERMS), 0, begin, ())]
-    fewest: dict[tuple[int, int, int], int] = {}
+    fewest: dict[Node, int] = {}
     pushed = 0
     while queue:
         cost, _, key, actions = heapq.heappop(queue)
-        if fewest.get(key[:3], key[3] + 1) <= key[3]:
+        if fewest.get(_node(key), key[3] + 1) <= key[3]:
             continue
-        fewest[key[:3]] = key[3]
+        fewest[_node(key)] = key[3]
         if key[3] > 0 and search.goal(key):
             return SearchResult(Status.PLAN, actions, len(fewest), f"optimal under {COST_DOC}",
                                 extra={"cost": dict(zip(COST_TERMS, cost, strict=True)),
                                        "cost_order": list(COST_TERMS)})
         for action, nxt in successors(key):
-            if fewest.get(nxt[:3], nxt[3] + 1) <= nxt[3]:
+            if fewest.get(_node(nxt), nxt[3] + 1) <= nxt[3]:
                 continue
             pushed += 1
             added = action_cost(action, form.lanes[nxt[0]])
@@ -220,8 +178,17 @@ def predict(problem: Problem, strategy: Strategy, firsts: Container[Action], lim
     return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), len(fewest))
 
 
-def _back(parent: dict[tuple[int, int, int], tuple[tuple[int, int, int], Action] | None],
-          key: tuple[int, int, int]) -> tuple[Action, ...]:
+Node = tuple[int, int, int, bool]  # a search node: the offsets, and whether an action was taken
+
+
+def _node(key: Key) -> Node:
+    """What a search visits a key as: its offsets, and whether it is past the start. The start is a node of its own
+    (its successors are the committable actions only, and it is never the goal): a plan that comes back to the
+    start's offsets (a drive that moves nothing) is a plan, not a revisit."""
+    return (*key[:3], key[3] > 0)
+
+
+def _back(parent: dict[Node, tuple[Node, Action] | None], key: Node) -> tuple[Action, ...]:
     actions = []
     link = parent[key]
     while link is not None:
@@ -231,38 +198,52 @@ def _back(parent: dict[tuple[int, int, int], tuple[tuple[int, int, int], Action]
     return tuple(reversed(actions))
 
 
+class Interpreter:
+    """The interpreter's proofs of one problem (``spec.commitment.Proofs``), each sequence answered once."""
+
+    def __init__(self, problem: Problem) -> None:
+        self.problem, self.rules, self.first = problem, _sound_rules(problem), start(problem)
+        self._held: dict[tuple[tuple[Action, ...], bool], bool] = {}
+
+    def start_violation(self) -> str | None:
+        hit = self.rules.start_violation(self.first)
+        return None if hit is None else hit.describe()
+
+    def holds(self, actions: Sequence[Action], goal: bool) -> bool:
+        key = (tuple(actions), goal)
+        if key not in self._held:
+            why, end = sequence_refusal(self.rules, self.first, actions)
+            self._held[key] = why is None and (not goal or self.rules.goal_holds(end, self.problem.goal)) \
+                and self.rules.continuation_violation(end) is None
+        return self._held[key]
+
+    def predict(self, strategy: Strategy, firsts: Container[Action], limits: Limits) -> SearchResult:
+        return predict(self.problem, strategy, firsts, limits)
+
+    def no_plan_beyond(self) -> bool:
+        return bitplan.beyond_horizon(self.problem).status is Status.NO_PLAN
+
+    def why_not(self, action: Action) -> str:
+        found = self.rules.step_violation(self.first, action)
+        if found is not None:
+            return found.describe()
+        escapes = commitment(self.problem).allowed(lane_after(self.first.lane, (action,)))
+        return "no escape after it: " + no_escape_reason(self.rules, self.first, (action,), escapes)
+
+    def states(self, actions: Sequence[Action]) -> tuple[State, ...]:
+        return states_along(self.problem, actions)
+
+
+@lru_cache(maxsize=64)
+def proofs(problem: Problem) -> Interpreter:
+    """The interpreter's proofs of ``problem``, kept for the last few problems: the pipeline's validation of an
+    answer asks the same sequences again."""
+    return Interpreter(problem)
+
+
 def solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult:
-    """The interpreter's answer under the commitment semantics (see the module's docstring)."""
-    rules, first = _sound_rules(problem), start(problem)
-    allowed = commitment(problem)
-    hit = rules.start_violation(first)
-    if hit is not None:
-        take = unsafe_start_escape(first.lane)
-        return SearchResult(Status.UNSAFE_START, (), 1, f"the start already breaks the safety specification: "
-                            f"{hit.describe()}; escape at once: {take.describe()}",
-                            commit=Commit((), take, (), escape_proved=False))
-    if rules.goal_holds(first, problem.goal) and rules.continuation_violation(first) is None:
-        return SearchResult(Status.PLAN, (), 1, "goal holds in the initial state, safe for ever",
-                            (sound.display(problem, first),), commit=Commit((), None, ()))
-    predicted = predict(problem, strategy, Firsts(problem, first), limits)
-    if predicted.status is not Status.PLAN:
-        ok, refused = committable(problem, first)
-        if not ok:
-            why = "; ".join(f"{a.value}: {r}" for a, r in refused.items())
-            return SearchResult(Status.NO_PLAN, (), 1, f"no committed step is provable (the AV keeps its "
-                                f"minimal-risk manoeuvre): {why}")
-        if predicted.status is Status.NO_PLAN_WITHIN_HORIZON and bitplan.beyond_horizon(problem).status is \
-                Status.NO_PLAN:
-            return SearchResult(Status.NO_PLAN, (), predicted.states_explored, "the paper's rules prove that no "
-                                "plan of any length reaches the goal (the predicted continuation's model)")
-        detail = (f"no predicted continuation reaches the goal within {problem.horizon} actions from a committable "
-                  f"step ({', '.join(a.value for a in ok)}) under the paper's rules" + (
-                      f": {predicted.detail}" if predicted.detail else ""))
-        return replace(predicted, detail=detail, states=())
-    committed, escape = split(problem, predicted.actions, allowed)
-    states = states_along(problem, committed)
-    return SearchResult(Status.PLAN, committed, predicted.states_explored, _detail(committed, escape, predicted),
-                        states, predicted.extra, Commit(committed, escape, predicted.actions[len(committed):]))
+    """The interpreter's answer under the commitment semantics (``spec.commitment.answer``)."""
+    return answer(problem, strategy, limits, proofs(problem))
 
 
 def states_along(problem: Problem, actions: Sequence[Action]) -> tuple[State, ...]:
@@ -273,46 +254,6 @@ def states_along(problem: Problem, actions: Sequence[Action]) -> tuple[State, ..
         state = rules.after(state, action)
         shown.append(sound.display(problem, state))
     return tuple(shown)
-
-
-def _detail(committed: tuple[Action, ...], escape: Escape | None, predicted: SearchResult) -> str:
-    if escape is None:
-        return "a whole plan, proved to its goal and safe for ever after" + (
-            f" ({predicted.detail})" if predicted.detail else "")
-    return (f"{len(committed)} committed action(s) with a proved escape; {len(predicted.actions) - len(committed)} "
-            "predicted to the goal under the paper's rules")
-
-
-def split(problem: Problem, actions: Sequence[Action], allowed: Commitment) -> tuple[tuple[Action, ...], Escape | None]:
-    """The committed part of a predicted plan and its escape: the whole plan when the sound model proves it (safe at
-    every instant, the goal for every position at its end, safe for ever after) within ``most_actions``; else its
-    longest prefix of at most ``most_actions`` actions after which an escape is proved (at least its first action,
-    which the search made committable). Remembered for the last few problems: the pipeline's validation of an
-    answer asks again."""
-    return _split(problem, tuple(actions), allowed)
-
-
-@lru_cache(maxsize=64)
-def _split(problem: Problem, actions: tuple[Action, ...], allowed: Commitment) -> tuple[tuple[Action, ...],
-                                                                                       Escape | None]:
-    rules, first = _sound_rules(problem), start(problem)
-    most = len(actions) if allowed.most_actions is None else min(allowed.most_actions, len(actions))
-    if most == len(actions):
-        why, end = sequence_refusal(rules, first, actions)
-        if why is None and rules.goal_holds(end, problem.goal) and rules.continuation_violation(end) is None:
-            return tuple(actions), None
-    state = first
-    for k in range(min(most, len(actions) - 1) - 1):  # a step unsafe before the next plan step ends every longer prefix
-        if rules.step_violation(state, actions[k], actions[k + 1]) is not None:
-            most = k + 1
-            break
-        state = rules.after(state, actions[k])
-    for n in range(most, 0, -1):
-        prefix = tuple(actions[:n])
-        proved = escape_after(rules, first, prefix, allowed.allowed(_lane_after(first.lane, prefix)))
-        if proved is not None:
-            return prefix, proved.escape
-    raise ValueError(f"the predicted plan's first action {actions[0].value} has no escape (it was committable)")
 
 
 @dataclass(frozen=True, slots=True)
@@ -350,7 +291,7 @@ def validate(problem: Problem, actions: Sequence[Action]) -> CommitValidation:
             return CommitValidation(False, f"step {n}: {reason}", shown)
         state = rules.after(state, action)
     allowed = commitment(problem)
-    escapes = allowed.allowed(_lane_after(first.lane, actions[:1]))
+    escapes = allowed.allowed(lane_after(first.lane, actions[:1]))
     if escape_after(rules, first, actions[:1], escapes) is None:
         found = rules.step_violation(first, actions[0])
         if found is not None:
@@ -360,7 +301,7 @@ def validate(problem: Problem, actions: Sequence[Action]) -> CommitValidation:
     predicted = _predicted_reason(problem, actions)
     if predicted is not None:
         return CommitValidation(False, f"predicted continuation: {predicted}", shown)
-    committed, escape = split(problem, actions, allowed)
+    committed, escape = split(problem, actions, proofs(problem))
     commit = Commit(committed, escape, tuple(actions[len(committed):]))
     what = ("a whole plan, proved to its goal and safe for ever after" if escape is None else
             f"{len(committed)} committed action(s), escape {escape.describe()}, {len(actions) - len(committed)} "

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import z3
 
-from oracle import bmc, bmc_sound
+from oracle import bmc, bmc_commit, bmc_sound
 from spec.answers import Limits, SearchResult, Strategy
 from spec.engines import Engine, register
 from spec.scenario import Problem
@@ -13,11 +13,15 @@ from spec.scenario import Problem
 
 def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult:
     """shortest: incremental bounds; optimal: lexicographic tightening. sensible is left to the search engines. A
-    scenario with a sound model goes to ``oracle.bmc_sound``.
+    scenario with a sound model goes to ``oracle.bmc_sound``; under the commitment semantics its proofs
+    (``oracle.bmc_commit``) composed by ``spec.commitment``.
     Z3 refusing a call because the context was interrupted (an interrupt that lands between checks) is an interrupt
     too, never an engine failure."""
-    solvers = bmc.SOLVERS if problem.scenario.sound is None else bmc_sound.SOLVERS
+    sound = problem.scenario.sound
+    solvers = bmc.SOLVERS if sound is None else bmc_sound.SOLVERS
     try:
+        if sound is not None and sound.commitment is not None:
+            return bmc_commit.solve(problem, strategy, limits)
         return solvers[strategy](problem, limits)
     except z3.Z3Exception as err:
         if bmc._cancelled(str(err)):
@@ -27,4 +31,4 @@ def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult
 
 Z3 = register(Engine("z3", tuple(bmc.SOLVERS), _solve,
                      "Z3 bounded model checking: shortest lengths, optimal plans, proofs within the horizon",
-                     sound=True))
+                     sound=True, commit=True))

@@ -16,6 +16,7 @@ scenario (and re-reads it on replay with ``pan -r``).
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass
 
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
@@ -99,23 +100,60 @@ def _left_hit(shape: Shape) -> str:
     return f"(left[i] >= {_cell(shape.grid, lo)} && left[i] <= {_cell(shape.grid, hi)})"
 
 
-def scenario_values(problem: Problem) -> str:
-    """The scenario as the injected verifier reads it: lane nl cells... nr cells... nt ft horizon; under the sound
-    model then each phantom's edge (``spec.sound.Sound.phantoms``: where its sensor's view ended), and 0, or 1 and
-    each vehicle's sensed interval (``spec.sound.sensed_extents``, same-direction then oncoming, lo hi each, as
-    Python's ``repr`` writes a double: ``strtod`` reads it back exactly)."""
+class Probe(enum.IntEnum):
+    """What a sound model's verifier is asked (``Query.probe``): the plan search, or one sequence of actions known
+    whole (the commitment semantics' proofs, ``spec.commitment.Proofs``): safe at every instant and safe for ever at
+    its end (``ESCAPE``), and the goal there too (``WHOLE``); the start safe (``START``); the display states along it
+    (``WALK``: its steps' checks only)."""
+
+    SEARCH = 0
+    ESCAPE = 1
+    WHOLE = 2
+    START = 3
+    WALK = 4
+
+
+@dataclass(frozen=True, slots=True)
+class Query:
+    """What a verifier is asked beyond its scenario. The paper model's: plans whose first action is one of ``firsts``
+    (None: any), at least one action long when ``firsts`` is given (the commitment semantics' prediction). The sound
+    model's: ``probe`` along ``sequence``."""
+
+    firsts: tuple[Action, ...] | None = None
+    probe: Probe = Probe.SEARCH
+    sequence: tuple[Action, ...] = ()
+
+
+SEARCH = Query()
+#: Every first action allowed (the paper model's ``firsts`` when a query names none).
+ALL_FIRSTS = (1 << len(ACTION_ORDER)) - 1
+
+
+def scenario_values(problem: Problem, query: Query = SEARCH) -> str:
+    """The scenario as the injected verifier reads it: lane nl cells... nr cells... nt ft horizon; under the paper's
+    rules then the first actions allowed (a bitmask in ``ACTION_ORDER``) and whether a plan must have an action;
+    under the sound model then each phantom's edge (``spec.sound.Sound.phantoms``: where its sensor's view ended),
+    and 0, or 1 and each vehicle's sensed interval (``spec.sound.sensed_extents``, same-direction then oncoming, lo hi
+    each, as Python's ``repr`` writes a double: ``strtod`` reads it back exactly), the measured speeds, then the
+    probe: 0, or its code, the sequence's length and its action codes."""
     s = problem.scenario
     first_target = s.target_indices[0] if s.target_indices else 0
     words: list[object] = [LANE_CODE[s.lane], len(s.left_lane), *s.left_lane, len(s.right_lane), *s.right_lane,
                            len(s.target_indices), first_target, problem.horizon]
-    if s.sound is not None:
-        words += [repr(float(p.dx_m)) for p in s.sound.phantoms()]
-        if s.left_m is None and s.right_m is None:
-            words.append(0)
-        else:
-            same, oncoming = sensed_extents(s.lane, s.left_lane, s.right_lane, s.grid, s.left_m, s.right_m)
-            words += [1, *(repr(float(x)) for pair in (*same, *oncoming) for x in pair)]
-        words += _measured_speeds(s)
+    if s.sound is None:
+        if query.firsts is None:
+            return " ".join(map(str, [*words, ALL_FIRSTS, 0]))
+        return " ".join(map(str, [*words, sum(1 << ACTION_ORDER.index(a) for a in query.firsts), 1]))
+    words += [repr(float(p.dx_m)) for p in s.sound.phantoms()]
+    if s.left_m is None and s.right_m is None:
+        words.append(0)
+    else:
+        same, oncoming = sensed_extents(s.lane, s.left_lane, s.right_lane, s.grid, s.left_m, s.right_m)
+        words += [1, *(repr(float(x)) for pair in (*same, *oncoming) for x in pair)]
+    words += _measured_speeds(s)
+    words.append(int(query.probe))
+    if query.probe is not Probe.SEARCH:
+        words += [len(query.sequence), *(ACTION_ORDER.index(a) for a in query.sequence)]
     return " ".join(map(str, words))
 
 
@@ -158,13 +196,15 @@ def render(shape: Shape, scenario: Scenario | None = None, horizon: int | None =
         "short right[MAXR];  /* oncoming vehicles, ascending */",
         "byte nl; byte nr; byte nt; byte ft; byte horizon;  /* the scenario: constant after start */",
         "bit lane; byte lc; byte steps; bool crashed; bool reached;",
+        "byte firsts; bit least;  /* the first actions allowed (bit per action), whether a plan needs one */",
         "byte i;  /* scratch index, reset to 0 at the end of every atomic step, so it is constant */",
         "",
         _INLINES.replace("LEFT_HIT", _left_hit(shape)),
         _goal_inline(goal, grid),
         "active proctype av() {",
         _load_literal(scenario, horizon) if scenario else _load_injected(),
-        "  d_step { collide(); if :: !crashed -> printf(\"INIT \"); print_state(); goal_check() :: else -> skip fi;",
+        "  d_step { collide(); if :: !crashed -> printf(\"INIT \"); print_state(); goal_check(); reached = reached && "
+        "!least :: else -> skip fi;",
         "           assert(!reached); i = 0 }",
         "  do",
         *(_option(action, grid) for action in ACTION_ORDER),
@@ -216,7 +256,7 @@ def _goal_inline(goal: GoalRule, grid: Grid) -> str:
 def _option(action: Action, grid: Grid) -> str:
     """One decision step as one atomic transition: guard, effect, check, ticks, goal."""
     rule = ACTION_RULES[action]
-    guard = ["!crashed", "steps < horizon"]
+    guard = ["!crashed", "steps < horizon", f"(steps > 0 || ((firsts >> {ACTION_ORDER.index(action)}) & 1))"]
     body = []
     if rule.from_lane is not None:
         guard.append(f"lane == {rule.from_lane.name}")
@@ -240,7 +280,7 @@ def _load_literal(scenario: Scenario, horizon: int | None) -> str:
     values = [f"lane = {LANE_CODE[scenario.lane]}", f"nl = {len(scenario.left_lane)}",
               f"nr = {len(scenario.right_lane)}", f"nt = {len(scenario.target_indices)}",
               f"ft = {scenario.target_indices[0] if scenario.target_indices else 0}",
-              f"horizon = {scenario.horizon if horizon is None else horizon}"]
+              f"horizon = {scenario.horizon if horizon is None else horizon}", f"firsts = {ALL_FIRSTS}", "least = 0"]
     values += [f"left[{i}] = {c}" for i, c in enumerate(scenario.left_lane)]
     values += [f"right[{i}] = {c}" for i, c in enumerate(scenario.right_lane)]
     return "  d_step { " + "; ".join(values) + " }"
@@ -248,14 +288,17 @@ def _load_literal(scenario: Scenario, horizon: int | None) -> str:
 
 def _load_injected() -> str:
     return f"""  c_code {{
-    char *text = getenv("{ENV_VAR}"); char *end; long v[2 * MAXL + 8]; int n = 0, j, at;
+    char *text = getenv("{ENV_VAR}"); char *end; long v[2 * MAXL + 10]; int n = 0, j, at;
     if (!text) {{ fprintf(stderr, "overtake: {ENV_VAR} is not set\\n"); exit(2); }}
-    while (n < 2 * MAXL + 8) {{ v[n] = strtol(text, &end, 10); if (end == text) break; n++; text = end; }}
+    while (n < 2 * MAXL + 10) {{ v[n] = strtol(text, &end, 10); if (end == text) break; n++; text = end; }}
     at = 0; now.lane = v[at++]; now.nl = v[at++];
     for (j = 0; j < now.nl; j++) now.left[j] = v[at++];
     now.nr = v[at++];
     for (j = 0; j < now.nr; j++) now.right[j] = v[at++];
     now.nt = v[at++]; now.ft = v[at++]; now.horizon = v[at++];
+    if (at + 2 != n || v[at] < 0 || v[at] > {ALL_FIRSTS} || v[at + 1] < 0 || v[at + 1] > 1) {{
+      fprintf(stderr, "overtake: malformed {ENV_VAR} (the first actions allowed)\\n"); exit(2); }}
+    now.firsts = v[at++]; now.least = v[at++];
     if (at != n || now.nl > MAXL || now.nr > MAXR || now.horizon > {MAX_HORIZON}) {{
       fprintf(stderr, "overtake: malformed {ENV_VAR}\\n"); exit(2); }}
   }};"""

@@ -48,7 +48,7 @@ from pathlib import Path
 from typing import IO
 
 from promela import sound as sound_model
-from promela.render import ENV_VAR, Shape, render, render_for, scenario_values, shape_of
+from promela.render import ENV_VAR, SEARCH, Probe, Query, Shape, render, render_for, scenario_values, shape_of
 from spec.actions import Action
 from spec.answers import SearchResult, Status, Strategy
 from spec.errors import EngineError, ToolMissing
@@ -212,7 +212,7 @@ def _compile(folder: Path, source: str, flags: list[str], serve: bool = False) -
 
 
 def search(problem: Problem, strategy: Strategy, timeout_s: float | None = None,
-           serve: bool = True) -> SearchResult:
+           serve: bool = True, query: Query = SEARCH) -> SearchResult:
     """Compile-once planning: the cached verifier, the scenario injected through the environment; by its server
     (``serve``), else a pan process per run. A scenario with a sound model is searched in the sound model's
     verifier (``promela.sound``), the others in the paper model's.
@@ -228,7 +228,7 @@ def search(problem: Problem, strategy: Strategy, timeout_s: float | None = None,
         built = verifier(shape, strategy)
         started = time.perf_counter()
         try:
-            return _search_with(built, problem, limit, started, serve)
+            return _search_with(built, problem, limit, started, serve, query)
         except (EngineError, OSError) as err:
             reason = str(err) if isinstance(err, EngineError) else f"the verifier would not start ({err})"
             if attempt == 1 and built.cached:
@@ -271,10 +271,10 @@ def _table_data(sound: Sound, grid: Grid, hold_floor_mps: float | None) -> tuple
     return data, f"{hashlib.sha256(data).hexdigest()[:24]}.txt"
 
 
-def injected(problem: Problem) -> str:
-    """What a verifier reads when it starts (``OVERTAKE_SCENARIO``): the scenario's values; under the sound model
-    then ``|`` and the path of its table."""
-    values = scenario_values(problem)
+def injected(problem: Problem, query: Query = SEARCH) -> str:
+    """What a verifier reads when it starts (``OVERTAKE_SCENARIO``): the scenario's values and the query's; under the
+    sound model then ``|`` and the path of its table."""
+    values = scenario_values(problem, query)
     return values if problem.scenario.sound is None else f"{values} | {table_file(problem)}"
 
 
@@ -283,15 +283,16 @@ def _replay_args(problem: Problem) -> list[str]:
     return ["-r", f"-w{HASH_BITS}", f"-m{problem.horizon + DEPTH_MARGIN}", f"{MODEL_FILE}.trail"]
 
 
-def _search_with(built: Verifier, problem: Problem, timeout_s: float, started: float, serve: bool) -> SearchResult:
-    values = injected(problem)
+def _search_with(built: Verifier, problem: Problem, timeout_s: float, started: float, serve: bool,
+                 query: Query = SEARCH) -> SearchResult:
+    values = injected(problem, query)
     replay_args = _replay_args(problem)
     if serve:
         server = _server(built.path)
         (server.folder / f"{MODEL_FILE}.trail").unlink(missing_ok=True)  # the last search's
         outcome = _pan(server.folder, lambda args, limit: server.run(values, args, limit), problem, timeout_s,
                        started)
-        if outcome.status is not Status.PLAN:
+        if outcome.status is not Status.PLAN or query.probe in (Probe.ESCAPE, Probe.WHOLE, Probe.START):
             return _with_extra(outcome, built.cached, "compile-once, served")
         found = _replay(lambda args, limit: server.run(values, args, limit), replay_args, problem,
                         outcome.states_explored)
@@ -301,7 +302,7 @@ def _search_with(built: Verifier, problem: Problem, timeout_s: float, started: f
         folder = Path(work)
         pan = _executing(str(built.path), folder, env)
         outcome = _pan(folder, pan, problem, timeout_s, started)
-        if outcome.status is not Status.PLAN:
+        if outcome.status is not Status.PLAN or query.probe in (Probe.ESCAPE, Probe.WHOLE, Probe.START):
             return _with_extra(outcome, built.cached, "compile-once")
         found = _replay(pan, replay_args, problem, outcome.states_explored)
         return _with_extra(found, built.cached, "compile-once")

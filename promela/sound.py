@@ -45,19 +45,32 @@ from spec.constants import MAX_HORIZON
 from spec.dynamics import Overtaken
 from spec.envelope import CLOSING_EPS_MPS
 from spec.errors import EngineError
+from spec.escapes import ESCAPES
 from spec.grid import Grid
 from spec.lanes import Lane
 from spec.models import GoalRule, ModelRules
 from spec.scenario import Problem
 from spec.sound import EPS_M, Checks, Sound, follower_limit_m, rear_binds, slowest_ahead_mps, vehicles
-from spec.windows import NO_SPEED, Binding, Instant, Window, shapes, sound_table
+from spec.windows import (
+    NO_SPEED,
+    Binding,
+    CutKey,
+    EarlyKey,
+    Instant,
+    ShapeKey,
+    Window,
+    cut_shapes,
+    shapes,
+    sound_table,
+)
 
 ENV_VAR = "OVERTAKE_SCENARIO"
 LANE_CODE = {Lane.LEFT: 0, Lane.RIGHT: 1}
 MOVED_CODE = {None: 0, Lane.LEFT: 1, Lane.RIGHT: 2}
 CONTINUATION = len(ACTION_ORDER)  # the action code of the minimal-risk continuation (action None)
 WORD_BITS = 32
-TABLE_FORMAT = 2  # the table file's layout (table_text): a verifier reads only its own
+MAX_ESCAPE = max(len(e.actions) for e in ESCAPES)  # a sequence probed is a committed part and its escape
+TABLE_FORMAT = 3  # the table file's layout (table_text): a verifier reads only its own
 TABLE_END = 271828  # the table's last number: a file cut short is refused
 
 
@@ -211,26 +224,56 @@ def table_text(sound: Sound, grid: Grid, hold_floor_mps: float | None = None) ->
     unstarted = replace(sound, start_mps=None)
     shape_lines = [_shape_lines(unstarted, grid, v, i not in table.action_speed.values(), hold_floor_mps)
                    for i, v in enumerate(table.speeds_mps)]
-    for before, action, lane, moved in sorted(table.relative, key=lambda k: (
-            k[0], _action_code(k[1]), LANE_CODE[k[2]], MOVED_CODE[k[3]])):
-        relative[before][_action_code(action)][LANE_CODE[lane]][MOVED_CODE[moved]] = len(windows)
+    placed: dict[object, int] = {}  # each shape's and early window's index, for their cut windows
+    for key in sorted(table.relative, key=_shape_order):
+        before, action, lane, moved = key
+        relative[before][_action_code(action)][LANE_CODE[lane]][MOVED_CODE[moved]] = placed[key] = len(windows)
         windows.append(shape_lines[before][action, lane, moved])
     early = []
-    for (lane, t, d, first, last, moved, action), w in sorted(table.early.items(), key=lambda kv: (
-            LANE_CODE[kv[0][0]], *kv[0][1:5], MOVED_CODE[kv[0][5]], _action_code(kv[0][6]))):
+    for at, w in sorted(table.early.items(), key=lambda kv: _early_order(kv[0])):
+        lane, t, d, first, last, moved, action = at
         early.append(f"{LANE_CODE[lane]} {t} {d} {first} {last} {MOVED_CODE[moved]} {_action_code(action)} "
                      f"{len(windows)}")
+        placed[at] = len(windows)
         windows.append(_window(w, sound))
     starts = []
     for lane in Lane:
         starts.append(str(len(windows)))
         windows.append(_window(table.start[lane], sound))
+    cuts = []
+    cut_lines = {i: _cut_lines(unstarted, grid, table.speeds_mps[i], hold_floor_mps)
+                 for i in set(table.action_speed.values())} if table.relative_cut else {}
+    for (key, following), _ in sorted(table.relative_cut.items(), key=lambda kv: (_shape_order(kv[0][0]), kv[0][1])):
+        before, step, lane, moved = key
+        if step is None:
+            raise ValueError("promela: a cut continuation window (only steps are cut)")
+        cuts.append(f"{placed[key]} {following} {len(windows)}")
+        windows.append(cut_lines[before][step, lane, moved, table.speeds_mps[following]])
+    for (at, following), w in sorted(table.early_cut.items(), key=lambda kv: (_early_order(kv[0][0]), kv[0][1])):
+        cuts.append(f"{placed[at]} {following} {len(windows)}")
+        windows.append(_window(w, sound))
     lines.append(str(len(windows)))
     lines += [line for w in windows for line in w]
     lines += [" ".join(str(k) for by_action in by_speed for by_lane in by_action for k in by_lane)
               for by_speed in relative]
-    lines += [str(len(early)), *early, " ".join(starts), str(TABLE_END)]
+    lines += [str(len(early)), *early, " ".join(starts), str(len(cuts)), *cuts, str(TABLE_END)]
     return "\n".join(lines) + "\n"
+
+
+def _shape_order(key: ShapeKey) -> tuple[int, ...]:
+    before, action, lane, moved = key
+    return before, _action_code(action), LANE_CODE[lane], MOVED_CODE[moved]
+
+
+def _early_order(key: EarlyKey) -> tuple[int, ...]:
+    lane, t, d, first, last, moved, action = key
+    return LANE_CODE[lane], t, d, first, last, MOVED_CODE[moved], _action_code(action)
+
+
+@functools.lru_cache(maxsize=64)
+def _cut_lines(sound: Sound, grid: Grid, before_mps: float, hold_floor_mps: float | None) -> dict[CutKey, list[str]]:
+    """The table's lines of the cut shapes after ``before_mps`` (``spec.windows.cut_shapes``), written once."""
+    return {key: _window(w, sound) for key, w in cut_shapes(sound, grid, before_mps, hold_floor_mps).items()}
 
 
 @functools.lru_cache(maxsize=64)
@@ -292,6 +335,17 @@ def _tables(shape: SoundShape) -> str:
         "/* the shapes: the window (-1: none) by speed before, action (CONTINUATION: none), lane, moved */",
         "static short *RELATIVE_;",
         "#define RELATIVE(b, a, l, m) RELATIVE_[(((b) * (CONTINUATION + 1) + (a)) * 2 + (l)) * 3 + (m)]",
+        "/* a step's window cut where the ramp into a following action of another speed starts (-1: none), by the",
+        "   window and the following action's speed: the commitment semantics' sequences known whole */",
+        "static int *CUT_;",
+        "#define CUT(w, f) CUT_[(w) * N_SPEEDS + (f)]",
+        "/* the probe (promela.render.Probe): 0 the plan search; else the one sequence SEQ[0..N_SEQ) asked about */",
+        "#define SQ_ESCAPE 1",
+        "#define SQ_WHOLE 2",
+        "#define SQ_START 3",
+        "#define SQ_WALK 4",
+        f"#define MAX_SEQ {MAX_HORIZON + MAX_ESCAPE}",
+        "static int SQ_PROBE, N_SEQ, SEQ[MAX_SEQ];",
         f"static const int INTO_LEFT[CONTINUATION] = {{{into_left}}};",
         f"static SoundPhantom PHANTOMS[N_PHANTOMS + 1] = {{{', '.join(phantoms)}}};",
         "/* where a vehicle in a cell can be, metres ahead of the AV: same direction (by the AV lane), oncoming */",
@@ -561,8 +615,23 @@ static const SoundWindow *sound_window(int action, double *dt, double *dx)
 /* whether an action keeps every condition over its window; its followers are left in step_fol */
 static int sound_step_ok(int action)
 {	double dt, dx, held_s = -1.0;
-	int i, k;
-	const SoundWindow *w = sound_window(action, &dt, &dx);
+	int i, k, next, cut;
+	const SoundWindow *w;
+	if (SQ_PROBE && (now.steps >= N_SEQ || SEQ[now.steps] != action)) { return 0; }  /* off the sequence probed */
+	if (SQ_PROBE == SQ_WALK)  /* the display states along it: no check */
+	{	for (k = 0; k < FW; k++) { step_fol[k] = (unsigned) now.fol[k]; }
+		return 1;
+	}
+	w = sound_window(action, &dt, &dx);
+	next = SQ_PROBE && now.steps + 1 < N_SEQ ? SEQ[now.steps + 1] : -1;
+	if (next >= 0 && ACTION_SPEED[next] != ACTION_SPEED[action])  /* known to follow: the window ends at its ramp */
+	{	cut = CUT((int) (w - WINDOWS), ACTION_SPEED[next]);
+		if (cut < 0)
+		{	fprintf(stderr, "overtake: no cut window for action %d before action %d\n", action, next);
+			exit(3);
+		}
+		w = &WINDOWS[cut];
+	}
 	if (INTO_LEFT[action] && held_passing)  /* when the passing window began (spec.sound.SoundRules.passing_from_s) */
 	{	held_s = now.out >= 0 ? now.out * UNIT_S : (now.lane == RIGHT ? 0.0 : -1.0);
 	}
@@ -589,14 +658,22 @@ static void sound_take_followers(void)
 	for (k = 0; k < FW; k++) { now.fol[k] = (int) step_fol[k]; }
 }
 
-/* whether a plan may end here: the goal holds for every position, and the minimal-risk manoeuvre is safe for ever */
+/* whether a plan may end here: the goal holds for every position, and the minimal-risk manoeuvre is safe for ever;
+   under a probe, where the sequence ends (an escape's: safe for ever, no goal; a walk's: its steps alone) */
 static int sound_done(void)
 {	double dt, dx, x, t, stop;
 	int i, k;
-	const SoundWindow *w = sound_window(CONTINUATION, &dt, &dx);
+	const SoundWindow *w;
+	if (SQ_PROBE == SQ_START) { return 1; }  /* called only from a start not refused */
+	if (SQ_PROBE && now.steps != N_SEQ) { return 0; }
+	if (SQ_PROBE == SQ_WALK) { return 1; }
+	w = sound_window(CONTINUATION, &dt, &dx);
 	x = w->bx + dx;
 	t = w->bt + dt;
+	if (SQ_PROBE != SQ_ESCAPE)
+	{
 GOAL
+	}
 	for (k = 0; k < w->n; k++)
 	{	if (sound_stretch_refused(&w->s[k], dt, dx, (const unsigned *) now.fol, -1.0)) { return 0; }
 	}
@@ -769,6 +846,14 @@ static void sound_load_table(const char *path)
 	}
 	START_WINDOW[0] = table_int(0, N_WINDOWS - 1, "a start window");
 	START_WINDOW[1] = table_int(0, N_WINDOWS - 1, "a start window");
+	CUT_ = table_alloc(N_WINDOWS * N_SPEEDS, sizeof(int));
+	for (i = 0; i < N_WINDOWS * N_SPEEDS; i++) { CUT_[i] = -1; }
+	n = table_int(0, 10000000, "cut windows");
+	for (k = 0; k < n; k++)
+	{	i = table_int(0, N_WINDOWS - 1, "a cut window's step");
+		j = table_int(0, N_SPEEDS - 1, "a cut window's following speed");
+		CUT(i, j) = table_int(0, N_WINDOWS - 1, "a cut window");
+	}
 	if (table_int(TABLE_END, TABLE_END, "its end") != TABLE_END) { sound_bad_table("its end"); }
 	while (*table_at == ' ' || *table_at == '\n' || *table_at == '\t' || *table_at == '\r') { table_at++; }
 	if (*table_at) { sound_bad_table("more after its end"); }
@@ -777,9 +862,10 @@ static void sound_load_table(const char *path)
 /* the scenario: lane nl cells... nr cells... nt ft horizon, each phantom's edge (dx: where its sensor's view ends),
    then 0, or 1 and each vehicle's sensed interval (lo hi, same-direction then oncoming), then 0, or 1 and for each
    vehicle (same-direction then oncoming) 0, or 1 and its interval at the plan's start and its own dynamics there (lo
-   hi low high top: spec.sound.vehicles), then | and the path of the sound model's table; the vehicles as intervals
+   hi low high top: spec.sound.vehicles), then the probe: 0, or its code, the sequence's length and its actions' codes,
+   then | and the path of the sound model's table; the vehicles as intervals
    (those, or their cells' extents, widened), then the phantoms */
-#define SOUND_VALUES (18 * (ROAD_CELLS + 1) + N_PHANTOMS + 16)
+#define SOUND_VALUES (18 * (ROAD_CELLS + 1) + N_PHANTOMS + MAX_SEQ + 18)
 static void sound_load(void)
 {	char *text = getenv("ENV_NAME"), *end, *bar;
 	static double v[SOUND_VALUES];
@@ -861,6 +947,20 @@ static void sound_load(void)
 		sound_motion(m, v[at + 2], v[at + 3], v[at + 4]);
 		at += 5;
 	}
+	if (at >= n) { sound_malformed("no probe"); }
+	SQ_PROBE = (int) v[at++];
+	if (SQ_PROBE < 0 || SQ_PROBE > SQ_WALK) { sound_malformed("the probe"); }
+	N_SEQ = 0;
+	if (SQ_PROBE)
+	{	if (at >= n || v[at] < 0 || v[at] > MAX_SEQ || at + 1 + (int) v[at] > n) { sound_malformed("the sequence"); }
+		N_SEQ = (int) v[at++];
+		for (j = 0; j < N_SEQ; j++)
+		{	if (v[at] < 0 || v[at] >= CONTINUATION) { sound_malformed("a sequence's action"); }
+			SEQ[j] = (int) v[at++];
+		}
+		now.horizon = N_SEQ;  /* a committed part and its escape may run past the plan's horizon */
+		now.seq = 1;
+	}
 	if (at != n) { sound_malformed("more numbers than the scenario holds"); }
 	held_passing = 0;
 	for (j = 0; j < n_same; j++) { if (NO_ACCELERATION && S_MOT[j].measured) { held_passing = 1; } }
@@ -882,7 +982,7 @@ def _option(action: Action, grid: Grid) -> str:
     if rule.from_lane is not None:
         guard.append(f"lane == {rule.from_lane.name}")
     if rule.changes_lane:
-        guard.append("lc < MAX_LC")
+        guard.append("(seq || lc < MAX_LC)")  # a probed sequence's escape keeps no count of lane changes
     effect = []
     if rule.to_lane is Lane.LEFT:
         effect += ["c_code { sound_take_followers(); }", "out = -1"]
@@ -925,6 +1025,7 @@ def render(shape: SoundShape) -> str:
         "short out = -1;  /* when the move into the passing lane the AV is in began, time units (-1: none) */",
         "int fol[FW];  /* followers: bit i of word i / 32 for the same-direction vehicle i */",
         "bool refused; bool reached; byte horizon;  /* the horizon: constant after the start */",
+        "bool seq;  /* a sequence is probed (constant after the start) */",
         "",
         _FUNCTIONS.replace("GOAL", _goal(goal)).replace("ENV_NAME", ENV_VAR),
         "",

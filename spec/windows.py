@@ -40,7 +40,7 @@ time units and ``d_cells`` cells plus the first ramp's gain (``gain_m``).
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 from spec.actions import ACTION_RULES, Action
 from spec.envelope import Reference
@@ -113,6 +113,7 @@ class Window:
 
 ShapeKey = tuple[int, Action | None, Lane, Lane | None]  # speed before, action (None: continuation), lane, moved
 EarlyKey = tuple[Lane, int, int, int, int, Lane | None, Action | None]  # lane, t, d, first, last, moved, action
+CutKey = tuple[Action, Lane, Lane | None, float]  # action, lane, moved, the speed of the action that follows
 
 
 @dataclass(frozen=True)
@@ -130,26 +131,35 @@ class SoundTable:
     relative: dict[ShapeKey, Window]
     early: dict[EarlyKey, Window]
     start: dict[Lane, Window]  # the plan's start, an instant
+    #: under the commitment semantics (a sequence known whole), each step window cut where the ramp into a following
+    #: action of another speed starts (``SoundRules.step_violation``'s ``following``), by the following's speed index
+    relative_cut: dict[tuple[ShapeKey, int], Window] = field(default_factory=dict)
+    early_cut: dict[tuple[EarlyKey, int], Window] = field(default_factory=dict)
 
     def speed_index(self, speed_mps: float | None) -> int:
         return NO_SPEED if speed_mps is None else self.speeds_mps.index(speed_mps)
 
     def window(self, lane: Lane, t_units: int, d_cells: int, first: int, last: int, moved: Lane | None,
-               action: Action | None) -> Window:
+               action: Action | None, following: int = NO_SPEED) -> Window:
         """The window of ``action`` (None: the continuation) from a state given by its lane, time, advance, first
-        and last speed (indices, ``NO_SPEED``) and the lane its last action moved into."""
-        found = self.early.get((lane, t_units, d_cells, first, last, moved, action))
+        and last speed (indices, ``NO_SPEED``) and the lane its last action moved into; ``following``: the speed
+        index of the action known to follow it (``NO_SPEED``: none known)."""
+        cut = action is not None and following not in (NO_SPEED, self.action_speed[action])
+        early_key = (lane, t_units, d_cells, first, last, moved, action)
+        found = self.early_cut.get((early_key, following)) if cut else self.early.get(early_key)
         if found is not None:
             return found
         if first == NO_SPEED:
             first = self.start_speed if action is None else self.action_speed[action]
         before = first if last == NO_SPEED else last
-        return self.relative[before, action, lane, moved].shifted(
-            t_units * self.unit_s, d_cells * self.cell_m + self.gain_m[first])
+        shape = self.relative_cut[(before, action, lane, moved), following] if cut else \
+            self.relative[before, action, lane, moved]
+        return shape.shifted(t_units * self.unit_s, d_cells * self.cell_m + self.gain_m[first])
 
-    def state_window(self, state: SoundState, action: Action | None) -> Window:
+    def state_window(self, state: SoundState, action: Action | None, following: Action | None = None) -> Window:
         return self.window(state.lane, state.t_units, state.d_cells, self.speed_index(state.first_mps),
-                           self.speed_index(state.last_mps), state.moved, action)
+                           self.speed_index(state.last_mps), state.moved, action,
+                           NO_SPEED if following is None else self.action_speed[following])
 
 
 def _instant(b: Bounded, t_s: float) -> Instant:
@@ -185,7 +195,12 @@ def sound_table(sound: Sound, grid: Grid, hold_floor_mps: float | None = None) -
     relative: dict[ShapeKey, Window] = {
         (index[before], *key): w for before in speeds
         for key, w in shapes(unstarted, grid, before, before not in action_speeds.values(), hold_floor_mps).items()}
+    cuts = sound.commitment is not None
+    relative_cut: dict[tuple[ShapeKey, int], Window] = {} if not cuts else {
+        ((index[before], action, lane, moved), index[v]): w for before in speeds if before in action_speeds.values()
+        for (action, lane, moved, v), w in cut_shapes(unstarted, grid, before, hold_floor_mps).items()}
     early_windows: dict[EarlyKey, Window] = {}
+    early_cut: dict[tuple[EarlyKey, int], Window] = {}
     first_end_s = max(ramp_s(rules.start_mps, v) for v in speeds)
     half_ramp_s = max(ramp_s(a, b) for a in speeds for b in speeds) / 2
     todo = [SoundState(lane, 0, 0, 0, 0, None, None) for lane in Lane]
@@ -203,6 +218,12 @@ def sound_table(sound: Sound, grid: Grid, hold_floor_mps: float | None = None) -
                 key = (state.lane, state.t_units, state.d_cells, _index(index, state.first_mps),
                        _index(index, state.last_mps), state.moved, action)
                 early_windows[key] = declared(rules.window(state, action), _at_boundary(ref))
+                if cuts and action is not None:
+                    end_s = (state.t_units + grid.units(action)) * rules.unit_s
+                    for v in set(action_speeds.values()) - {action_speeds[action]}:
+                        early_cut[key, index[v]] = declared(
+                            _cut(rules, rules.window(state, action), end_s, action_speeds[action], v),
+                            _at_boundary(ref))
             if action is not None:
                 todo.append(advance(state, action, grid, action_speeds[action]))
     start = {}
@@ -212,7 +233,7 @@ def sound_table(sound: Sound, grid: Grid, hold_floor_mps: float | None = None) -
         start[lane] = declared([(seg, [rules._bounded(p) for p in ref.pieces(0.0, 0.0)])], _at_boundary(ref))
     gains = tuple(ramp_gain_m(rules.start_mps, v) for v in speeds)
     return SoundTable(sound, grid, rules.unit_s, rules.cell_m, speeds, {a: index[v] for a, v in action_speeds.items()},
-                      index[rules.start_mps], gains, relative, early_windows, start)
+                      index[rules.start_mps], gains, relative, early_windows, start, relative_cut, early_cut)
 
 
 def _rules(sound: Sound, grid: Grid, hold_floor_mps: float | None) -> SoundRules:
@@ -240,6 +261,37 @@ def shapes(sound: Sound, grid: Grid, before_mps: float, continuation_only: bool 
                 ref = rules._reference(0.0, 0.0, before_mps, before_mps, action, before_mps)
                 found[action, lane, moved] = declared(shape, _at_boundary(ref))
     return found
+
+
+@functools.lru_cache(maxsize=64)
+def cut_shapes(sound: Sound, grid: Grid, before_mps: float, hold_floor_mps: float | None = None) -> dict[
+        CutKey, Window]:
+    """Every step window's shape after the speed ``before_mps`` cut where the ramp into a following action of another
+    speed starts, centred on the step's end (``SoundRules.step_violation`` with ``following``): by action, lane,
+    moved and the following action's speed. Only a sequence known whole (the commitment semantics) asks for them."""
+    rules = _rules(sound, grid, hold_floor_mps)
+    action_speeds = {a: rules.speeds[a] for a in Action}
+    found: dict[CutKey, Window] = {}
+    for lane in Lane:
+        for moved in (None, lane):
+            for action in Action:
+                if ACTION_RULES[action].from_lane not in (None, lane):
+                    continue
+                shape = rules.relative_window(before_mps, action, lane, moved)
+                ref = rules._reference(0.0, 0.0, before_mps, before_mps, action, before_mps)
+                end_s = grid.units(action) * rules.unit_s
+                for v in set(action_speeds.values()) - {action_speeds[action]}:
+                    found[action, lane, moved, v] = declared(_cut(rules, shape, end_s, action_speeds[action], v),
+                                                             _at_boundary(ref))
+    return found
+
+
+def _cut(rules: SoundRules, window: list[tuple[Segment, list[Bounded]]], end_s: float, speed_mps: float,
+         following_mps: float) -> list[tuple[Segment, list[Bounded]]]:
+    """``window`` of a step ending at ``end_s`` up to where the ramp into ``following_mps`` starts (its segments
+    from before the cut, each clipped there: ``SoundRules._clipped``)."""
+    cut_s = end_s - ramp_s(speed_mps, following_mps) / 2
+    return [rules._clipped(seg, pieces, cut_s) for seg, pieces in window if seg.t0_s < cut_s]
 
 
 def _index(index: dict[float, int], speed: float | None) -> int:

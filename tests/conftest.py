@@ -123,3 +123,24 @@ def check_aged_witness(engine: str, latency_s: float) -> None:
     answer = plan(scenario, Strategy.SHORTEST, engine=engine)
     assert answer.status is Status.PLAN and len(answer.actions) == AGED_SHORTEST_LENGTH[latency_s], answer
     assert answer.actions == plan(scenario, Strategy.SHORTEST).actions
+
+
+#: The built-ins the engines' commitments are compared on (each with a plan under the paper's rules).
+COMMITTED_BUILT_INS = ("paper_example", "one_target", "two_targets", "oncoming_forces_wait", "prep_case_b")
+
+
+def committed_answers(name: str, bounds: str, strategy: object, engine: str) -> tuple[object, object]:
+    """The interpreter's and ``engine``'s answers (unchecked) for a built-in under ``bounds`` and the commitment
+    semantics, their statuses the same ("no plan" and "no plan within the horizon" alike: only the interpreter
+    proves the former of the prediction)."""
+    from oracle.planner import solve
+    from spec.answers import Status
+    from spec.escapes import COMMIT
+
+    found = builtin(name)
+    assert found is not None
+    scenario = replace(found.load(), sound=Sound(profile(bounds), commitment=COMMIT))
+    ours, theirs = solve(scenario, strategy), solve(scenario, strategy, engine=engine)  # type: ignore[arg-type]
+    assert theirs.status is ours.status or {ours.status, theirs.status} == {
+        Status.NO_PLAN, Status.NO_PLAN_WITHIN_HORIZON}, (theirs.detail, ours.detail)
+    return ours, theirs

@@ -216,8 +216,8 @@ def sound_options(command: Any) -> Any:
 
 
 def whole_sound_options(command: Any) -> Any:
-    """``sound_options`` without the commitment semantics' (a campaign that holds several engines to each other:
-    only the interpreter answers commitments): the model is always the sound model's whole plans."""
+    """``sound_options`` without the commitment semantics' (a campaign, which names its semantics itself:
+    ``crossval --semantics``): the model is the sound model's whole plans."""
     return _sound_options(command, commitment=False)
 
 
@@ -265,8 +265,8 @@ def _sound_options(command: Any, commitment: bool) -> Any:
                      "asks of a vehicle being overtaken). See docs/sound.md."),
     ) + ((
         click.option("--semantics", default=None, help="Sound model: commit (committed actions with a proved "
-                     "escape and a predicted continuation; the default) or whole (every plan proved to its end; "
-                     "the answer Spin and Z3 give). See docs/sound.md."),
+                     "escape and a predicted continuation; the default) or whole (every plan proved to its end). "
+                     "See docs/sound.md."),
         click.option("--commit-max", default=None, help="Sound model, commit: the most actions one answer commits "
                      "to (default: as many as are proved)."),
         click.option("--escapes", default=None, help="Sound model, commit: the escapes it may prove, comma-separated "

@@ -32,6 +32,7 @@ from ci.shared.records import campaign_lock
 from oracle.coverage import CoverageTarget
 from spec.assumptions import DEFAULT_PROFILE, profile
 from spec.errors import ExitCode, OptionError
+from spec.escapes import Semantics
 from spec.lanes import Lane
 from spec.scenario import Scenario
 from spec.sound import Checks, Sound
@@ -84,12 +85,16 @@ class RateColumn(ProgressColumn):
 @click.option("--model", "model_name", type=click.Choice(MODELS), default="paper", show_default=True,
               help="The paper's rules, or the sound model (under --bounds and the options below; with --source "
                    "hypothesis the bounds are drawn with each scenario unless given).")
+@click.option("--semantics", "semantics_text", type=click.Choice([s.value for s in Semantics]),
+              default=Semantics.WHOLE.value, show_default=True,
+              help="With --model sound: whole plans, or the commitment semantics (committed actions, a proved escape, "
+                   "a predicted continuation; each engine must answer it). See docs/sound.md.")
 @whole_sound_options
 def crossval(source: str, space: str, property_text: str, engine_text: str, workers: int | None, executor_kind: str,
              scheduler: str | None, timeout_s: float, coverage_text: str, seed: int | None, count: int | None,
              max_reproducers: int,
              cell_m: float | None, horizon: int | None, out_dir: str, fresh: bool, list_only: bool, as_json: bool,
-             model_name: str, sound: Callable[[Scenario], Scenario]) -> None:
+             model_name: str, semantics_text: str, sound: Callable[[Scenario], Scenario]) -> None:
     """Check every property on scenarios from a source; exit 0 when all hold, 6 on any failure, 3 when none failed
     but one could not be decided, 7 when every property held but the coverage target was missed."""
     from ci.conformance.crossval import (
@@ -113,6 +118,7 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
     properties = _properties(property_text)
     engines = _engines(engine_text)
     model = _model(model_name, sound, grid, source, engines)
+    commit = _commit(Semantics(semantics_text), model, engines)
     if model is not None and coverage_text != CoverageTarget.NONE.value:
         raise OptionError("--coverage-target", coverage_text, "names the paper model's rules; a --model sound campaign "
                                                               "has no rule coverage yet")
@@ -138,13 +144,14 @@ def crossval(source: str, space: str, property_text: str, engine_text: str, work
         seed = int.from_bytes(os.urandom(4), "little")
     campaign = Campaign(source, tuple(chosen), engines, float(grid.cell_m), horizon, timeout_s,
                         the_space.describe() if the_space else None, seed if source == "hypothesis" else None, model,
-                        count)
+                        count, commit)
     if fresh:
         (out_path / VERDICTS_FILE).unlink(missing_ok=True)
     check_resumable(out_path / VERDICTS_FILE, campaign)  # before any line: one model and bounds per folder
     print_header(err, f"crossval: source {source}; properties {', '.join(p.value for p in chosen)}"
               + (f" (not applicable to these engines: {', '.join(skipped)})" if skipped else "")
-              + f"; engines {', '.join(engines)}; {_describe(model)}; on {executor.describe()}"
+              + f"; engines {', '.join(engines)}; {_describe(model)}"
+              + ("; the commitment semantics" if commit else "") + f"; on {executor.describe()}"
               + (f"; seed {seed}" if source == "hypothesis" else ""), out_dir)
     summary = Summary(CoverageTarget(coverage_text), float(grid.cell_m), paper=model is None)
     started = time.perf_counter()
@@ -218,6 +225,23 @@ def _model(name: str, sound: Callable[[Scenario], Scenario], grid: Any, source: 
             raise OptionError("--model", name, "the identity check's cell rules are not a campaign's model")
         return probe.sound
     return DRAWN if source == "hypothesis" else Sound(profile(DEFAULT_PROFILE))
+
+
+def _commit(semantics: Semantics, model: Sound | str | None, engines: tuple[str, ...]) -> bool:
+    """Whether the campaign holds the engines to the commitment semantics; bad input names the option and why."""
+    from spec.engines import get_engine, load_engines
+
+    if semantics is Semantics.WHOLE:
+        return False
+    if model is None:
+        raise OptionError("--semantics", semantics.value, "the commitment semantics is the sound model's: add "
+                                                          "--model sound")
+    for engine in engines:
+        if not get_engine(engine).commit:
+            able = ", ".join(e.name for e in load_engines().values() if e.commit) or "none"
+            raise OptionError("--engines", engine, f"engine {engine} answers the sound model's whole plans only, not "
+                                                   f"--semantics commit (answered by: {able})")
+    return True
 
 
 def _describe(model: Sound | str | None) -> str:

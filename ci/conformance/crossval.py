@@ -34,6 +34,7 @@ from oracle.coverage import CoverageTarget, rules_exercised, rules_on
 from spec.answers import Limits, Status
 from spec.constants import DEFAULT_HORIZON
 from spec.errors import OptionError, ScenarioError
+from spec.escapes import COMMIT
 from spec.files import scenario_from_dict, scenario_to_dict
 from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
@@ -185,6 +186,9 @@ class Campaign:
     sound: Sound | str | None = None
     #: At most this many scenarios (None: every one the source gives; ``spread`` picks them).
     count: int | None = None
+    #: Under the sound model, the commitment semantics (``spec.escapes``) instead of whole plans: its default
+    #: commitment, or one drawn with each scenario by the hypothesis source (``ci.conformance.hypo.commitments``).
+    commit: bool = False
 
     def key(self) -> dict[str, Any]:
         key = {"source": self.source, "properties": [p.value for p in self.properties], "engines": list(self.engines),
@@ -195,11 +199,15 @@ class Campaign:
             key["bounds"] = self.sound if isinstance(self.sound, str) else sound_to_table(self.sound)
         if self.count is not None:  # likewise: a campaign of every scenario keeps its key
             key["count"] = self.count
+        if self.commit:  # and a campaign of whole plans
+            key["semantics"] = "commit"
         return key
 
     def with_model(self, scenario: Scenario) -> Scenario:
-        """``scenario`` under the campaign's model (a drawn one keeps its own bounds)."""
-        return replace(scenario, sound=self.sound) if isinstance(self.sound, Sound) else scenario
+        """``scenario`` under the campaign's model (a drawn one keeps its own bounds), under its semantics."""
+        if not isinstance(self.sound, Sound):
+            return scenario
+        return replace(scenario, sound=replace(self.sound, commitment=COMMIT) if self.commit else self.sound)
 
 
 DRAWN = "drawn with each scenario"

@@ -34,6 +34,7 @@ from spec.constants import DEFAULT_HORIZON
 from spec.dynamics import Overtaken
 from spec.engines import get_engine
 from spec.errors import ScenarioError
+from spec.escapes import ALL_KINDS, Commitment, EscapeKind
 from spec.files import scenario_from_dict
 from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
@@ -103,6 +104,19 @@ def drawn_sound(draw: st.DrawFn) -> Sound:
     return Sound(Bounds(name, same, oncoming, error, phantoms, source, react, latency))
 
 
+#: The commitments the hypothesis source draws under the commitment semantics, stated: as many actions as are proved
+#: (the default, half the time), or at most one, two or three; every escape, or the minimal-risk manoeuvre with aborts
+#: only or with completions only (``spec.escapes.EscapeKind``).
+MOST_ACTIONS = (None, None, 1, 2, 3)
+ESCAPE_CHOICES = (ALL_KINDS, (EscapeKind.MINIMAL_RISK, EscapeKind.ABORT),
+                  (EscapeKind.MINIMAL_RISK, EscapeKind.COMPLETE))
+
+
+def commitments() -> st.SearchStrategy[Commitment]:
+    """A commitment from the stated choices (shrinking towards the default, ``COMMIT``)."""
+    return st.builds(Commitment, st.sampled_from(MOST_ACTIONS), st.sampled_from(ESCAPE_CHOICES))
+
+
 def speeds(lane: SpeedBounds, count: int) -> st.SearchStrategy[list[tuple[float, float]]]:
     """Measured speed intervals for ``count`` vehicles of a lane with ``lane``'s speeds: standing, anything from a
     standstill to the top, narrow readings anywhere from below the lane's slowest to above its top."""
@@ -126,14 +140,15 @@ def with_speeds(draw: st.DrawFn, scenario: Scenario, profiles: bool = True) -> S
 
 
 def scenarios(grid: Grid, horizon: int | None, model: Sound | str | None = None, measured: bool = False,
-              profiles: bool = False) -> st.SearchStrategy[Scenario]:
+              profiles: bool = False, commit: bool = False) -> st.SearchStrategy[Scenario]:
     """Valid scenarios on ``grid``: up to 4 same-direction and 2 oncoming vehicles anywhere in the window, either
     lane, any target count; drawn near the AV first (hypothesis shrinks towards small cells, so the window's
     start is put at the AV's cell and cells count outwards from it). Under ``model`` (``Campaign.sound``): the
     paper's rules (None), that sound model, or one drawn with each scenario (``DRAWN``); under the sound model, half
     the time what the snapshot measured of each vehicle's place, and with ``measured`` (every engine of the
     campaign answers it) half the time each vehicle's own speed (``with_speeds``; under either profile of vehicles
-    overtaken with ``profiles``, every engine answering both)."""
+    overtaken with ``profiles``, every engine answering both); with ``commit``, under the commitment semantics, a
+    commitment drawn with each scenario (``commitments``)."""
     cells = st.integers(0, grid.road_cells)
 
     @st.composite
@@ -148,6 +163,8 @@ def scenarios(grid: Grid, horizon: int | None, model: Sound | str | None = None,
         if sound is not None and sound.oncoming_view_m is None:
             view = draw(st.sampled_from((None, None, None, *VIEWS_M)))
             sound = sound if view is None else replace(sound, oncoming_view_m=view)
+        if sound is not None and commit:
+            sound = replace(sound, commitment=draw(commitments()))
         try:
             scenario = replace(make_scenario(lane, left, right, targets, horizon=h, grid=grid), sound=sound)
         except ScenarioError:
@@ -201,7 +218,7 @@ def hypothesis_job(name: str, campaign: Campaign, out_dir: str, profile_name: st
               database=DirectoryBasedExampleDatabase(str(out / "hypothesis" / name)))
     @given(scenarios(grid, campaign.horizon, campaign.sound,
                      all(get_engine(e).measured_speeds for e in campaign.engines),
-                     all(get_engine(e).overtaken_profile for e in campaign.engines)))
+                     all(get_engine(e).overtaken_profile for e in campaign.engines), campaign.commit))
     def test(scenario: Scenario) -> None:
         result = check_scenario(scenario, [prop], campaign.engines, campaign.timeout_s)
         if name not in done.get(result["key"], {}).get("verdicts", {}):

@@ -16,16 +16,20 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import cache
 
-from ci.conformance.properties import LieKind, Property, Run, RunKey, Runs
+from ci.conformance.properties import LieKind, Property, Run, RunKey, Runs, answers_model
 from oracle.bitplan import shortest
 from oracle.interpreter import enabled_actions, problem_step, validate
 from oracle.optimum import lexicographic_optimum, plan_cost
+from oracle.reach import exact_check
 from spec.actions import Action
 from spec.answers import Answer, Status, Strategy
+from spec.assumptions import profile
 from spec.errors import EngineError
+from spec.escapes import COMMIT
 from spec.library import builtin
 from spec.models import ModelChoice, ModelKind, models_for
 from spec.scenario import Problem, Scenario, problem_for
+from spec.sound import Sound
 from spec.state import Collision, State
 
 #: What a lying engine answers, given the scenario and the honest engine's answer: an answer or an engine error.
@@ -45,7 +49,8 @@ class Lie:
         """The lie as told to ``prop`` by each run it reads, or by the run it is about when it has one (optimality
         judges z3's optimal plan: its lies must come from there). So a run added to a property is lied about too."""
         liars = (prop.subject,) if prop.subject is not None else prop.runs
-        return [replace(self, liar=liar) for liar in liars]
+        scenario = self.scenario()
+        return [replace(self, liar=liar) for liar in liars if answers_model(liar.engine, scenario)]
 
 
 class LyingRuns(Runs):
@@ -149,6 +154,23 @@ def _waiting_first(scenario: Scenario, answer: Answer) -> Answer:
     return _plan(answer, scenario, (Action.DRIVE, *answer.actions))
 
 
+@cache
+def committed_example() -> Scenario:
+    """The paper's example under the paper profile's bounds and the commitment semantics: three actions committed to
+    (accelerate, move out, accelerate) with the abort after them, four predicted."""
+    return replace(_library("paper_example"), sound=Sound(profile("paper"), commitment=COMMIT))
+
+
+def _past_escape(scenario: Scenario, answer: Answer) -> Answer:
+    """The honest commitment with the first predicted action committed to as well, the same escape kept."""
+    parts = answer.commit
+    if parts is None or not parts.predicted or parts.escape is None:
+        raise ValueError(f"no commitment with an escape and a prediction to lie about on {scenario}")
+    committed = (*parts.committed, parts.predicted[0])
+    return replace(answer, actions=committed, commit=replace(parts, committed=committed,
+                                                             predicted=parts.predicted[1:]))
+
+
 def _states(change: Callable[[tuple[State, ...]], tuple[State, ...]]) -> Tell:
     return lambda scenario, answer: replace(answer, states=change(answer.states))
 
@@ -182,6 +204,7 @@ LIES: dict[LieKind, Lie] = {lie.kind: lie for lie in (
         _no_plan(Status.NO_PLAN, "no plan of any length")),
     Lie(LieKind.NO_PLAN_BEYOND, RunKey("spin", Strategy.SENSIBLE), several_beyond,
         _no_plan(Status.NO_PLAN, "no plan of any length")),
+    Lie(LieKind.COMMIT_PAST_ESCAPE, RunKey("spin", Strategy.SENSIBLE), committed_example, _past_escape),
 )}
 
 
@@ -189,6 +212,12 @@ def is_a_lie(lie: Lie, scenario: Scenario, honest: Answer, told: Answer | Engine
     """Why ``told`` is false on ``scenario``, judged without the properties (None: it is no lie, the stub is wrong)."""
     if isinstance(told, EngineError):
         return "an engine error is not an answer" if lie.kind is LieKind.ENGINE_ERROR else None
+    if lie.kind is LieKind.COMMIT_PAST_ESCAPE:
+        parts = told.commit
+        if parts is None or parts.escape is None:
+            return None
+        breach = exact_check(scenario, (*parts.committed, *parts.escape.actions))
+        return None if breach is None else f"{lie.kind.value}: {breach.describe()}"
     problem = problem_for(scenario, _model_of(scenario, told))
     verdict = validate(problem, told.actions) if told.status is Status.PLAN else None
     honest_plan = honest.status is Status.PLAN

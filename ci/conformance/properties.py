@@ -19,10 +19,14 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from oracle import commit, reach
+from oracle.commit import CommitValidation
 from oracle.planner import combined_status, cost_of, least_cost, solve
 from oracle.planner import verdict_for as validate
-from spec.actions import plan_text
-from spec.answers import Answer, Limits, Status, Strategy
+from spec.actions import Action, plan_text
+from spec.answers import Answer, Commit, Limits, Status, Strategy
+from spec.commitment import paper_problem
+from spec.engines import answers, get_engine
 from spec.errors import EngineError
 from spec.models import models_for
 from spec.scenario import Problem, Scenario, problem_for
@@ -42,6 +46,7 @@ class PropertyName(enum.Enum):
     TRACE_EQUALITY = "trace_equality"
     OPTIMALITY = "optimality"
     NO_PLAN_PROOF = "no_plan_proof"
+    MOTION_SAFETY = "motion_safety"
 
 
 class LieKind(enum.Enum):
@@ -62,6 +67,7 @@ class LieKind(enum.Enum):
     DEARER_PLAN = "dearer_plan"  # a valid plan, dearer than the least cost
     NO_PLAN_ONE_BEYOND = "no_plan_one_beyond"  # "no plan of any length"; the shortest is one step past the horizon
     NO_PLAN_BEYOND = "no_plan_beyond"  # "no plan of any length"; the shortest is several steps past the horizon
+    COMMIT_PAST_ESCAPE = "commit_past_escape"  # a committed part one action longer than its escape was proved after
 
 
 class Verdict(enum.Enum):
@@ -161,7 +167,9 @@ class Property:
         return tuple(k for k in self.runs if k.engine in engines)
 
     def verdict(self, scenario: Scenario, runs: Runs, engines: Sequence[str]) -> Outcome:
-        return self.check(scenario, [runs.get(k) for k in self.selected(engines)])
+        """The check on the runs of the engines selected that answer ``scenario``'s model (``spec.engines.answers``:
+        Z3 answers no commitment)."""
+        return self.check(scenario, [runs.get(k) for k in self.selected(engines) if answers_model(k.engine, scenario)])
 
 
 PROPERTIES: dict[PropertyName, Property] = {}
@@ -192,9 +200,19 @@ def _plans(runs: Sequence[Run]) -> list[Run]:
     return [r for r in runs if r.answer is not None and r.answer.status is Status.PLAN]
 
 
+def _whole(answer: Answer) -> tuple[Action, ...]:
+    """The action list an answer stands for: its plan; under the commitment semantics its committed part then its
+    predicted continuation (one plan of the paper's rules, ``spec.escapes``)."""
+    return answer.actions if answer.commit is None else (*answer.commit.committed, *answer.commit.predicted)
+
+
 def _actions(run: Run) -> str:
     assert run.answer is not None
-    return plan_text(run.answer.actions)
+    return plan_text(_whole(run.answer))
+
+
+def _committed(scenario: Scenario) -> bool:
+    return scenario.sound is not None and scenario.sound.commitment is not None
 
 
 # -- the checks ---------------------------------------------------------------------------------------
@@ -225,26 +243,41 @@ def validity(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
             problems.append(f"{r.key.label} {contradiction}")
     for r in _plans(runs):
         assert r.answer is not None
-        verdict = validate(_problem(scenario, r.answer), r.answer.actions)
+        if _committed(scenario) and r.answer.commit is None:
+            problems.append(f"{r.key.label} plan {_actions(r)} has no committed part and escape")
+            continue
+        verdict = validate(_problem(scenario, r.answer), _whole(r.answer))
         if not verdict.valid:
             problems.append(f"{r.key.label} plan {_actions(r)} is invalid: {verdict.reason}")
+        elif isinstance(verdict, CommitValidation) and r.answer.commit is not None and (
+                verdict.commit != r.answer.commit or r.answer.actions != r.answer.commit.committed):
+            problems.append(f"{r.key.label} commits to {_parts(r.answer.commit)}; the interpreter splits its plan "
+                            f"into {_parts(verdict.commit)}")
     return Outcome(Verdict.FAILED, "; ".join(problems)) if problems else _incomplete(runs) or HELD
+
+
+def _parts(parts: Commit | None) -> str:
+    if parts is None:
+        return "(none)"
+    escape = "none: a whole plan" if parts.escape is None else parts.escape.describe()
+    return f"[{plan_text(parts.committed)}] with escape {escape}"
 
 
 def sensible_identity(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
     plans = _plans(runs)
-    if len(plans) == len(runs) and len({(r.answer.model, r.answer.actions) for r in plans if r.answer}) > 1:
+    if len(plans) == len(runs) and len({(r.answer.model, _whole(r.answer), r.answer.commit) for r in plans
+                                        if r.answer}) > 1:
         return Outcome(Verdict.FAILED, "sensible plans differ: " + "; ".join(
             f"{r.key.label} {r.answer.model.value if r.answer and r.answer.model else '-'} {_actions(r)}"
-            for r in plans))
+            + (f", committed {_parts(r.answer.commit)}" if r.answer and r.answer.commit else "") for r in plans))
     return _incomplete(runs) or HELD
 
 
 def shortest_length(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
     plans = [r for r in _plans(runs) if r.answer is not None]
-    if len({(r.answer.model, len(r.answer.actions)) for r in plans if r.answer}) > 1:
+    if len({(r.answer.model, len(_whole(r.answer))) for r in plans if r.answer}) > 1:
         return Outcome(Verdict.FAILED, "shortest plans differ: " + "; ".join(
-            f"{r.key.label} {r.answer.model.value if r.answer.model else '-'} {len(r.answer.actions)} action(s)"
+            f"{r.key.label} {r.answer.model.value if r.answer.model else '-'} {len(_whole(r.answer))} action(s)"
             for r in plans if r.answer))
     return _incomplete(runs) or HELD
 
@@ -261,7 +294,7 @@ def trace_equality(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
     problems = []
     for r in _plans(runs):
         assert r.answer is not None
-        reference = validate(_problem(scenario, r.answer), r.answer.actions).states
+        reference = validate(_problem(scenario, r.answer), _whole(r.answer)).states
         if not r.answer.states:
             problems.append(f"{r.key.label} reports no states for its plan")
             continue
@@ -279,6 +312,8 @@ def optimality(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
         return Outcome(Verdict.FAILED, f"z3/optimal raised an engine error: {optimal.error}")
     if optimal is None or optimal.answer is None or optimal.status is not Status.PLAN:
         return _incomplete(runs) or HELD
+    if _committed(scenario):
+        return _optimal_prediction(scenario, runs, optimal)
     problem = _problem(scenario, optimal.answer)
     checked = validate(problem, optimal.answer.actions)
     if not checked.valid:
@@ -300,12 +335,75 @@ def optimality(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
     return Outcome(Verdict.FAILED, "; ".join(problems)) if problems else HELD
 
 
+def answers_model(engine: str, scenario: Scenario) -> bool:
+    """Whether ``engine`` answers ``scenario``'s model (its semantics, its measured speeds)."""
+    return answers(get_engine(engine), scenario)
+
+
+def motion_safety(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
+    """Under the sound model, every plan's actions (under the commitment semantics its committed part then its
+    escape) against the exact continuous-motion check (``oracle.reach.exact_check``): every motion inside the
+    bounds, phantoms and corners included."""
+    if scenario.sound is None:
+        return _incomplete(runs) or HELD
+    problems, checked = [], {}
+    for r in _plans(runs):
+        assert r.answer is not None
+        parts = r.answer.commit
+        escape = () if parts is None or parts.escape is None else parts.escape.actions
+        path = r.answer.actions if parts is None else (*parts.committed, *escape)
+        if path not in checked:  # the engines mostly agree: each path checked once
+            checked[path] = reach.exact_check(scenario, path)
+        breach = checked[path]
+        if breach is not None:
+            what = "plan" if parts is None else "committed part and escape"
+            problems.append(f"{r.key.label} {what} [{plan_text(path)}] breaks: {breach.describe()}")
+    return Outcome(Verdict.FAILED, "; ".join(problems)) if problems else _incomplete(runs) or HELD
+
+
+def _optimal_prediction(scenario: Scenario, runs: Sequence[Run], optimal: Run) -> Outcome:
+    """Under the commitment semantics the optimal strategy's plan is the prediction (``spec.commitment``): its
+    committed and predicted actions cost, under the paper's rules, what the interpreter's optimal commitment costs,
+    and no other engine's costs less (whether each is a commitment at all is ``validity``'s)."""
+    assert optimal.answer is not None
+    problem = _problem(scenario, optimal.answer)
+    paper = paper_problem(problem)
+    try:
+        cost = cost_of(paper, _whole(optimal.answer))
+    except ValueError as err:
+        return Outcome(Verdict.FAILED, f"z3/optimal plan {_actions(optimal)} is no plan of the paper's rules: {err}")
+    best = commit.solve(problem, Strategy.OPTIMAL, Limits())
+    problems = []
+    if best.status is Status.PLAN and best.commit is not None:
+        least = cost_of(paper, (*best.commit.committed, *best.commit.predicted))
+        if least != cost:
+            problems.append(f"z3/optimal's prediction costs {cost}, the interpreter's least is {least} "
+                            f"({plan_text((*best.commit.committed, *best.commit.predicted))})")
+    for other in _plans(runs):
+        if other is optimal or other.answer is None or other.answer.model is not optimal.answer.model:
+            continue
+        try:
+            other_cost = cost_of(paper, _whole(other.answer))
+        except ValueError:
+            continue  # validity reports it
+        if other_cost < cost:
+            problems.append(f"{other.key.label}'s prediction costs {other_cost}, less than z3/optimal's {cost}")
+    return Outcome(Verdict.FAILED, "; ".join(problems)) if problems else HELD
+
+
 def no_plan_proof(scenario: Scenario, runs: Sequence[Run]) -> Outcome:
     claims = [r for r in runs if r.status is Status.NO_PLAN]
     if not claims:
         return _incomplete(runs) or HELD
     deeper = scenario.horizon * DEEPER
     for kind in models_for(scenario.model):
+        if _committed(scenario):
+            answer = commit.solve(problem_for(scenario, kind, deeper), Strategy.SHORTEST, Limits())
+            if answer.status is Status.PLAN and answer.commit is not None:
+                return Outcome(Verdict.FAILED, f"{', '.join(r.key.label for r in claims)} claim no plan of any "
+                                               f"length; the {kind.value} model commits to one {DEEPER} times deeper: "
+                                               f"{plan_text((*answer.commit.committed, *answer.commit.predicted))}")
+            continue
         found = least_cost(problem_for(scenario, kind, deeper))
         if found.cost is not None:
             return Outcome(Verdict.FAILED, f"{', '.join(r.key.label for r in claims)} claim no plan of any length; "
@@ -321,7 +419,7 @@ for _prop in (
              "reaching the goal exactly at its last step; no engine raises an error or answers against its own "
              "stages", PLAIN_RUNS, 1, validity,
              (LieKind.UNSAFE_PLAN, LieKind.WRONG_PLAN, LieKind.FALSE_PLAN, LieKind.ENGINE_ERROR,
-              LieKind.INCOMPLETE_AS_ANSWER)),
+              LieKind.INCOMPLETE_AS_ANSWER, LieKind.COMMIT_PAST_ESCAPE)),
     Property(PropertyName.SENSIBLE_IDENTITY, "interpreter and Spin give identical sensible plans", SENSIBLE_RUNS, 2,
              sensible_identity, (LieKind.OTHER_SENSIBLE_PLAN,)),
     Property(PropertyName.SHORTEST_LENGTH, "every engine's shortest plan has the same length, under the same model",
@@ -335,5 +433,8 @@ for _prop in (
     Property(PropertyName.NO_PLAN_PROOF, f"where an engine claims no plan of any length, a search {DEEPER} times "
              "deeper than the horizon finds none", PLAIN_RUNS, 1, no_plan_proof,
              (LieKind.NO_PLAN_ONE_BEYOND, LieKind.NO_PLAN_BEYOND)),
+    Property(PropertyName.MOTION_SAFETY, "under the sound model every plan of every engine (under the commitment "
+             "semantics its committed part, then its escape) survives the exact continuous-motion check",
+             PLAIN_RUNS, 1, motion_safety, (LieKind.COMMIT_PAST_ESCAPE,)),
 ):
     register(_prop)

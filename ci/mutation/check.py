@@ -43,6 +43,7 @@ ROOT = Path(__file__).resolve().parents[2]
 CI_SPACE = "left=2@9..14,right=1@12..18,lanes=both"  # CI's exhaustive sweep (.ci/run), every property
 #: CI's 10.5 m hypothesis campaign's properties (.ci/run): every one but optimality
 CI_FINE_PROPERTIES = "existence,validity,sensible_identity,shortest_length,trace_equality,no_plan_proof"
+CI_SOUND_PROPERTIES = f"{CI_FINE_PROPERTIES},motion_safety"
 DETECTOR_TIMEOUT_S = 1800.0
 
 
@@ -130,7 +131,16 @@ DETECTORS: tuple[Detector, ...] = (
     Detector("crossval sound hypothesis 10.5 m (CI's)",
              lambda m, work: _crossval(work / "sound-hypothesis-10.5m", "--source", "hypothesis", "--seed",
                                        _ci_seed(), "--cell-m", "10.5", "--model", "sound", "--engines",
-                                       "interpreter,spin", "--properties", CI_FINE_PROPERTIES, "--timeout", "60"),
+                                       "interpreter,spin", "--properties", CI_SOUND_PROPERTIES, "--timeout", "60"),
+             FAILS_CI, (("HYPOTHESIS_PROFILE", "ci"),)),
+    Detector("crossval sound commitments exhaustive (CI's space)",
+             lambda m, work: _crossval(work / "sound-commit-exhaustive", "--source", "exhaustive", "--space", CI_SPACE,
+                                       "--model", "sound", "--semantics", "commit"),
+             FAILS_CI),
+    Detector("crossval sound commitments hypothesis (CI's)",
+             lambda m, work: _crossval(work / "sound-commit-hypothesis", "--source", "hypothesis", "--seed",
+                                       _ci_seed(), "--model", "sound", "--semantics", "commit", "--engines",
+                                       "interpreter,spin", "--timeout", "60"),
              FAILS_CI, (("HYPOTHESIS_PROFILE", "ci"),)),
     Detector("tests (all)", lambda m, work: _pytest("tests", SELF_CHECK), (1,), tests=True),
 )

@@ -18,6 +18,7 @@ from spec.actions import Action
 from spec.answers import Limits, Status, Strategy
 from spec.assumptions import profile
 from spec.escapes import COMMIT, Commitment, EscapeKind
+from spec.files import scenario_from_dict
 from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid, grid_for
 from spec.library import BUILTINS, builtin
 from spec.models import PIPELINE, ModelKind
@@ -241,3 +242,20 @@ def test_a_commitment_that_is_not_kept_to_its_end_is_what_the_claim_needs() -> N
     for most in (1, 2, 3):
         answer = plan(replace(scenario, sound=replace(scenario.sound, commitment=Commitment(most))))  # type: ignore
         assert answer.commit is not None and len(answer.commit.committed) <= most
+
+
+@pytest.mark.parametrize(("strategy", "length"), [(Strategy.SHORTEST, 5), (Strategy.OPTIMAL, 5)])
+def test_a_prediction_may_come_back_to_the_starts_offsets(strategy: Strategy, length: int) -> None:
+    """On 7 m cells with no oncoming vehicle a drive moves no cell: the plan (drive, out, accelerate twice, back)
+    passes through the start's offsets after one action. The prediction's start is a node of its own (only the
+    committable actions leave it, and it is never the goal), so that plan is found: Z3's bounded search found it
+    where a search that took the offsets for a revisit of the start answered a six-action plan."""
+    scenario = scenario_from_dict({
+        "lane": "left", "left_lane": [17, 33, 56, 70], "right_lane": [], "targets": 1, "horizon": 6, "cell_m": 7.0,
+        "bounds": {"same_mps": [6.5, 7.5], "oncoming_mps": [4.9, 9.1], "sensing_error_m": 0.0, "phantoms": True,
+                   "followers_react": True, "latency_s": 0.1, "oncoming_view_m": 52.5,
+                   "escapes": ["minimal_risk", "abort"]}})
+    answer = plan(scenario, strategy)
+    assert answer.status is Status.PLAN and answer.commit is not None
+    whole = (*answer.commit.committed, *answer.commit.predicted)
+    assert len(whole) == length and whole[0] is Action.DRIVE

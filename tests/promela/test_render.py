@@ -12,7 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from promela.render import Shape, render, render_for, scenario_values, standard_shape
+from promela.render import Query, Shape, render, render_for, scenario_values, standard_shape
+from spec.actions import ACTION_ORDER, Action
 from spec.grid import STANDARD_CELLS_M, Grid
 from spec.library import builtin
 from spec.models import GoalKind, ModelKind
@@ -62,4 +63,7 @@ def test_a_finer_grid_renders_its_own_numbers(cell_m) -> None:
 
 def test_scenario_values_line() -> None:
     problem = problem_for(builtin("prep_case_a").load(), ModelKind.PREPARATIONS)  # type: ignore[union-attr]
-    assert scenario_values(problem) == "1 4 10 11 13 14 1 17 2 0 30"  # the vehicle alongside is FV1
+    assert scenario_values(problem) == "1 4 10 11 13 14 1 17 2 0 30 31 0"  # the vehicle alongside is FV1; any first
+    drive_or_brake = Query(firsts=(Action.DRIVE, Action.BRAKE))  # action (31: the bit of each), none needed
+    assert scenario_values(problem, drive_or_brake).endswith(
+        f" 30 {(1 << ACTION_ORDER.index(Action.DRIVE)) | (1 << ACTION_ORDER.index(Action.BRAKE))} 1")

@@ -384,7 +384,7 @@ def test_the_no_acceleration_profile_holds_a_vehicle_from_the_move_out_not_from_
 
 
 @pytest.mark.parametrize(("values", "why"), [
-    (lambda v: v + " 1", "more numbers than the scenario holds"),
+    (lambda v: v + " 0 1", "more numbers than the scenario holds"),  # after the probe (0: the search)
     (lambda v: v[: v.rindex(" 1 ")] + " 2" + v[v.rindex(" 1 ") + 2:], "a vehicle's measured speed"),
     (lambda v: v.rsplit(" ", 1)[0], "a vehicle's measured speed"),
     (lambda v: " ".join([*v.split(" ")[:-3], "5.0", "4.0", v.split(" ")[-1]]), "a vehicle's measured speed"),
@@ -396,8 +396,8 @@ def test_a_malformed_measured_speed_is_refused_in_one_line(tmp_path: Path, value
     scenario = measured_speeds(make_scenario("left", [13], [], 1), [(6.0, 7.5)])
     problem = problem_for(replace(scenario, sound=Sound(profile("default"))), ModelKind.FINAL)
     built = runner.verifier(sound_model.shape_of(problem), Strategy.SENSIBLE)
-    given_values = runner.scenario_values(problem)
-    env = {**os.environ, "OVERTAKE_SCENARIO": f"{values(given_values)} | {runner.table_file(problem)}"}
+    given_values = runner.scenario_values(problem).removesuffix(" 0")  # the probe: the plan search
+    env = {**os.environ, "OVERTAKE_SCENARIO": f"{values(given_values)} 0 | {runner.table_file(problem)}"}
     done = subprocess.run([str(built.path), "-E"], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=60)
     assert done.returncode == 2, (given_values, values(given_values), done.stdout[-300:])
     assert done.stderr.strip() == f"overtake: malformed OVERTAKE_SCENARIO ({why})"

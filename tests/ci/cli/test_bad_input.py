@@ -364,6 +364,8 @@ CASES: list[Case] = [
     *choices("crossval", "--model"), *sound_options("crossval", "--model=sound", commitment=False),
     _case("crossval", "--bounds=paper", named="--bounds"),  # the bounds choose the sound model: --model sound
     _case("crossval", "--model=sound", "--coverage-target=grid", named="--coverage-target"),
+    *choices("crossval", "--semantics"),
+    _case("crossval", "--semantics=commit", named="--semantics"),  # the sound model's semantics: --model sound
     # the older conformance campaign
     *numbers("conform", "--timeout", "--cell-m"),
     *whole("conform", "--count", COUNT), *whole("conform", "--seed", SEED),

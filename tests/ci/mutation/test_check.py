@@ -103,7 +103,8 @@ def test_what_a_test_detector_counts_as_a_catch(code: int, summary: str, caught:
 def test_the_first_detector_runs_the_tests_that_mirror_the_mutated_module() -> None:
     from ci.mutation.check import DETECTORS, _module_tests
 
-    assert _module_tests(mutant("commit-one-action-past-its-escape")) == ["tests/oracle/test_commit.py"]
+    assert _module_tests(mutant("commit-one-action-past-its-escape")) == ["tests/spec/test_commitment.py",
+                                                                          "tests/oracle/test_commit.py"]
     assert _module_tests(mutant("spec-oncoming-odds-first-two-swapped")) == ["tests/sim/test_spawn_odds.py"]
     assert all((ROOT / t).is_file() for m in MUTANTS for t in m.tests)
     assert "tests/sim/test_safety_by_hand.py" in _module_tests(mutant("safety-closing-reversed"))

@@ -11,6 +11,7 @@ short left[MAXL];   /* left-lane vehicles, ascending */
 short right[MAXR];  /* oncoming vehicles, ascending */
 byte nl; byte nr; byte nt; byte ft; byte horizon;  /* the scenario: constant after start */
 bit lane; byte lc; byte steps; bool crashed; bool reached;
+byte firsts; bit least;  /* the first actions allowed (bit per action), whether a plan needs one */
 byte i;  /* scratch index, reset to 0 at the end of every atomic step, so it is constant */
 
 inline collide() {
@@ -35,23 +36,23 @@ inline goal_check() {
   i = ft; do :: i < ft + nt -> reached = reached && left[i] < AV_CELL; i++ :: else -> break od;
 }
 active proctype av() {
-  d_step { lane = 0; nl = 2; nr = 1; nt = 2; ft = 0; horizon = 30; left[0] = 12; left[1] = 14; right[0] = 40 }
-  d_step { collide(); if :: !crashed -> printf("INIT "); print_state(); goal_check() :: else -> skip fi;
+  d_step { lane = 0; nl = 2; nr = 1; nt = 2; ft = 0; horizon = 30; firsts = 31; least = 0; left[0] = 12; left[1] = 14; right[0] = 40 }
+  d_step { collide(); if :: !crashed -> printf("INIT "); print_state(); goal_check(); reached = reached && !least :: else -> skip fi;
            assert(!reached); i = 0 }
   do
-  :: d_step { !crashed && steps < horizon && lane == RIGHT && lc < MAX_LC ->
+  :: d_step { !crashed && steps < horizon && (steps > 0 || ((firsts >> 0) & 1)) && lane == RIGHT && lc < MAX_LC ->
        lane = LEFT; lc++; steps++; collide(); tick(); tick();
        if :: !crashed -> printf("STEP left_lane_change "); print_state(); goal_check(); assert(!reached) :: else -> skip fi; i = 0 }
-  :: d_step { !crashed && steps < horizon ->
+  :: d_step { !crashed && steps < horizon && (steps > 0 || ((firsts >> 1) & 1)) ->
        shift_left(-1); steps++; collide(); tick(); tick(); tick();
        if :: !crashed -> printf("STEP accelerate "); print_state(); goal_check(); assert(!reached) :: else -> skip fi; i = 0 }
-  :: d_step { !crashed && steps < horizon && lane == LEFT && lc < MAX_LC ->
+  :: d_step { !crashed && steps < horizon && (steps > 0 || ((firsts >> 2) & 1)) && lane == LEFT && lc < MAX_LC ->
        lane = RIGHT; lc++; steps++; collide(); tick(); tick();
        if :: !crashed -> printf("STEP right_lane_change "); print_state(); goal_check(); assert(!reached) :: else -> skip fi; i = 0 }
-  :: d_step { !crashed && steps < horizon ->
+  :: d_step { !crashed && steps < horizon && (steps > 0 || ((firsts >> 3) & 1)) ->
        steps++; collide(); tick(); tick();
        if :: !crashed -> printf("STEP drive "); print_state(); goal_check(); assert(!reached) :: else -> skip fi; i = 0 }
-  :: d_step { !crashed && steps < horizon ->
+  :: d_step { !crashed && steps < horizon && (steps > 0 || ((firsts >> 4) & 1)) ->
        shift_left(1); steps++; collide(); tick(); tick(); tick();
        if :: !crashed -> printf("STEP brake "); print_state(); goal_check(); assert(!reached) :: else -> skip fi; i = 0 }
   od

@@ -11,6 +11,7 @@ short left[MAXL];   /* left-lane vehicles, ascending */
 short right[MAXR];  /* oncoming vehicles, ascending */
 byte nl; byte nr; byte nt; byte ft; byte horizon;  /* the scenario: constant after start */
 bit lane; byte lc; byte steps; bool crashed; bool reached;
+byte firsts; bit least;  /* the first actions allowed (bit per action), whether a plan needs one */
 byte i;  /* scratch index, reset to 0 at the end of every atomic step, so it is constant */
 
 inline collide() {
@@ -36,33 +37,36 @@ inline goal_check() {
 }
 active proctype av() {
   c_code {
-    char *text = getenv("OVERTAKE_SCENARIO"); char *end; long v[2 * MAXL + 8]; int n = 0, j, at;
+    char *text = getenv("OVERTAKE_SCENARIO"); char *end; long v[2 * MAXL + 10]; int n = 0, j, at;
     if (!text) { fprintf(stderr, "overtake: OVERTAKE_SCENARIO is not set\n"); exit(2); }
-    while (n < 2 * MAXL + 8) { v[n] = strtol(text, &end, 10); if (end == text) break; n++; text = end; }
+    while (n < 2 * MAXL + 10) { v[n] = strtol(text, &end, 10); if (end == text) break; n++; text = end; }
     at = 0; now.lane = v[at++]; now.nl = v[at++];
     for (j = 0; j < now.nl; j++) now.left[j] = v[at++];
     now.nr = v[at++];
     for (j = 0; j < now.nr; j++) now.right[j] = v[at++];
     now.nt = v[at++]; now.ft = v[at++]; now.horizon = v[at++];
+    if (at + 2 != n || v[at] < 0 || v[at] > 31 || v[at + 1] < 0 || v[at + 1] > 1) {
+      fprintf(stderr, "overtake: malformed OVERTAKE_SCENARIO (the first actions allowed)\n"); exit(2); }
+    now.firsts = v[at++]; now.least = v[at++];
     if (at != n || now.nl > MAXL || now.nr > MAXR || now.horizon > 200) {
       fprintf(stderr, "overtake: malformed OVERTAKE_SCENARIO\n"); exit(2); }
   };
-  d_step { collide(); if :: !crashed -> printf("INIT "); print_state(); goal_check() :: else -> skip fi;
+  d_step { collide(); if :: !crashed -> printf("INIT "); print_state(); goal_check(); reached = reached && !least :: else -> skip fi;
            assert(!reached); i = 0 }
   do
-  :: d_step { !crashed && steps < horizon && lane == RIGHT && lc < MAX_LC ->
+  :: d_step { !crashed && steps < horizon && (steps > 0 || ((firsts >> 0) & 1)) && lane == RIGHT && lc < MAX_LC ->
        lane = LEFT; lc++; steps++; collide(); tick(); tick();
        if :: !crashed -> printf("STEP left_lane_change "); print_state(); goal_check(); assert(!reached) :: else -> skip fi; i = 0 }
-  :: d_step { !crashed && steps < horizon ->
+  :: d_step { !crashed && steps < horizon && (steps > 0 || ((firsts >> 1) & 1)) ->
        shift_left(-1); steps++; collide(); tick(); tick(); tick();
        if :: !crashed -> printf("STEP accelerate "); print_state(); goal_check(); assert(!reached) :: else -> skip fi; i = 0 }
-  :: d_step { !crashed && steps < horizon && lane == LEFT && lc < MAX_LC ->
+  :: d_step { !crashed && steps < horizon && (steps > 0 || ((firsts >> 2) & 1)) && lane == LEFT && lc < MAX_LC ->
        lane = RIGHT; lc++; steps++; collide(); tick(); tick();
        if :: !crashed -> printf("STEP right_lane_change "); print_state(); goal_check(); assert(!reached) :: else -> skip fi; i = 0 }
-  :: d_step { !crashed && steps < horizon ->
+  :: d_step { !crashed && steps < horizon && (steps > 0 || ((firsts >> 3) & 1)) ->
        steps++; collide(); tick(); tick();
        if :: !crashed -> printf("STEP drive "); print_state(); goal_check(); assert(!reached) :: else -> skip fi; i = 0 }
-  :: d_step { !crashed && steps < horizon ->
+  :: d_step { !crashed && steps < horizon && (steps > 0 || ((firsts >> 4) & 1)) ->
        shift_left(1); steps++; collide(); tick(); tick(); tick();
        if :: !crashed -> printf("STEP brake "); print_state(); goal_check(); assert(!reached) :: else -> skip fi; i = 0 }
   od

@@ -1,0 +1,74 @@
+"""Spin's proofs for the commitment semantics (``spec.commitment.Proofs``), each one run of a served verifier.
+
+A sequence known whole (a committed part and its escape, or a whole plan) is probed in the sound model's verifier
+(``promela.render.Probe``): its actions are the only ones enabled, each step's window cut where the ramp into the
+next starts (the table's cut windows, ``spec.windows.cut_shapes``), and the assertion fails where it ends safe for
+ever (with the goal, for a whole plan): a trail means "proved". The prediction is a search of the paper model's
+verifier with its first actions restricted to the committable ones. Spin proves no "no plan of any length": its
+answer is "no plan within the horizon" where the interpreter's may be "no plan".
+"""
+
+from __future__ import annotations
+
+from collections.abc import Container, Sequence
+
+from promela import runner
+from promela.render import Probe, Query
+from spec.actions import ACTION_ORDER, Action
+from spec.answers import Limits, SearchResult, Status, Strategy
+from spec.commitment import answer, enabled_firsts, paper_problem
+from spec.errors import EngineError
+from spec.scenario import Problem
+from spec.state import State
+
+
+class Spin:
+    """Spin's proofs of one problem, each sequence probed once."""
+
+    def __init__(self, problem: Problem, limits: Limits) -> None:
+        self.problem, self.limits = problem, limits
+        self._held: dict[tuple[tuple[Action, ...], bool], bool] = {}
+
+    def _probe(self, probe: Probe, actions: Sequence[Action]) -> SearchResult:
+        found = runner.search(self.problem, Strategy.SENSIBLE, self.limits.timeout_s,
+                              query=Query(probe=probe, sequence=tuple(actions)))
+        if found.status is Status.INCOMPLETE:
+            raise EngineError(f"spin: probing {probe.name.lower()} along "
+                              f"[{', '.join(a.value for a in actions)}] did not finish: {found.detail}")
+        return found
+
+    def start_violation(self) -> str | None:
+        if self._probe(Probe.START, ()).status is Status.PLAN:
+            return None
+        return "a vehicle's interval at the start (the verifier's start check)"
+
+    def holds(self, actions: Sequence[Action], goal: bool) -> bool:
+        key = (tuple(actions), goal)
+        if key not in self._held:
+            self._held[key] = self._probe(Probe.WHOLE if goal else Probe.ESCAPE, actions).status is Status.PLAN
+        return self._held[key]
+
+    def predict(self, strategy: Strategy, firsts: Container[Action], limits: Limits) -> SearchResult:
+        enabled = enabled_firsts(self.problem)  # only those are asked: a proof needs its lane guards kept
+        allowed = tuple(a for a in ACTION_ORDER if a in enabled and a in firsts)
+        if not allowed:
+            return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 1, "no first action is committable")
+        return runner.search(paper_problem(self.problem), strategy, limits.timeout_s, query=Query(firsts=allowed))
+
+    def no_plan_beyond(self) -> bool:
+        return False
+
+    def why_not(self, action: Action) -> str:
+        return "no escape is proved after it (its step and each escape allowed, probed as one sequence)"
+
+    def states(self, actions: Sequence[Action]) -> tuple[State, ...]:
+        walked = self._probe(Probe.WALK, actions)
+        if walked.status is not Status.PLAN or len(walked.states) != len(actions) + 1:
+            raise EngineError(f"spin: the walk along [{', '.join(a.value for a in actions)}] printed "
+                              f"{len(walked.states)} states for {len(actions)} actions")
+        return walked.states
+
+
+def solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult:
+    """Spin's answer under the commitment semantics (``spec.commitment.answer``)."""
+    return answer(problem, strategy, limits, Spin(problem, limits))
