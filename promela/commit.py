@@ -10,13 +10,14 @@ answer is "no plan within the horizon" where the interpreter's may be "no plan".
 
 from __future__ import annotations
 
+import time
 from collections.abc import Container, Sequence
 
 from promela import runner
 from promela.render import Probe, Query
 from spec.actions import ACTION_ORDER, Action
 from spec.answers import Limits, SearchResult, Status, Strategy
-from spec.commitment import answer, enabled_firsts, paper_problem
+from spec.commitment import ProofIncomplete, answer, enabled_firsts, paper_problem
 from spec.errors import EngineError
 from spec.scenario import Problem
 from spec.state import State
@@ -26,15 +27,16 @@ class Spin:
     """Spin's proofs of one problem, each sequence probed once."""
 
     def __init__(self, problem: Problem, limits: Limits) -> None:
-        self.problem, self.limits = problem, limits
+        self.problem, self.limits, self.started = problem, limits, time.perf_counter()
         self._held: dict[tuple[tuple[Action, ...], bool], bool] = {}
 
     def _probe(self, probe: Probe, actions: Sequence[Action]) -> SearchResult:
-        found = runner.search(self.problem, Strategy.SENSIBLE, self.limits.timeout_s,
-                              query=Query(probe=probe, sequence=tuple(actions)))
+        """One run of the sound verifier within what is left of the answer's time limit."""
+        left = self.limits.remaining(self.started, time.perf_counter()).timeout_s
+        found = runner.search(self.problem, Strategy.SENSIBLE, left, query=Query(probe=probe, sequence=tuple(actions)))
         if found.status is Status.INCOMPLETE:
-            raise EngineError(f"spin: probing {probe.name.lower()} along "
-                              f"[{', '.join(a.value for a in actions)}] did not finish: {found.detail}")
+            raise ProofIncomplete(f"spin: probing {probe.name.lower()} along "
+                                  f"[{', '.join(a.value for a in actions)}]: {found.detail}")
         return found
 
     def start_violation(self) -> str | None:
@@ -53,7 +55,8 @@ class Spin:
         allowed = tuple(a for a in ACTION_ORDER if a in enabled and a in firsts)
         if not allowed:
             return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 1, "no first action is committable")
-        return runner.search(paper_problem(self.problem), strategy, limits.timeout_s, query=Query(firsts=allowed))
+        left = limits.remaining(self.started, time.perf_counter()).timeout_s
+        return runner.search(paper_problem(self.problem), strategy, left, query=Query(firsts=allowed))
 
     def no_plan_beyond(self) -> bool:
         return False

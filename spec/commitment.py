@@ -34,8 +34,13 @@ from spec.scenario import Problem
 from spec.state import State
 
 
+class ProofIncomplete(Exception):
+    """An engine's proof that hit its limit (time, states): the answer is "search incomplete", never a refusal."""
+
+
 class Proofs(Protocol):
-    """What one engine proves of one problem, for the commitment semantics."""
+    """What one engine proves of one problem, for the commitment semantics (a proof that hits its limit raises
+    ``ProofIncomplete``)."""
 
     def start_violation(self) -> str | None:
         """How the start already breaks the safety specification, or None."""
@@ -138,7 +143,15 @@ def split(problem: Problem, actions: Sequence[Action], proofs: Proofs) -> tuple[
 
 
 def answer(problem: Problem, strategy: Strategy, limits: Limits, proofs: Proofs) -> SearchResult:
-    """The commitment semantics' answer to ``problem`` from ``proofs`` (see the module's docstring)."""
+    """The commitment semantics' answer to ``problem`` from ``proofs`` (see the module's docstring); "search
+    incomplete" when a proof or the prediction hit its limit."""
+    try:
+        return _answer(problem, strategy, limits, proofs)
+    except ProofIncomplete as err:
+        return SearchResult(Status.INCOMPLETE, (), 0, f"a proof did not finish: {err}")
+
+
+def _answer(problem: Problem, strategy: Strategy, limits: Limits, proofs: Proofs) -> SearchResult:
     hit = proofs.start_violation()
     if hit is not None:
         take = unsafe_start_escape(problem.scenario.lane)

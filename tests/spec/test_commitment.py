@@ -10,7 +10,7 @@ from dataclasses import replace
 from spec.actions import Action
 from spec.answers import Limits, SearchResult, Status, Strategy
 from spec.assumptions import profile
-from spec.commitment import Firsts, answer, split
+from spec.commitment import Firsts, ProofIncomplete, answer, split
 from spec.escapes import COMMIT, Commitment, EscapeKind
 from spec.lanes import Lane
 from spec.models import ModelKind
@@ -106,3 +106,12 @@ def test_firsts_proves_each_first_action_once_when_asked() -> None:
     firsts = Firsts(proofs, _problem())
     assert D in firsts and D in firsts and A not in firsts and "drive" not in firsts
     assert [a for a, _ in proofs.asked].count((D,)) == 1
+
+
+def test_a_proof_that_hits_its_limit_makes_the_answer_incomplete_never_a_refusal() -> None:
+    class Limited(Scripted):
+        def holds(self, actions: Sequence[Action], goal: bool) -> bool:
+            raise ProofIncomplete("time limit 0.1 s reached")
+
+    found = answer(_problem(), Strategy.SENSIBLE, Limits(), Limited(set(), (A, R, L)))
+    assert found.status is Status.INCOMPLETE and "time limit" in found.detail
