@@ -36,6 +36,9 @@ class Z3:
             return None
         return "a vehicle's interval at the start (the encoding's start conditions)"
 
+    def prefetch(self, asked: Sequence[tuple[tuple[Action, ...], bool]]) -> None:
+        """Nothing: each sequence is checked when asked (a simplification, no solver run)."""
+
     def holds(self, actions: Sequence[Action], goal: bool) -> bool:
         key = (tuple(actions), goal)
         if key not in self._held:

@@ -209,6 +209,9 @@ class Interpreter:
         hit = self.rules.start_violation(self.first)
         return None if hit is None else hit.describe()
 
+    def prefetch(self, asked: Sequence[tuple[tuple[Action, ...], bool]]) -> None:
+        """Nothing: each sequence is proved when asked (a depth-first prediction asks few)."""
+
     def holds(self, actions: Sequence[Action], goal: bool) -> bool:
         key = (tuple(actions), goal)
         if key not in self._held:

@@ -15,6 +15,7 @@ from collections.abc import Container, Sequence
 
 from promela import runner
 from promela.render import Probe, Query
+from promela.sound import MAX_BATCH
 from spec.actions import ACTION_ORDER, Action
 from spec.answers import Limits, SearchResult, Status, Strategy
 from spec.commitment import ProofIncomplete, answer, enabled_firsts, paper_problem
@@ -43,6 +44,22 @@ class Spin:
         if self._probe(Probe.START, ()).status is Status.PLAN:
             return None
         return "a vehicle's interval at the start (the verifier's start check)"
+
+    def prefetch(self, asked: Sequence[tuple[tuple[Action, ...], bool]]) -> None:
+        """Every sequence not yet proved, in runs of at most ``MAX_BATCH`` (``Probe.BATCH``: one path each)."""
+        todo = list(dict.fromkeys(q for q in asked if q not in self._held))
+        for start in range(0, len(todo), MAX_BATCH):
+            part = todo[start:start + MAX_BATCH]
+            left = self.limits.remaining(self.started, time.perf_counter()).timeout_s
+            batch = tuple((Probe.WHOLE if goal else Probe.ESCAPE, seq) for seq, goal in part)
+            found = runner.search(self.problem, Strategy.SENSIBLE, left, query=Query(probe=Probe.BATCH, batch=batch))
+            if found.status is Status.INCOMPLETE:
+                raise ProofIncomplete(f"spin: probing {len(part)} sequences together: {found.detail}")
+            held = found.extra.get("held")
+            if found.status is not Status.NO_PLAN_WITHIN_HORIZON or not isinstance(held, list):
+                raise EngineError(f"spin: a batch of {len(part)} sequences answered {found.status.value}")
+            for k, query in enumerate(part):
+                self._held[query] = k in held
 
     def holds(self, actions: Sequence[Action], goal: bool) -> bool:
         key = (tuple(actions), goal)

@@ -111,17 +111,19 @@ class Probe(enum.IntEnum):
     WHOLE = 2
     START = 3
     WALK = 4
+    BATCH = 5  # several sequences, each ``ESCAPE`` or ``WHOLE``, one path each: those held are printed
 
 
 @dataclass(frozen=True, slots=True)
 class Query:
     """What a verifier is asked beyond its scenario. The paper model's: plans whose first action is one of ``firsts``
     (None: any), at least one action long when ``firsts`` is given (the commitment semantics' prediction). The sound
-    model's: ``probe`` along ``sequence``."""
+    model's: ``probe`` along ``sequence``; ``BATCH``: each of ``batch`` (its kind and its sequence)."""
 
     firsts: tuple[Action, ...] | None = None
     probe: Probe = Probe.SEARCH
     sequence: tuple[Action, ...] = ()
+    batch: tuple[tuple[Probe, tuple[Action, ...]], ...] = ()
 
 
 SEARCH = Query()
@@ -135,7 +137,8 @@ def scenario_values(problem: Problem, query: Query = SEARCH) -> str:
     under the sound model then each phantom's edge (``spec.sound.Sound.phantoms``: where its sensor's view ended),
     and 0, or 1 and each vehicle's sensed interval (``spec.sound.sensed_extents``, same-direction then oncoming, lo hi
     each, as Python's ``repr`` writes a double: ``strtod`` reads it back exactly), the measured speeds, then the
-    probe: 0, or its code, the sequence's length and its action codes."""
+    probe: 0, its code (the start), or its code, the sequence's length and its action codes (a batch: how many, then
+    each one's kind, length and codes)."""
     s = problem.scenario
     first_target = s.target_indices[0] if s.target_indices else 0
     words: list[object] = [LANE_CODE[s.lane], len(s.left_lane), *s.left_lane, len(s.right_lane), *s.right_lane,
@@ -152,7 +155,11 @@ def scenario_values(problem: Problem, query: Query = SEARCH) -> str:
         words += [1, *(repr(float(x)) for pair in (*same, *oncoming) for x in pair)]
     words += _measured_speeds(s)
     words.append(int(query.probe))
-    if query.probe is not Probe.SEARCH:
+    if query.probe is Probe.BATCH:
+        words.append(len(query.batch))
+        for kind, sequence in query.batch:
+            words += [int(kind), len(sequence), *(ACTION_ORDER.index(a) for a in sequence)]
+    elif query.probe not in (Probe.SEARCH, Probe.START):
         words += [len(query.sequence), *(ACTION_ORDER.index(a) for a in query.sequence)]
     return " ".join(map(str, words))
 

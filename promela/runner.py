@@ -77,6 +77,8 @@ REPLAY_TIMEOUT_S = 60.0  # replaying a trail of at most MAX_HORIZON steps takes 
 #: The goal's assertion (``assert(!reached)``, promela.render) as pan reports it violated: the one error that is a plan.
 GOAL_VIOLATED = re.compile(r"assertion violated\s+!\(reached\)")
 SUMMARY = re.compile(r"errors: (\d+)")  # pan's closing summary: it ran to its end
+#: A batch probe's sequence held (``promela.render.Probe.BATCH``), printed by the verifier during its search.
+HELD = re.compile(r"^HELD (\d+)\n", re.MULTILINE)
 INSTALL_HINT = {"spin": "apt-get install spin", "gcc": "apt-get install gcc"}
 
 
@@ -292,7 +294,7 @@ def _search_with(built: Verifier, problem: Problem, timeout_s: float, started: f
         (server.folder / f"{MODEL_FILE}.trail").unlink(missing_ok=True)  # the last search's
         outcome = _pan(server.folder, lambda args, limit: server.run(values, args, limit), problem, timeout_s,
                        started)
-        if outcome.status is not Status.PLAN or query.probe in (Probe.ESCAPE, Probe.WHOLE, Probe.START):
+        if outcome.status is not Status.PLAN or query.probe in (Probe.ESCAPE, Probe.WHOLE, Probe.START, Probe.BATCH):
             return _with_extra(outcome, built.cached, "compile-once, served")
         found = _replay(lambda args, limit: server.run(values, args, limit), replay_args, problem,
                         outcome.states_explored)
@@ -302,7 +304,7 @@ def _search_with(built: Verifier, problem: Problem, timeout_s: float, started: f
         folder = Path(work)
         pan = _executing(str(built.path), folder, env)
         outcome = _pan(folder, pan, problem, timeout_s, started)
-        if outcome.status is not Status.PLAN or query.probe in (Probe.ESCAPE, Probe.WHOLE, Probe.START):
+        if outcome.status is not Status.PLAN or query.probe in (Probe.ESCAPE, Probe.WHOLE, Probe.START, Probe.BATCH):
             return _with_extra(outcome, built.cached, "compile-once")
         found = _replay(pan, replay_args, problem, outcome.states_explored)
         return _with_extra(found, built.cached, "compile-once")
@@ -359,6 +361,8 @@ def _pan(folder: Path, execute: Execute, problem: Problem, timeout_s: float | No
         returncode, text = execute(args, remaining)
     except subprocess.TimeoutExpired:
         return SearchResult(Status.INCOMPLETE, detail=f"pan: time limit {timeout_s} s reached")
+    held = sorted({int(k) for k in HELD.findall(text)})
+    text = HELD.sub("", text)
     explored, summary = _explored(text), SUMMARY.search(text)
     if returncode == 0 and summary is not None:  # pan ran to its end: a signal or an error exit never gets here
         errors = int(summary.group(1))
@@ -370,7 +374,7 @@ def _pan(folder: Path, execute: Execute, problem: Problem, timeout_s: float | No
             return SearchResult(Status.PLAN, (), explored, "a trail to replay")
         if errors == 0 and _clean_report(text):
             return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), explored,
-                                f"no plan within {problem.horizon} actions (search completed)")
+                                f"no plan within {problem.horizon} actions (search completed)", extra={"held": held})
     raise EngineError(f"pan failed ({_ending(returncode)}): {_first_line(text)}")
 
 
@@ -613,7 +617,7 @@ def _explored(text: str) -> int:
 
 
 def _with_extra(result: SearchResult, cached: bool, mode: str) -> SearchResult:
-    extra = {"spin_version": tool_versions(), "verifier_cached": cached, "spin_mode": mode}
+    extra = {**result.extra, "spin_version": tool_versions(), "verifier_cached": cached, "spin_mode": mode}
     return SearchResult(result.status, result.actions, result.states_explored, result.detail, result.states, extra)
 
 

@@ -70,6 +70,7 @@ MOVED_CODE = {None: 0, Lane.LEFT: 1, Lane.RIGHT: 2}
 CONTINUATION = len(ACTION_ORDER)  # the action code of the minimal-risk continuation (action None)
 WORD_BITS = 32
 MAX_ESCAPE = max(len(e.actions) for e in ESCAPES)  # a sequence probed is a committed part and its escape
+MAX_BATCH = 64  # sequences one run probes (a longer batch is run in parts)
 TABLE_FORMAT = 3  # the table file's layout (table_text): a verifier reads only its own
 TABLE_END = 271828  # the table's last number: a file cut short is refused
 
@@ -339,13 +340,19 @@ def _tables(shape: SoundShape) -> str:
         "   window and the following action's speed: the commitment semantics' sequences known whole */",
         "static int *CUT_;",
         "#define CUT(w, f) CUT_[(w) * N_SPEEDS + (f)]",
-        "/* the probe (promela.render.Probe): 0 the plan search; else the one sequence SEQ[0..N_SEQ) asked about */",
+        "/* the probe (promela.render.Probe): 0 the plan search; else the sequences asked about, one per path (the",
+        "   path's seqid): one of its kind, or (SQ_BATCH) several, each of its own kind, each one held printed */",
         "#define SQ_ESCAPE 1",
         "#define SQ_WHOLE 2",
         "#define SQ_START 3",
         "#define SQ_WALK 4",
+        "#define SQ_BATCH 5",
         f"#define MAX_SEQ {MAX_HORIZON + MAX_ESCAPE}",
-        "static int SQ_PROBE, N_SEQ, SEQ[MAX_SEQ];",
+        f"#define MAX_BATCH {MAX_BATCH}",
+        "static int SQ_PROBE, N_BATCH, B_KIND[MAX_BATCH], B_LEN[MAX_BATCH], B_SEQ[MAX_BATCH][MAX_SEQ];",
+        "#define SEQ_LEN B_LEN[now.seqid]",
+        "#define SEQ_KIND B_KIND[now.seqid]",
+        "#define SEQ_AT(k) B_SEQ[now.seqid][k]",
         f"static const int INTO_LEFT[CONTINUATION] = {{{into_left}}};",
         f"static SoundPhantom PHANTOMS[N_PHANTOMS + 1] = {{{', '.join(phantoms)}}};",
         "/* where a vehicle in a cell can be, metres ahead of the AV: same direction (by the AV lane), oncoming */",
@@ -617,13 +624,13 @@ static int sound_step_ok(int action)
 {	double dt, dx, held_s = -1.0;
 	int i, k, next, cut;
 	const SoundWindow *w;
-	if (SQ_PROBE && (now.steps >= N_SEQ || SEQ[now.steps] != action)) { return 0; }  /* off the sequence probed */
-	if (SQ_PROBE == SQ_WALK)  /* the display states along it: no check */
+	if (SQ_PROBE && (now.steps >= SEQ_LEN || SEQ_AT(now.steps) != action)) { return 0; }  /* off the sequence */
+	if (SQ_PROBE && SEQ_KIND == SQ_WALK)  /* the display states along it: no check */
 	{	for (k = 0; k < FW; k++) { step_fol[k] = (unsigned) now.fol[k]; }
 		return 1;
 	}
 	w = sound_window(action, &dt, &dx);
-	next = SQ_PROBE && now.steps + 1 < N_SEQ ? SEQ[now.steps + 1] : -1;
+	next = SQ_PROBE && now.steps + 1 < SEQ_LEN ? SEQ_AT(now.steps + 1) : -1;
 	if (next >= 0 && ACTION_SPEED[next] != ACTION_SPEED[action])  /* known to follow: the window ends at its ramp */
 	{	cut = CUT((int) (w - WINDOWS), ACTION_SPEED[next]);
 		if (cut < 0)
@@ -660,17 +667,17 @@ static void sound_take_followers(void)
 
 /* whether a plan may end here: the goal holds for every position, and the minimal-risk manoeuvre is safe for ever;
    under a probe, where the sequence ends (an escape's: safe for ever, no goal; a walk's: its steps alone) */
-static int sound_done(void)
+static int sound_holds(void)
 {	double dt, dx, x, t, stop;
 	int i, k;
 	const SoundWindow *w;
 	if (SQ_PROBE == SQ_START) { return 1; }  /* called only from a start not refused */
-	if (SQ_PROBE && now.steps != N_SEQ) { return 0; }
-	if (SQ_PROBE == SQ_WALK) { return 1; }
+	if (SQ_PROBE && now.steps != SEQ_LEN) { return 0; }
+	if (SQ_PROBE && SEQ_KIND == SQ_WALK) { return 1; }
 	w = sound_window(CONTINUATION, &dt, &dx);
 	x = w->bx + dx;
 	t = w->bt + dt;
-	if (SQ_PROBE != SQ_ESCAPE)
+	if (!SQ_PROBE || SEQ_KIND == SQ_WHOLE)
 	{
 GOAL
 	}
@@ -699,6 +706,15 @@ GOAL
 			}
 	}	}
 	return 1;
+}
+
+/* whether the path ends here (the assertion's violation: the plan, or the probe's one sequence held); a batch's
+   sequence held is printed instead, and every path of the batch is searched */
+static int sound_done(void)
+{	int held = sound_holds();
+	if (SQ_PROBE != SQ_BATCH) { return held; }
+	if (held) { printf("HELD %d\n", now.seqid); }
+	return 0;
 }
 
 /* the start, an instant: refused or not; those not held ahead there follow the AV */
@@ -862,14 +878,14 @@ static void sound_load_table(const char *path)
 /* the scenario: lane nl cells... nr cells... nt ft horizon, each phantom's edge (dx: where its sensor's view ends),
    then 0, or 1 and each vehicle's sensed interval (lo hi, same-direction then oncoming), then 0, or 1 and for each
    vehicle (same-direction then oncoming) 0, or 1 and its interval at the plan's start and its own dynamics there (lo
-   hi low high top: spec.sound.vehicles), then the probe: 0, or its code, the sequence's length and its actions' codes,
-   then | and the path of the sound model's table; the vehicles as intervals
-   (those, or their cells' extents, widened), then the phantoms */
-#define SOUND_VALUES (18 * (ROAD_CELLS + 1) + N_PHANTOMS + MAX_SEQ + 18)
+   hi low high top: spec.sound.vehicles), then the probe: 0, or its code and the sequence's length and its actions'
+   codes (a batch: 5, how many, then each one's kind, length and codes), then | and the path of the sound model's
+   table; the vehicles as intervals (those, or their cells' extents, widened), then the phantoms */
+#define SOUND_VALUES (18 * (ROAD_CELLS + 1) + N_PHANTOMS + MAX_BATCH * (MAX_SEQ + 2) + 18)
 static void sound_load(void)
 {	char *text = getenv("ENV_NAME"), *end, *bar;
 	static double v[SOUND_VALUES];
-	int n = 0, at = 0, j, lane, cell, measured, speeds;
+	int n = 0, at = 0, j, k, lane, cell, measured, speeds;
 	double lo, hi;
 	if (!text) { fprintf(stderr, "overtake: ENV_NAME is not set\n"); exit(2); }
 	bar = strchr(text, '|');
@@ -949,18 +965,30 @@ static void sound_load(void)
 	}
 	if (at >= n) { sound_malformed("no probe"); }
 	SQ_PROBE = (int) v[at++];
-	if (SQ_PROBE < 0 || SQ_PROBE > SQ_WALK) { sound_malformed("the probe"); }
-	N_SEQ = 0;
-	if (SQ_PROBE)
-	{	if (at >= n || v[at] < 0 || v[at] > MAX_SEQ || at + 1 + (int) v[at] > n) { sound_malformed("the sequence"); }
-		N_SEQ = (int) v[at++];
-		for (j = 0; j < N_SEQ; j++)
-		{	if (v[at] < 0 || v[at] >= CONTINUATION) { sound_malformed("a sequence's action"); }
-			SEQ[j] = (int) v[at++];
-		}
-		now.horizon = N_SEQ;  /* a committed part and its escape may run past the plan's horizon */
-		now.seq = 1;
+	if (SQ_PROBE < 0 || SQ_PROBE > SQ_BATCH) { sound_malformed("the probe"); }
+	N_BATCH = 1;
+	B_KIND[0] = SQ_PROBE;
+	B_LEN[0] = 0;
+	if (SQ_PROBE == SQ_BATCH)
+	{	if (at >= n || v[at] < 1 || v[at] > MAX_BATCH) { sound_malformed("the batch"); }
+		N_BATCH = (int) v[at++];
 	}
+	now.horizon = SQ_PROBE ? 0 : now.horizon;
+	for (k = 0; SQ_PROBE && SQ_PROBE != SQ_START && k < N_BATCH; k++)
+	{	if (SQ_PROBE == SQ_BATCH)
+		{	if (at >= n || (v[at] != SQ_ESCAPE && v[at] != SQ_WHOLE)) { sound_malformed("a batch's kind"); }
+			B_KIND[k] = (int) v[at++];
+		}
+		if (at >= n || v[at] < 0 || v[at] > MAX_SEQ || at + 1 + (int) v[at] > n) { sound_malformed("the sequence"); }
+		B_LEN[k] = (int) v[at++];
+		for (j = 0; j < B_LEN[k]; j++)
+		{	if (v[at] < 0 || v[at] >= CONTINUATION) { sound_malformed("a sequence's action"); }
+			B_SEQ[k][j] = (int) v[at++];
+		}
+		if (B_LEN[k] > now.horizon) { now.horizon = B_LEN[k]; }  /* may run past the plan's horizon */
+	}
+	now.seq = SQ_PROBE != 0;
+	now.nbatch = N_BATCH;
 	if (at != n) { sound_malformed("more numbers than the scenario holds"); }
 	held_passing = 0;
 	for (j = 0; j < n_same; j++) { if (NO_ACCELERATION && S_MOT[j].measured) { held_passing = 1; } }
@@ -1026,11 +1054,15 @@ def render(shape: SoundShape) -> str:
         "int fol[FW];  /* followers: bit i of word i / 32 for the same-direction vehicle i */",
         "bool refused; bool reached; byte horizon;  /* the horizon: constant after the start */",
         "bool seq;  /* a sequence is probed (constant after the start) */",
+        "short nbatch; short seqid;  /* the sequences probed, and the one this path follows */",
         "",
         _FUNCTIONS.replace("GOAL", _goal(goal)).replace("ENV_NAME", ENV_VAR),
         "",
         "active proctype av() {",
         "  c_code { sound_load(); };",
+        "  if  /* a batch: each sequence its own path, chosen in one step */",
+        *(f"  :: nbatch > {k} -> seqid = {k}" for k in range(MAX_BATCH)),
+        "  fi;",
         "  d_step { c_code { sound_start(); };",
         '           if :: !refused -> c_code { sound_show("INIT"); now.reached = sound_done(); } :: else -> skip fi;',
         "           assert(!reached) }",

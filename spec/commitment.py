@@ -45,6 +45,9 @@ class Proofs(Protocol):
     def start_violation(self) -> str | None:
         """How the start already breaks the safety specification, or None."""
 
+    def prefetch(self, asked: Sequence[tuple[tuple[Action, ...], bool]]) -> None:
+        """``holds`` will be asked of (some of) these: an engine may prove them together (Spin: one run), or not."""
+
     def holds(self, actions: Sequence[Action], goal: bool) -> bool:
         """Whether ``actions`` from the start, known whole, are safe at every instant (each step's window ending
         where the ramp into the next starts) and end safe for ever under the minimal-risk manoeuvre; with ``goal``,
@@ -95,6 +98,11 @@ def guarded(lane: Lane, actions: Sequence[Action]) -> bool:
     return True
 
 
+def escape_sequences(lane: Lane, committed: Sequence[Action], allowed: Commitment) -> list[tuple[Action, ...]]:
+    """The sequences ``escape_after`` proves, in order: ``committed`` then each escape allowed from where it ends."""
+    return [(*committed, *escape.actions) for escape in allowed.allowed(lane_after(lane, committed))]
+
+
 def escape_after(proofs: Proofs, lane: Lane, committed: Sequence[Action], allowed: Commitment) -> Escape | None:
     """The first escape ``allowed`` from the lane ``committed`` ends in (starting from ``lane``) that ``proofs``
     prove after it, with it as one sequence."""
@@ -133,6 +141,9 @@ def split(problem: Problem, actions: Sequence[Action], proofs: Proofs) -> tuple[
     allowed = commitment(problem)
     plan = tuple(actions)
     most = len(plan) if allowed.most_actions is None else min(allowed.most_actions, len(plan))
+    lane = problem.scenario.lane
+    proofs.prefetch([*([(plan, True)] if most == len(plan) else []),
+                     *((seq, False) for n in range(most, 0, -1) for seq in escape_sequences(lane, plan[:n], allowed))])
     if most == len(plan) and proofs.holds(plan, goal=True):
         return plan, None
     for n in range(most, 0, -1):
@@ -157,6 +168,9 @@ def _answer(problem: Problem, strategy: Strategy, limits: Limits, proofs: Proofs
         take = unsafe_start_escape(problem.scenario.lane)
         return SearchResult(Status.UNSAFE_START, (), 1, f"the start already breaks the safety specification: {hit}; "
                             f"escape at once: {take.describe()}", commit=Commit((), take, (), escape_proved=False))
+    allowed, lane = commitment(problem), problem.scenario.lane
+    proofs.prefetch([((), True), *((seq, False) for a in enabled_firsts(problem)
+                                   for seq in escape_sequences(lane, (a,), allowed))])
     if proofs.holds((), goal=True):
         return SearchResult(Status.PLAN, (), 1, "goal holds in the initial state, safe for ever", proofs.states(()),
                             commit=Commit((), None, ()))

@@ -217,7 +217,8 @@ def test_a_refused_start_has_no_successors() -> None:
     assert sound.solve(problem, Strategy.SENSIBLE, Limits()).detail.startswith("initial state:")
     for strategy in (Strategy.SENSIBLE, Strategy.SHORTEST):
         spin = runner.search(problem, strategy)
-        assert spin.status is Status.NO_PLAN_WITHIN_HORIZON and spin.states_explored <= 3
+        # the load, the probe's choice, the start: no step after
+        assert spin.status is Status.NO_PLAN_WITHIN_HORIZON and spin.states_explored <= 5
 
 
 def test_a_plan_that_may_end_at_the_start_is_the_empty_plan() -> None:

@@ -32,6 +32,9 @@ class Scripted:
     def start_violation(self) -> str | None:
         return self.start
 
+    def prefetch(self, asked: Sequence[tuple[tuple[Action, ...], bool]]) -> None:
+        self.hinted = list(asked)
+
     def holds(self, actions: Sequence[Action], goal: bool) -> bool:
         self.asked.append((tuple(actions), goal))
         return (tuple(actions), goal) in self.proved
