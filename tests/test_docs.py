@@ -166,7 +166,7 @@ ADDED = {"overtake audit": {"--km": "0.3", "--runs": "1"},
          "python -m ci.bench.measured": {"--count": "5"},
          "python -m ci.bench.engines_sound": {"--count": "5", "--timeout": "1"},  # Z3's undecided runs end sooner
          "python -m ci.bench.crossval": {"--sweep-count": "20"},
-         "python -m ci.bench.loop": {"--km": "0.3", "--compiled": "2"},
+         "python -m ci.bench.loop": {"--km": "0.3", "--compiled": "2", "--commitments": "2"},
          "python -m ci.conformance.tightness": {"--count": "2"},  # every cell size, profile and model: 32 problems
          "python -m ci.mutation.check": {"--count": "1"}}
 

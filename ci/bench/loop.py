@@ -2,7 +2,7 @@
 a verifier per snapshot, on the same snapshots, in one run.
 
 Usage: python -m ci.bench.loop [--km 2] [--seeds 1,2,3] [--engines interpreter,spin] [--cells 21]
-                               [--traffic paper] [--sensor exact] [--compiled 10]
+                               [--traffic paper] [--sensor exact] [--compiled 10] [--commitments 40]
 
 Every engine drives the same seeds under the sound model (``sensible``); each plan's time is the pipeline's as the
 drive counts it (``RunSummary.plan_ms``: final model, then preparations; every new measured speed of the AV builds
@@ -11,12 +11,15 @@ plans (the sensible plans are the same plans). Then ``--compiled`` of the first 
 ``SNAPSHOT_EVERY`` plans) are planned twice: by the served verifier, its tables built afresh as a new speed's are in
 the loop, and by a verifier compiled for the snapshot (``promela.runner.search_compiling``: spin -a, gcc, pan);
 each through the pipeline as a drive times it (``oracle.planner.solve``: without the interpreter's checks of the
-answer that ``plan`` adds after the clock stops).
+answer that ``plan`` adds after the clock stops). Last, ``--commitments`` snapshots of the first engine's drives are
+planned by each engine under the commitment semantics (``spec.commitment``; Spin's tables built afresh, as a new
+speed's): what a decision costs when the loop commits (every engine answering it: #61 moves the loop there).
 """
 
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 
 import numpy as np
 from rich.console import Console
@@ -32,8 +35,9 @@ from sim.parts import DriveConfig
 from sim.simulator import run_drive
 from sim.summary import RunSummary
 from spec import windows
-from spec.answers import Strategy
+from spec.answers import Status, Strategy
 from spec.engines import Engine, get_engine
+from spec.escapes import COMMIT
 from spec.files import scenario_from_dict
 from spec.physical import LOOP
 from spec.scenario import Scenario
@@ -66,6 +70,8 @@ def main() -> None:
     parser.add_argument("--traffic", default="paper")
     parser.add_argument("--sensor", default="exact")
     parser.add_argument("--compiled", type=int, default=10, help="snapshots planned by compiling a verifier each")
+    parser.add_argument("--commitments", type=int, default=40, help="snapshots planned under the commitment "
+                        "semantics by each engine")
     args = parser.parse_args()
     seeds = [int(s) for s in args.seeds.split(",")]
     engines = [e.strip() for e in args.engines.split(",")]
@@ -78,8 +84,9 @@ def main() -> None:
     for engine in engines:
         runs[engine] = []
         for seed in seeds:
+            kept = args.compiled if engine == "spin" else args.commitments if engine == engines[0] else 0
             config = DriveConfig(args.km, engine=engine, model="sound", cell_m=args.cells, traffic=args.traffic,
-                                 sensor=args.sensor, snapshots=args.compiled if engine == "spin" else 0)
+                                 sensor=args.sensor, snapshots=kept)
             runs[engine].append(run_drive(seed, config))
             console.print(f"  {engine} seed {seed}: {runs[engine][-1].plans} plans, {runs[engine][-1].km:.2f} km")
     reference = engines[0]
@@ -103,6 +110,8 @@ def main() -> None:
         console.print(f"target: {engine}'s plans over the budget <= {TARGET_OVER:.0%}: "
                       f"{'met' if share <= TARGET_OVER else 'NOT met'} ({share:.1%}); same drives: "
                       f"{'yes' if same else 'NO'}")
+    _commitments(console, [scenario_from_dict(s) for r in runs[reference] for s in r.snapshots][: args.commitments],
+                 engines, budget_ms)
     snapshots = [scenario_from_dict(s) for r in runs.get("spin", []) for s in r.snapshots][: args.compiled]
     if not snapshots:
         return
@@ -119,6 +128,30 @@ def main() -> None:
     ratio = np.median(compiled) / np.median(served)
     console.print(f"target: served >= {TARGET_RATIO:g}x faster than compiling per snapshot: "
                   f"{'met' if ratio >= TARGET_RATIO else 'NOT met'} ({ratio:.0f}x)")
+
+
+def _commitments(console: Console, snapshots: list[Scenario], engines: list[str], budget_ms: float) -> None:
+    """The snapshots under the commitment semantics, per engine: ms per answer (the pipeline's, unchecked; Spin's
+    tables built afresh) against the budget, and which answers are commitments."""
+    committed = [replace(s, sound=replace(s.sound, commitment=COMMIT)) for s in snapshots if s.sound is not None]
+    if not committed:
+        return
+    table = Table(title=f"the first drives' {len(committed)} snapshots under the commitment semantics (ms per answer)")
+    for col in ("engine", "n", "median", "p99", "max", f"over {budget_ms:.0f} ms", "commitments"):
+        table.add_column(col, justify="right")
+    for engine in engines:
+        answers: list[Status] = []
+
+        def run(scenario: Scenario, engine: str = engine, answers: list[Status] = answers) -> None:
+            if engine == "spin":
+                _fresh_tables()
+            answers.append(solve(scenario, Strategy.SENSIBLE, engine=engine).status)
+
+        ms = timed(committed, run)
+        over = int((ms > budget_ms).sum())
+        table.add_row(engine, str(len(ms)), f"{np.median(ms):.2f}", f"{np.percentile(ms, 99):.2f}", f"{ms.max():.2f}",
+                      f"{over} ({over / len(ms):.1%})", str(sum(s is Status.PLAN for s in answers[1:])))
+    console.print(table)
 
 
 if __name__ == "__main__":
