@@ -99,6 +99,9 @@ SELF_CHECK = "--ignore=tests/ci/mutation/test_check.py"
 
 #: A campaign's exits that fail CI's run of it: a property failed, or one could not be decided (it claims nothing).
 FAILS_CI = (ExitCode.DISAGREE, ExitCode.INCOMPLETE)
+#: The sound model's hypothesis campaigns: a property failed (an undecided verdict there is often the interpreter's
+#: known limit on a measured draw, which CI lets pass when it is the only one: ``ci.conformance.inconclusive``).
+SOUND_DRAWS_FAIL = (ExitCode.DISAGREE,)
 
 
 def _module_tests(m: Mutant) -> list[str]:
@@ -132,7 +135,7 @@ DETECTORS: tuple[Detector, ...] = (
              lambda m, work: _crossval(work / "sound-hypothesis-10.5m", "--source", "hypothesis", "--seed",
                                        _ci_seed(), "--cell-m", "10.5", "--model", "sound", "--engines",
                                        "interpreter,spin", "--properties", CI_SOUND_PROPERTIES, "--timeout", "60"),
-             FAILS_CI, (("HYPOTHESIS_PROFILE", "ci"),)),
+             SOUND_DRAWS_FAIL, (("HYPOTHESIS_PROFILE", "ci"),)),
     Detector("crossval sound commitments exhaustive (CI's space)",
              lambda m, work: _crossval(work / "sound-commit-exhaustive", "--source", "exhaustive", "--space", CI_SPACE,
                                        "--model", "sound", "--semantics", "commit"),
@@ -141,7 +144,7 @@ DETECTORS: tuple[Detector, ...] = (
              lambda m, work: _crossval(work / "sound-commit-hypothesis", "--source", "hypothesis", "--seed",
                                        _ci_seed(), "--model", "sound", "--semantics", "commit", "--engines",
                                        "interpreter,spin", "--timeout", "60"),
-             FAILS_CI, (("HYPOTHESIS_PROFILE", "ci"),)),
+             SOUND_DRAWS_FAIL, (("HYPOTHESIS_PROFILE", "ci"),)),
     Detector("tests (all)", lambda m, work: _pytest("tests", SELF_CHECK), (1,), tests=True),
 )
 #: The detectors that are cross-validation campaigns (``--crossval-only``: what catches a mutant without the tests).
