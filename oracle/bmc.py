@@ -75,8 +75,11 @@ class Encoding:
         self.grid = problem.grid
         self.ticks = {a: self.grid.ticks(a) for a in ACTION_ORDER}
         start = self.new_step()
+        #: the start's place; its safety holds where ``start_checked`` is assumed (every answer but the commitment
+        #: semantics' prediction, whose start the sound model checks: ``spec.commitment``)
+        self.start_checked = z3.Bool("start_checked")
         self.initial = z3.And(start.right == (scenario.lane is Lane.RIGHT), start.lc == 0, start.l == 0, start.o == 0,
-                              self.safe(start.right, start.l, 0, start.o, 0))
+                              z3.Implies(self.start_checked, self.safe(start.right, start.l, 0, start.o, 0)))
         here, after, action = _placeholder("a"), _placeholder("b"), z3.Int("action")
         self._step_template = (here, action, after, self.transition(here, action, after))
         self._goal_template = (here, self.goal(here))
@@ -365,7 +368,7 @@ def _first_in(action_var: z3.ArithRef, firsts: Sequence[Action]) -> z3.BoolRef:
 def shortest(problem: Problem, limits: Limits | None = None, firsts: Sequence[Action] | None = None) -> SearchResult:
     """The smallest k whose bound is satisfiable, incrementally, or a proof that none is up to the horizon. With
     ``firsts`` (the commitment semantics' prediction, ``spec.commitment``): at least one action, the first one of
-    ``firsts``; no warm start.
+    ``firsts``, from a start whose collisions are not checked (the sound model checked it); no warm start.
 
     Warm start: a kept solver remembers the last problem's first satisfiable bound g (in a campaign,
     often this one's too) and first asks whether the goal holds anywhere below it, one check for
@@ -375,6 +378,7 @@ def shortest(problem: Problem, limits: Limits | None = None, firsts: Sequence[Ac
     horizon = problem.horizon
     with _solver_for(Shortest, problem) as kept:
         fixed, not_before, start = kept.fixing(problem.scenario), list[z3.BoolRef](), 0
+        fixed += [kept.enc.start_checked] if firsts is None else []
         if firsts is not None:
             kept.goal(1)
             fixed.append(kept.literal(_first_in(kept.enc.actions[0], firsts)))
@@ -457,6 +461,7 @@ def optimal(problem: Problem, limits: Limits | None = None, firsts: Sequence[Act
     started = time.perf_counter()
     with _solver_for(Optimal, problem) as kept:
         solver, terms, assumed = kept.solver, kept.terms, kept.fixing(problem.scenario)
+        assumed += [kept.enc.start_checked] if firsts is None else []
         if firsts is not None:
             if problem.horizon < 1:
                 return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 0, "proved: no plan of at least one action "

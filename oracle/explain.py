@@ -80,7 +80,7 @@ def _solver(scenario: Scenario, kind: ModelKind, literals: dict[Vehicle, z3.Bool
     _, constraints, _, _ = bounded(enc)
     solver = z3.SolverFor("QF_LIA")
     solver.set("unsat_core", True)
-    solver.add(*constraints, *(term == value for term, value in enc.cells(scenario)))
+    solver.add(*constraints, enc.start_checked, *(term == value for term, value in enc.cells(scenario)))
     return solver
 
 

@@ -203,15 +203,18 @@ def render(shape: Shape, scenario: Scenario | None = None, horizon: int | None =
         "short right[MAXR];  /* oncoming vehicles, ascending */",
         "byte nl; byte nr; byte nt; byte ft; byte horizon;  /* the scenario: constant after start */",
         "bit lane; byte lc; byte steps; bool crashed; bool reached;",
-        "byte firsts; bit least;  /* the first actions allowed (bit per action), whether a plan needs one */",
+        "byte firsts;  /* the first actions allowed (bit per action) */",
+        "bit least;  /* the commitment semantics' prediction: one action at least, the start unchecked (the sound "
+        "model checked it) */",
         "byte i;  /* scratch index, reset to 0 at the end of every atomic step, so it is constant */",
         "",
         _INLINES.replace("LEFT_HIT", _left_hit(shape)),
         _goal_inline(goal, grid),
         "active proctype av() {",
         _load_literal(scenario, horizon) if scenario else _load_injected(),
-        "  d_step { collide(); if :: !crashed -> printf(\"INIT \"); print_state(); goal_check(); reached = reached && "
-        "!least :: else -> skip fi;",
+        "  d_step { if :: !least -> collide() :: else -> skip fi;",
+        "           if :: !crashed -> printf(\"INIT \"); print_state(); goal_check(); reached = reached && !least "
+        ":: else -> skip fi;",
         "           assert(!reached); i = 0 }",
         "  do",
         *(_option(action, grid) for action in ACTION_ORDER),

@@ -144,3 +144,12 @@ def committed_answers(name: str, bounds: str, strategy: object, engine: str) -> 
     assert theirs.status is ours.status or {ours.status, theirs.status} == {
         Status.NO_PLAN, Status.NO_PLAN_WITHIN_HORIZON}, (theirs.detail, ours.detail)
     return ours, theirs
+
+
+def paper_start_collision() -> Scenario:
+    """The AV in the right lane with an oncoming vehicle one cell behind it: a collision under the paper's rules (its
+    danger zone is symmetric), safe under the sound model (the vehicle is past): the commitment semantics' prediction
+    starts there unchecked, and the whole plan is the move back (``spec.commitment``)."""
+    from spec.escapes import COMMIT
+
+    return replace(make_scenario("right", [], [9], 0, horizon=1), sound=Sound(profile("paper"), commitment=COMMIT))

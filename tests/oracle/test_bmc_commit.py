@@ -10,6 +10,7 @@ import pytest
 from oracle import commit
 from oracle.bmc_commit import Z3, display_states
 from oracle.interpreter import replay
+from oracle.planner import solve
 from spec.actions import Action
 from spec.answers import Answer, Strategy
 from spec.assumptions import profile
@@ -21,7 +22,7 @@ from spec.library import builtin
 from spec.models import ModelKind
 from spec.scenario import Scenario, make_scenario, problem_for
 from spec.sound import Sound
-from tests.conftest import COMMITTED_BUILT_INS, committed_answers
+from tests.conftest import COMMITTED_BUILT_INS, committed_answers, paper_start_collision
 
 
 @pytest.mark.parametrize(("lane", "left", "right", "bounds"), [
@@ -92,3 +93,12 @@ def test_z3s_display_states_are_the_interpreters() -> None:
     problem = problem_for(scenario, ModelKind.FINAL)
     actions = (Action.ACCELERATE, Action.RIGHT_LANE_CHANGE, Action.ACCELERATE, Action.LEFT_LANE_CHANGE)
     assert display_states(problem, actions) == commit.states_along(problem, actions)
+
+
+def test_the_prediction_starts_where_the_paper_rules_see_a_collision() -> None:
+    """Z3's paper encoding leaves the prediction's start unchecked (the sound model checked it): the move back."""
+    scenario = paper_start_collision()
+    for strategy in (Strategy.SHORTEST, Strategy.OPTIMAL):
+        ours, theirs = solve(scenario, strategy), solve(scenario, strategy, engine="z3")
+        assert (theirs.model, theirs.commit) == (ours.model, ours.commit)
+        assert ours.commit is not None and ours.commit.committed == (Action.LEFT_LANE_CHANGE,)

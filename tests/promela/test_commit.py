@@ -24,7 +24,7 @@ from spec.library import builtin
 from spec.models import ModelKind
 from spec.scenario import make_scenario, problem_for
 from spec.sound import Sound
-from tests.conftest import COMMITTED_BUILT_INS, committed_answers
+from tests.conftest import COMMITTED_BUILT_INS, committed_answers, paper_start_collision
 
 pytestmark = pytest.mark.requires_spin
 
@@ -146,3 +146,12 @@ def test_a_walk_prints_the_display_states_and_a_start_probe_its_safety() -> None
         Action.ACCELERATE, Action.RIGHT_LANE_CHANGE)))
     assert walked.status is Status.PLAN and len(walked.states) == 3 and walked.states[-1].lane.value == "right"
     assert runner.search(problem, Strategy.SENSIBLE, query=Query(probe=Probe.START)).status is Status.PLAN
+
+
+def test_the_prediction_starts_where_the_paper_rules_see_a_collision() -> None:
+    """Spin's paper verifier does not check the prediction's start (the sound model did): the move back, whole."""
+    scenario = paper_start_collision()
+    for strategy in (Strategy.SENSIBLE, Strategy.SHORTEST):
+        ours, theirs = solve(scenario, strategy), solve(scenario, strategy, engine="spin")
+        assert (theirs.model, theirs.commit) == (ours.model, ours.commit)
+        assert ours.commit is not None and ours.commit.committed == (Action.LEFT_LANE_CHANGE,)

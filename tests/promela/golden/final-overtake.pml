@@ -11,7 +11,8 @@ short left[MAXL];   /* left-lane vehicles, ascending */
 short right[MAXR];  /* oncoming vehicles, ascending */
 byte nl; byte nr; byte nt; byte ft; byte horizon;  /* the scenario: constant after start */
 bit lane; byte lc; byte steps; bool crashed; bool reached;
-byte firsts; bit least;  /* the first actions allowed (bit per action), whether a plan needs one */
+byte firsts;  /* the first actions allowed (bit per action) */
+bit least;  /* the commitment semantics' prediction: one action at least, the start unchecked (the sound model checked it) */
 byte i;  /* scratch index, reset to 0 at the end of every atomic step, so it is constant */
 
 inline collide() {
@@ -51,7 +52,8 @@ active proctype av() {
     if (at != n || now.nl > MAXL || now.nr > MAXR || now.horizon > 200) {
       fprintf(stderr, "overtake: malformed OVERTAKE_SCENARIO\n"); exit(2); }
   };
-  d_step { collide(); if :: !crashed -> printf("INIT "); print_state(); goal_check(); reached = reached && !least :: else -> skip fi;
+  d_step { if :: !least -> collide() :: else -> skip fi;
+           if :: !crashed -> printf("INIT "); print_state(); goal_check(); reached = reached && !least :: else -> skip fi;
            assert(!reached); i = 0 }
   do
   :: d_step { !crashed && steps < horizon && (steps > 0 || ((firsts >> 0) & 1)) && lane == RIGHT && lc < MAX_LC ->
