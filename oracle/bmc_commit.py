@@ -13,9 +13,9 @@ from __future__ import annotations
 from collections.abc import Container, Sequence
 
 from oracle import bmc, bmc_sound
-from spec.actions import ACTION_ORDER, Action
+from spec.actions import Action
 from spec.answers import Limits, SearchResult, Strategy
-from spec.commitment import answer, enabled_firsts, paper_problem
+from spec.commitment import answer, committable_in_order, paper_problem
 from spec.errors import EngineError
 from spec.scenario import Problem
 from spec.sound import SoundState, advance
@@ -46,8 +46,7 @@ class Z3:
         return self._held[key]
 
     def predict(self, strategy: Strategy, firsts: Container[Action], limits: Limits) -> SearchResult:
-        enabled = enabled_firsts(self.problem)  # only those are asked: a proof needs its lane guards kept
-        allowed = tuple(a for a in ACTION_ORDER if a in enabled and a in firsts)
+        allowed = committable_in_order(self.problem, firsts)
         if strategy not in PREDICTORS:
             raise EngineError(f"z3 answers {', '.join(s.value for s in PREDICTORS)} only")
         return PREDICTORS[strategy](paper_problem(self.problem), limits, allowed)

@@ -16,9 +16,9 @@ from collections.abc import Container, Sequence
 from promela import runner
 from promela.render import Probe, Query
 from promela.sound import MAX_BATCH
-from spec.actions import ACTION_ORDER, Action
+from spec.actions import Action
 from spec.answers import Limits, SearchResult, Status, Strategy
-from spec.commitment import ProofIncomplete, answer, enabled_firsts, paper_problem
+from spec.commitment import ProofIncomplete, answer, committable_in_order, paper_problem
 from spec.errors import EngineError
 from spec.scenario import Problem
 from spec.state import State
@@ -68,8 +68,7 @@ class Spin:
         return self._held[key]
 
     def predict(self, strategy: Strategy, firsts: Container[Action], limits: Limits) -> SearchResult:
-        enabled = enabled_firsts(self.problem)  # only those are asked: a proof needs its lane guards kept
-        allowed = tuple(a for a in ACTION_ORDER if a in enabled and a in firsts)
+        allowed = committable_in_order(self.problem, firsts)
         if not allowed:
             return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 1, "no first action is committable")
         left = limits.remaining(self.started, time.perf_counter()).timeout_s

@@ -25,7 +25,7 @@ from collections.abc import Container, Sequence
 from dataclasses import replace
 from typing import Protocol
 
-from spec.actions import ACTION_RULES, Action
+from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.answers import Commit, Limits, SearchResult, Status, Strategy
 from spec.escapes import COMMIT, Commitment, Escape, unsafe_start_escape
 from spec.lanes import Lane
@@ -118,6 +118,13 @@ def enabled_firsts(problem: Problem) -> tuple[Action, ...]:
     return tuple(a for a in Action if disabled_reason(start, a, problem.rules) is None)
 
 
+def committable_in_order(problem: Problem, firsts: Container[Action]) -> tuple[Action, ...]:
+    """The enabled first actions in ``firsts``, in ``ACTION_ORDER``: what an engine whose prediction takes them as
+    a set asks of ``Firsts`` (only enabled ones: a proof takes its lane guards as given)."""
+    enabled = enabled_firsts(problem)
+    return tuple(a for a in ACTION_ORDER if a in enabled and a in firsts)
+
+
 class Firsts:
     """The committable first actions, as a set a search asks about: each one proved the first time it is asked (a
     depth-first search asks only until the first live one that commits)."""
@@ -147,7 +154,7 @@ def split(problem: Problem, actions: Sequence[Action], proofs: Proofs) -> tuple[
     if most == len(plan) and proofs.holds(plan, goal=True):
         return plan, None
     for n in range(most, 0, -1):
-        escape = escape_after(proofs, problem.scenario.lane, plan[:n], allowed)
+        escape = escape_after(proofs, lane, plan[:n], allowed)
         if escape is not None:
             return plan[:n], escape
     raise ValueError(f"the predicted plan's first action {plan[0].value} has no escape (it was committable)")

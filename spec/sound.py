@@ -922,18 +922,15 @@ class SoundRules:
         does not know). With it (a sequence known whole: a commitment and its escape, ``oracle.commit``) the window
         ends where the ramp into ``following``, centred on the boundary, starts: from there on the reference is that
         ramp, and ``following``'s own window (from the start of the ramp into it) checks it."""
-        cut = self._cut_s(state, action, following)
+        cut = self.cut_s(state.t_units, action, following)
         asked = (state.key(), action, following if cut is not None else None)
         if asked in self._steps:
             return self._steps[asked]
         found = None
         followers = self.followers(state, action)
         held = self.passing_from_s(state) if ACTION_RULES[action].to_lane is Lane.LEFT else None
-        for seg, pieces in self.window(state, action):
-            if cut is not None:
-                if seg.t0_s >= cut:
-                    break
-                seg, pieces = self._clipped(seg, pieces, cut)
+        window = self.window(state, action)
+        for seg, pieces in window if cut is None else self.cut_window(window, cut):
             found = self.check_segment(seg, pieces, followers, held)
             if found is not None:
                 break
@@ -942,13 +939,18 @@ class SoundRules:
         self._steps[asked] = found
         return found
 
-    def _cut_s(self, state: SoundState, action: Action, following: Action | None) -> float | None:
-        """Where ``action``'s window ends when ``following`` comes after it: the start of the ramp into it (None: no
-        ramp, the speeds are the same, or nothing follows)."""
+    def cut_s(self, t_units: int, action: Action, following: Action | None) -> float | None:
+        """Where the window of ``action``, taken ``t_units`` time units into the plan, ends when ``following`` comes
+        after it: the start of the ramp into it (None: no ramp, the speeds are the same, or nothing follows)."""
         if following is None or self.speeds[following] == self.speeds[action]:
             return None
-        end_s = (state.t_units + self.grid.units(action)) * self.unit_s
+        end_s = (t_units + self.grid.units(action)) * self.unit_s
         return end_s - ramp_s(self.speeds[action], self.speeds[following]) / 2
+
+    def cut_window(self, window: list[tuple[Segment, list[Bounded]]], cut_s: float) -> list[
+            tuple[Segment, list[Bounded]]]:
+        """``window`` up to ``cut_s``: its segments that start before it, each clipped there."""
+        return [self._clipped(seg, pieces, cut_s) for seg, pieces in window if seg.t0_s < cut_s]
 
     def _clipped(self, seg: Segment, pieces: list[Bounded], cut_s: float) -> tuple[Segment, list[Bounded]]:
         """A window's segment and its pieces up to ``cut_s`` (each piece's thresholds taken over what is left)."""

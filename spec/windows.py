@@ -219,11 +219,11 @@ def sound_table(sound: Sound, grid: Grid, hold_floor_mps: float | None = None) -
                        _index(index, state.last_mps), state.moved, action)
                 early_windows[key] = declared(rules.window(state, action), _at_boundary(ref))
                 if cuts and action is not None:
-                    end_s = (state.t_units + grid.units(action)) * rules.unit_s
-                    for v in set(action_speeds.values()) - {action_speeds[action]}:
-                        early_cut[key, index[v]] = declared(
-                            _cut(rules, rules.window(state, action), end_s, action_speeds[action], v),
-                            _at_boundary(ref))
+                    for v, following in _other_speeds(rules, action).items():
+                        cut_s = rules.cut_s(state.t_units, action, following)
+                        assert cut_s is not None  # another speed: a ramp
+                        early_cut[key, index[v]] = declared(rules.cut_window(rules.window(state, action), cut_s),
+                                                            _at_boundary(ref))
             if action is not None:
                 todo.append(advance(state, action, grid, action_speeds[action]))
     start = {}
@@ -270,7 +270,6 @@ def cut_shapes(sound: Sound, grid: Grid, before_mps: float, hold_floor_mps: floa
     speed starts, centred on the step's end (``SoundRules.step_violation`` with ``following``): by action, lane,
     moved and the following action's speed. Only a sequence known whole (the commitment semantics) asks for them."""
     rules = _rules(sound, grid, hold_floor_mps)
-    action_speeds = {a: rules.speeds[a] for a in Action}
     found: dict[CutKey, Window] = {}
     for lane in Lane:
         for moved in (None, lane):
@@ -279,19 +278,16 @@ def cut_shapes(sound: Sound, grid: Grid, before_mps: float, hold_floor_mps: floa
                     continue
                 shape = rules.relative_window(before_mps, action, lane, moved)
                 ref = rules._reference(0.0, 0.0, before_mps, before_mps, action, before_mps)
-                end_s = grid.units(action) * rules.unit_s
-                for v in set(action_speeds.values()) - {action_speeds[action]}:
-                    found[action, lane, moved, v] = declared(_cut(rules, shape, end_s, action_speeds[action], v),
-                                                             _at_boundary(ref))
+                for v, following in _other_speeds(rules, action).items():
+                    cut_s = rules.cut_s(0, action, following)  # a shape starts at time 0
+                    assert cut_s is not None  # another speed: a ramp
+                    found[action, lane, moved, v] = declared(rules.cut_window(shape, cut_s), _at_boundary(ref))
     return found
 
 
-def _cut(rules: SoundRules, window: list[tuple[Segment, list[Bounded]]], end_s: float, speed_mps: float,
-         following_mps: float) -> list[tuple[Segment, list[Bounded]]]:
-    """``window`` of a step ending at ``end_s`` up to where the ramp into ``following_mps`` starts (its segments
-    from before the cut, each clipped there: ``SoundRules._clipped``)."""
-    cut_s = end_s - ramp_s(speed_mps, following_mps) / 2
-    return [rules._clipped(seg, pieces, cut_s) for seg, pieces in window if seg.t0_s < cut_s]
+def _other_speeds(rules: SoundRules, action: Action) -> dict[float, Action]:
+    """Each speed of an action but ``action``'s, with one action at it (a cut depends on the speeds alone)."""
+    return {rules.speeds[a]: a for a in reversed(Action) if rules.speeds[a] != rules.speeds[action]}
 
 
 def _index(index: dict[float, int], speed: float | None) -> int:

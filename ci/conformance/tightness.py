@@ -55,9 +55,10 @@ from ci.shared.machine import machine
 from oracle.planner import plan
 from oracle.reach import MAX_DT_S, TOLERANCE_M, Path
 from oracle.sound import _paper, rules_for, start
-from spec.actions import ACTION_RULES, Action
+from spec.actions import Action
 from spec.answers import Status, Strategy
 from spec.assumptions import profile
+from spec.commitment import lane_after
 from spec.escapes import COMMIT, Escape, Semantics
 from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
@@ -584,7 +585,7 @@ def measure_commit(scenario: Scenario, keep: int = 3) -> Counts:
             if disabled_guard(_paper(first), action, problem.rules) is not None:
                 continue
             counts.enabled += 1
-            escapes = allowed.allowed(_lane_after(first.lane, action))
+            escapes = allowed.allowed(lane_after(first.lane, (action,)))
             found = [(e, escape_refusal(rules, first, action, e)) for e in escapes]
             if not escapes or any(r is None for _, r in found):
                 counts.committable += int(bool(escapes))
@@ -612,10 +613,6 @@ def measure_commit(scenario: Scenario, keep: int = 3) -> Counts:
             counts.by_where[Where.STEP][max(verdicts, key=_ORDER.index)] += 1
     _answer(scenario, counts)
     return counts
-
-
-def _lane_after(lane: Lane, action: Action) -> Lane:
-    return ACTION_RULES[action].to_lane or lane
 
 
 # -- the measurement ----------------------------------------------------------------------------------------------

@@ -55,9 +55,8 @@ def test_the_table_gives_every_window_of_a_walk_as_the_interpreter_computes_it(c
                 window = rules.window(state, action)
                 _assert_same(table.state_window(state, action), declared(window, boundary))
                 for following in Action if action is not None else ():
-                    cut = rules._cut_s(state, action, following)
-                    kept = window if cut is None else [rules._clipped(seg, pieces, cut) for seg, pieces in window
-                                                       if seg.t0_s < cut]
+                    cut = rules.cut_s(state.t_units, action, following)
+                    kept = window if cut is None else rules.cut_window(window, cut)
                     _assert_same(table.state_window(state, action, following), declared(kept, boundary))
             action = rng.choice(enabled)
             state = advance(state, action, grid, rules.speeds[action])

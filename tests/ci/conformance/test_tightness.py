@@ -11,6 +11,7 @@ from ci.conformance.tightness import Refusal, Tightness, Where
 from oracle.sound import _paper, rules_for, start
 from spec.actions import Action
 from spec.assumptions import profile
+from spec.commitment import lane_after
 from spec.escapes import COMMIT, ESCAPES
 from spec.grid import grid_for
 from spec.lanes import Lane
@@ -184,7 +185,7 @@ def test_an_escape_refusal_with_its_vehicle_moved_far_away_is_exhibited_by_no_mo
     for action in Action:
         if disabled_guard(_paper(first), action, problem.rules) is not None:
             continue
-        for escape in COMMIT.allowed(tightness._lane_after(first.lane, action)):
+        for escape in COMMIT.allowed(lane_after(first.lane, (action,))):
             r = tightness.escape_refusal(rules, first, action, escape)
             if r is None:
                 continue
