@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Container, Sequence
 
 from oracle import bmc, bmc_sound
+from oracle.bmc_own import Own
 from spec.actions import Action
 from spec.answers import Limits, SearchResult, Strategy
 from spec.commitment import answer, committable_in_order, paper_problem
@@ -27,12 +28,14 @@ PREDICTORS = {Strategy.SHORTEST: bmc.shortest, Strategy.OPTIMAL: bmc.optimal}
 class Z3:
     """Z3's proofs of one problem, each sequence checked once."""
 
-    def __init__(self, problem: Problem) -> None:
+    def __init__(self, problem: Problem, limits: Limits | None = None) -> None:
         self.problem, self.enc = problem, bmc_sound.encoding(problem)
+        self.own = Own(problem.scenario)
+        self.timeout_s = None if limits is None else limits.timeout_s
         self._held: dict[tuple[tuple[Action, ...], bool], bool] = {}
 
     def start_violation(self) -> str | None:
-        if not self.enc.start_refused(self.problem.scenario):
+        if not self.enc.start_refused(self.problem.scenario, self.own, self.timeout_s):
             return None
         return "a vehicle's interval at the start (the encoding's start conditions)"
 
@@ -42,7 +45,7 @@ class Z3:
     def holds(self, actions: Sequence[Action], goal: bool) -> bool:
         key = (tuple(actions), goal)
         if key not in self._held:
-            self._held[key] = self.enc.holds(self.problem.scenario, actions, goal)
+            self._held[key] = self.enc.holds(self.problem.scenario, actions, goal, self.own, self.timeout_s)
         return self._held[key]
 
     def predict(self, strategy: Strategy, firsts: Container[Action], limits: Limits) -> SearchResult:
@@ -78,4 +81,4 @@ def display_states(problem: Problem, actions: Sequence[Action]) -> tuple[State, 
 
 def solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult:
     """Z3's answer under the commitment semantics (``spec.commitment.answer``)."""
-    return answer(problem, strategy, limits, Z3(problem))
+    return answer(problem, strategy, limits, Z3(problem, limits))

@@ -58,11 +58,12 @@ from collections import OrderedDict
 from collections.abc import Callable, Hashable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
-from typing import TypeAlias, TypeVar
+from typing import NamedTuple, TypeAlias, TypeVar
 
 import z3
 
 from oracle import bmc
+from oracle.bmc_own import Own, unbroken
 from spec.actions import ACTION_ORDER, ACTION_RULES, Action
 from spec.answers import Limits, SearchResult, Status, Strategy
 from spec.cost import COST_DOC, COST_TERMS, total_cost
@@ -70,7 +71,17 @@ from spec.errors import EngineError
 from spec.lanes import Lane
 from spec.motion import ramp_s
 from spec.scenario import Problem, Scenario
-from spec.sound import EPS_M, Checks, SoundState, advance, follower_limit_m, rear_binds, sensed_extents
+from spec.sound import (
+    EPS_M,
+    Checks,
+    SoundState,
+    advance,
+    follower_limit_m,
+    rear_binds,
+    sensed_extents,
+    slowest_ahead_mps,
+    vehicles,
+)
 from spec.state import State
 from spec.windows import NO_SPEED, Instant, Stretch, Window, sound_table
 
@@ -186,6 +197,16 @@ class Substitution:
         return z3.BoolRef(found, ctx)
 
 
+class Skip(NamedTuple):
+    """Vehicles (by index in their lane) the lane's speeds do not move: their conditions are ``oracle.bmc_own``'s."""
+
+    same: frozenset[int]
+    oncoming: frozenset[int]
+
+
+NO_SKIP = Skip(frozenset(), frozenset())
+
+
 @dataclass(frozen=True, slots=True)
 class Interval:
     """A vehicle's positions at the plan's start, metres ahead of the AV: parameters, or a phantom's constants."""
@@ -228,7 +249,7 @@ class SoundEncoding:
             raise EngineError("z3: the identity check (the paper's cell rules on the sound model's code path) is "
                               "answered by the interpreter only")
         self.problem, self.sound, self.grid = problem, sound, problem.grid
-        self.table = table = sound_table(sound, problem.grid)
+        self.table = table = sound_table(sound, problem.grid, hold_floor_mps(scenario))
         b = sound.bounds
         self.low, self.high = b.same_mps.low_mps, b.same_mps.high_mps
         self.low_o, self.high_o = b.oncoming_mps.low_mps, b.oncoming_mps.high_mps
@@ -335,17 +356,25 @@ class SoundEncoding:
         """The most ``hi`` a vehicle the AV cuts in ahead of may have at ``at``."""
         return at.x_m - self.ex - self.length_m - self.gap(self.high - at.v_mps + self.ev) - self.high * at.t_s
 
-    def _safe(self, window: Window, frame: Frame, follows: Sequence[Cond]) -> list[Cond]:
-        """Every stretch of ``window`` keeps its conditions (``SoundRules.check_segment``)."""
+    def _safe(self, window: Window, frame: Frame, follows: Sequence[Cond], skip: Skip = NO_SKIP) -> list[Cond]:
+        """Every stretch of ``window`` keeps its conditions (``SoundRules.check_segment``); ``skip``: the vehicles
+        that move by their own dynamics (``oracle.bmc_own``), not held to their lane's speeds here."""
         out: list[Cond] = []
         for s in window.stretches:
             if s.left:
-                out += self._entering(s, frame) if s.entering else self._ahead(s, frame, follows)
+                out += self._entering(s, frame, skip) if s.entering else self._ahead(s, frame, follows, skip)
             if s.right:
-                out += self._oncoming(s, frame)
+                out += self._oncoming(s, frame, skip)
         return out
 
-    def _ahead(self, s: Stretch, frame: Frame, follows: Sequence[Cond]) -> list[Cond]:
+    def _lane_same(self, follows: Sequence[Cond], skip: Skip) -> list[tuple[Interval, Cond]]:
+        """The same-direction vehicles held to their lane's speeds, each with whether it follows the AV."""
+        return [(v, f) for i, (v, f) in enumerate(zip(self.same, follows, strict=True)) if i not in skip.same]
+
+    def _lane_oncoming(self, skip: Skip) -> list[Interval]:
+        return [v for j, v in enumerate(self.oncoming) if j not in skip.oncoming]
+
+    def _ahead(self, s: Stretch, frame: Frame, follows: Sequence[Cond], skip: Skip = NO_SKIP) -> list[Cond]:
         """AHEAD: a vehicle not a follower, held ahead at a piece's start and short of the gap at its worst instant;
         BEHIND: a follower over the pieces where followers bind (``spec.sound.rear_binds``), nearer than a cut-in's.
         Both are bounds on the same term (``lo + low dt - dx``), so each piece refuses an interval of it; their
@@ -355,15 +384,15 @@ class SoundEncoding:
             need = self._ahead_need(b.ahead) + EPS_M
             refused.append((self._held_from(b.start), need))
         out = [_or(follower, self._atom(v.lo, self.low, frame, "<", lo), self._atom(v.lo, self.low, frame, ">=", hi))
-               for lo, hi in _union(refused) for v, follower in zip(self.same, follows, strict=True)]
+               for lo, hi in _union(refused) for v, follower in self._lane_same(follows, skip)]
         rear = [self._behind_allow(b.behind) for b in s.pieces if b.rear]
         if rear:  # BEHIND: each follower behind as a cut-in must be, at the strictest of those pieces
             allow = min(rear)
             out += [_or(_not(follower), self._atom(v.hi, self.high, frame, "<=", allow - EPS_M))
-                    for v, follower in zip(self.same, follows, strict=True)]
+                    for v, follower in self._lane_same(follows, skip)]
         return out
 
-    def _oncoming(self, s: Stretch, frame: Frame) -> list[Cond]:
+    def _oncoming(self, s: Stretch, frame: Frame, skip: Skip = NO_SKIP) -> list[Cond]:
         """ONCOMING: a vehicle not passed at a piece's start and short of the gap at its worst instant. A piece whose
         need is no larger and whose passing line no lower than another's asks nothing more: left out."""
         pieces = []
@@ -373,9 +402,9 @@ class SoundEncoding:
                 + self.high_o * at.t_s
             pieces.append((need, self._passed_from(b.start)))
         return [_or(self._atom(v.lo, -self.high_o, frame, ">=", need), self._atom(v.hi, -self.low_o, frame, "<=", line))
-                for need, line in _strongest(pieces) for v in self.oncoming]
+                for need, line in _strongest(pieces) for v in self._lane_oncoming(skip)]
 
-    def _entering(self, s: Stretch, frame: Frame) -> list[Cond]:
+    def _entering(self, s: Stretch, frame: Frame, skip: Skip = NO_SKIP) -> list[Cond]:
         """Each same-direction vehicle certainly ahead at every piece, or certainly behind at every piece (at the
         plan's start: one that cannot be clear ahead, ``spec.sound.follower_limit_m``)."""
         ahead = max(self._ahead_need(b.ahead) for b in s.pieces)
@@ -388,23 +417,24 @@ class SoundEncoding:
             behind = min(self._behind_allow(b.behind) for b in s.pieces)
         return [_or(self._atom(v.lo, self.low, frame, ">=", ahead + EPS_M),
                     self._atom(v.hi, 0.0 if s.at_start else self.high, frame, "<=", behind - EPS_M))
-                for v in self.same]
+                for v, _ in self._lane_same([False] * len(self.same), skip)]
 
-    def _end(self, window: Window, frame: Frame, lane: Lane, follows: Sequence[Cond]) -> list[Cond]:
+    def _end(self, window: Window, frame: Frame, lane: Lane, follows: Sequence[Cond], skip: Skip = NO_SKIP) \
+            -> list[Cond]:
         """After the continuation: in the right lane every oncoming vehicle passed; in the left lane, unless the AV
         is slow enough never to close in, no vehicle but a follower held ahead, and no follower at all where one
         would close in on the AV (``spec.sound.rear_binds`` at the end speed)."""
         end = window.end
         if lane is Lane.RIGHT:
-            return [self._passed(v, end, frame) for v in self.oncoming]
+            return [self._passed(v, end, frame) for v in self._lane_oncoming(skip)]
         out = []
         if self.sound.minimal_risk.closes_in(end.v_mps, self.low):
-            out += [_not(_and(_not(f), self._held(v, end, frame))) for v, f in zip(self.same, follows, strict=True)]
+            out += [_not(_and(_not(f), self._held(v, end, frame))) for v, f in self._lane_same(follows, skip)]
         if rear_binds(self.sound.bounds, end.v_mps):  # a follower that keeps its speed closes in for ever
-            out += [_not(f) for f in follows]
+            out += [_not(f) for _, f in self._lane_same(follows, skip)]
         return out
 
-    def _goal(self, window: Window, frame: Frame, lane: Lane) -> list[Cond]:
+    def _goal(self, window: Window, frame: Frame, lane: Lane, skip: Skip = NO_SKIP) -> list[Cond]:
         """The goal at the continuation window's boundary (``SoundRules.goal_holds``)."""
         goal, at, out = self.problem.goal, window.boundary, list[Cond]()
         if goal.av_lane is not None:
@@ -412,16 +442,17 @@ class SoundEncoding:
         ex, length = self.ex, self.length_m
         if goal.targets_behind:
             out += [self._atom(self.same[i].hi, self.high, frame, "<=", at.x_m - ex - length - self.high * at.t_s)
-                    for i in self.targets]
+                    for i in self.targets if i not in skip.same]
         if goal.nearest_target_m is not None:
             if not self.targets:
                 out.append(False)
-            else:
+            elif self.targets[0] not in skip.same:
                 v, most = self.same[self.targets[0]], float(goal.nearest_target_m)
                 out.append(self._atom(v.lo, self.low, frame, ">=", at.x_m + ex + length - self.low * at.t_s))
                 out.append(self._atom(v.hi, self.high, frame, "<=", at.x_m - ex + length + most - self.high * at.t_s))
         if goal.oncoming_passed:
-            out += [self._passed(v, at, frame) for v in self.oncoming[:self.sensed_oncoming]]
+            out += [self._passed(v, at, frame) for j, v in enumerate(self.oncoming[:self.sensed_oncoming])
+                    if j not in skip.oncoming]
         return out
 
     # -- the interpreter's prune, translated (``SoundRules.hopeless``) -------------------------------------------
@@ -558,39 +589,73 @@ class SoundEncoding:
             options.append(_term(_and(selected, *body)))
         return _any(options)
 
-    def start_refused(self, scenario: Scenario) -> bool:
-        """Whether ``scenario``'s start is refused (the start's conditions on its values, simplified to a constant)."""
-        return z3.is_false(self._at(scenario, self.start_safe))
+    def start_refused(self, scenario: Scenario, own: Own | None = None, timeout_s: float | None = None) -> bool:
+        """Whether ``scenario``'s start is refused (the start's conditions on its values, simplified to a constant);
+        ``own``: its measured vehicles (``oracle.bmc_own``), each held to its own dynamics."""
+        if not own:
+            return z3.is_false(self._at(scenario, self.start_safe))
+        skip = Skip(frozenset(own.same), frozenset(own.oncoming))
+        window = self.table.start[scenario.lane]
+        lane_bound = self._safe(window, ABSOLUTE, [False] * len(self.same), skip)
+        return not (z3.is_true(self._at(scenario, _term(_and(*lane_bound))))
+                    and unbroken(own.broken(window, [z3.BoolVal(False)] * len(self.same)), timeout_s))
 
     def _at(self, scenario: Scenario, term: z3.BoolRef) -> z3.BoolRef:
         """``term`` at ``scenario``'s interval ends, simplified (to a constant: they are its only unknowns)."""
         fixed = [(p, z3.RealVal(v)) for p, v in self.values(scenario)]
         return z3.simplify(z3.substitute(term, *fixed) if fixed else term)
 
-    def holds(self, scenario: Scenario, actions: Sequence[Action], goal: bool) -> bool:
+    def holds(self, scenario: Scenario, actions: Sequence[Action], goal: bool, own: Own | None = None,
+              timeout_s: float | None = None) -> bool:
         """Whether ``actions``, a sequence known whole (``spec.commitment.Proofs.holds``), keep every condition from
         ``scenario``'s start: each step's window (``SoundTable.window`` at the step's own state, its lookup rule
         evaluated here, every state being known; cut where the ramp into the next action starts), the followers
         classified at each move into the left lane as ``transition`` does, then the continuation (its window and its
         end; with ``goal``, the goal at its boundary). No prune and no count of lane changes: an escape is neither
-        a plan's step nor a move towards the goal."""
+        a plan's step nor a move towards the goal. ``own``: the scenario's measured vehicles, each held to its own
+        dynamics (``oracle.bmc_own``; a move back from the passing lane under the no-acceleration profile holds
+        them from the passing window's start)."""
         table, lane = self.table, scenario.lane
+        own = own if own else None
+        skip = NO_SKIP if own is None else Skip(frozenset(own.same), frozenset(own.oncoming))
         state = SoundState(lane, 0, 0, 0, 0, None, None)
+        out_units: int | None = None  # when the AV moved out into the passing lane (``SoundRules.passing_from_s``)
         start = table.start[lane]
-        follows: list[Cond] = [_not(self._held(v, start.boundary, ABSOLUTE)) for v in self.same]
+        follows = self._follows(start.boundary, own)
         conditions: list[Cond] = []
+        broken: list[z3.BoolRef] = []
         for k, action in enumerate(actions):
             following = actions[k + 1] if k + 1 < len(actions) else None
             window = table.state_window(state, action, following)
-            if ACTION_RULES[action].to_lane is Lane.LEFT:
-                follows = [_not(self._held(v, window.boundary, ABSOLUTE)) for v in self.same]
-            conditions += self._safe(window, ABSOLUTE, follows)
+            to_lane = ACTION_RULES[action].to_lane
+            if to_lane is Lane.LEFT:
+                follows = self._follows(window.boundary, own)
+            conditions += self._safe(window, ABSOLUTE, follows, skip)
+            if own is not None:
+                held_s = None
+                if to_lane is Lane.LEFT and own.held_passing:
+                    held_s = out_units * table.unit_s if out_units is not None else \
+                        0.0 if state.lane is Lane.RIGHT else None
+                broken += own.broken(window, follows, held_s)
+            if to_lane is not None:
+                out_units = state.t_units if to_lane is Lane.RIGHT else None
             state = advance(state, action, self.grid, table.speeds_mps[table.action_speed[action]])
         window = table.state_window(state, None)
         if goal:
-            conditions += self._goal(window, ABSOLUTE, state.lane)
-        conditions += [*self._safe(window, ABSOLUTE, follows), *self._end(window, ABSOLUTE, state.lane, follows)]
-        return z3.is_true(self._at(scenario, _term(_and(*conditions))))
+            conditions += self._goal(window, ABSOLUTE, state.lane, skip)
+            if own is not None:
+                conditions += own.goal(window, state.lane, self.problem.goal, self.targets, self.sensed_oncoming)
+        conditions += [*self._safe(window, ABSOLUTE, follows, skip), *self._end(window, ABSOLUTE, state.lane, follows,
+                                                                                 skip)]
+        if own is not None:
+            broken += [*own.broken(window, follows), *own.end_broken(window, state.lane, follows)]
+        return z3.is_true(self._at(scenario, _term(_and(*conditions)))) and unbroken(broken, timeout_s)
+
+    def _follows(self, at: Instant, own: Own | None) -> list[Cond]:
+        """Which same-direction vehicles follow the AV from a move into the left lane (or the start) at ``at``: those
+        not held ahead there, each measured one by its own dynamics."""
+        return [z3.Not(own.held(i, at)) if own is not None and i in own.same else _not(self._held(v, at, ABSOLUTE))
+                for i, v in enumerate(self.same)]
 
 
 class Unrolling:
@@ -663,8 +728,18 @@ PRUNE = True
 
 
 def shape(problem: Problem) -> Hashable:
-    """What an encoding depends on: ``oracle.bmc``'s shape, the sound model's assumptions, the prune."""
-    return bmc.shape(problem), problem.scenario.sound, PRUNE
+    """What an encoding depends on: ``oracle.bmc``'s shape, the sound model's assumptions, the minimal-risk
+    manoeuvre's hold speed, the prune."""
+    return bmc.shape(problem), problem.scenario.sound, hold_floor_mps(problem.scenario), PRUNE
+
+
+def hold_floor_mps(scenario: Scenario) -> float:
+    """The speed the minimal-risk manoeuvre brakes to (``spec.sound.slowest_ahead_mps``: a standstill where a
+    same-direction vehicle's speed was measured): the table's windows are its vehicles'."""
+    s = scenario
+    assert s.sound is not None
+    return slowest_ahead_mps(s.sound, vehicles(s.lane, s.left_lane, s.right_lane, s.grid, s.sound, s.left_m, s.right_m,
+                                               s.left_mps, s.right_mps))
 
 
 _encodings: OrderedDict[Hashable, SoundEncoding] = OrderedDict()

@@ -10,6 +10,7 @@ from oracle.search import trivial_answer
 from spec.answers import Limits, SearchResult, Status, Strategy
 from spec.cost import COST_DOC, COST_TERMS
 from spec.engines import Engine, register
+from spec.escapes import Semantics
 from spec.scenario import Problem
 
 
@@ -57,5 +58,5 @@ def _beyond(problem: Problem) -> SearchResult:
 INTERPRETER = register(
     Engine("interpreter", (Strategy.SENSIBLE, Strategy.SHORTEST, Strategy.OPTIMAL), _solve,
            "Python reference interpreter and planners", _beyond, sound=True, commit=True,
-           measured_speeds=True, overtaken_profile=True)
+           measured_speeds=tuple(Semantics), overtaken_profile=tuple(Semantics))
 )

@@ -8,6 +8,8 @@ import z3
 from oracle import bmc, bmc_commit, bmc_sound
 from spec.answers import Limits, SearchResult, Strategy
 from spec.engines import Engine, register
+from spec.errors import EngineError
+from spec.escapes import Semantics
 from spec.scenario import Problem
 
 
@@ -22,6 +24,9 @@ def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult
     try:
         if sound is not None and sound.commitment is not None:
             return bmc_commit.solve(problem, strategy, limits)
+        if sound is not None and (problem.scenario.left_mps or problem.scenario.right_mps):
+            raise EngineError("z3: measured speeds are answered under the commitment semantics only (its whole-plan "
+                              "encoding moves every vehicle at its lane's speeds)")
         return solvers[strategy](problem, limits)
     except z3.Z3Exception as err:
         if bmc._cancelled(str(err)):
@@ -31,4 +36,5 @@ def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult
 
 Z3 = register(Engine("z3", tuple(bmc.SOLVERS), _solve,
                      "Z3 bounded model checking: shortest lengths, optimal plans, proofs within the horizon",
-                     sound=True, commit=True))
+                     sound=True, commit=True, measured_speeds=(Semantics.COMMIT,),
+                     overtaken_profile=(Semantics.COMMIT,)))

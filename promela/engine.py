@@ -7,6 +7,7 @@ from __future__ import annotations
 from promela import commit, runner
 from spec.answers import Limits, SearchResult, Strategy
 from spec.engines import Engine, register
+from spec.escapes import Semantics
 from spec.scenario import Problem
 
 
@@ -21,5 +22,5 @@ def _solve(problem: Problem, strategy: Strategy, limits: Limits) -> SearchResult
 
 SPIN = register(Engine("spin", (Strategy.SENSIBLE, Strategy.SHORTEST), _solve,
                        "Spin model checker, verifier compiled once per model and cached",
-                       check_tools=runner.check_tools, sound=True, commit=True, measured_speeds=True,
-                       overtaken_profile=True))
+                       check_tools=runner.check_tools, sound=True, commit=True, measured_speeds=tuple(Semantics),
+                       overtaken_profile=tuple(Semantics)))

@@ -29,6 +29,7 @@ from spec.assumptions import Bounds, speed_error_mps, world_bounds
 from spec.dynamics import Overtaken, VehicleSpeeds, parse_overtaken, parse_vehicle_speeds
 from spec.engines import Engine, check_strategy, get_engine, load_engines, parse_strategy
 from spec.errors import OptionError, check_number
+from spec.escapes import Semantics
 from spec.faults import DEFAULT_STEERING_OFFSET_DEG, NO_FAULTS, FaultKind, FaultSpec, parse_faults
 from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
@@ -158,7 +159,7 @@ class DriveConfig:
         object.__setattr__(self, "vehicle_speeds", parse_vehicle_speeds(self.vehicle_speeds))
         if self.vehicle_speeds is VehicleSpeeds.MEASURED:  # the sound model's drives read them (the paper's: cells)
             why = ("needs --tracking on (speeds are measured by the tracks)" if not self.tracking else
-                   None if get_engine(self.engine).measured_speeds else
+                   None if Semantics.WHOLE in get_engine(self.engine).measured_speeds else
                    f"engine {self.engine} answers every vehicle at its lane's speeds only")
             if why is not None:
                 raise OptionError("--vehicle-speeds", self.vehicle_speeds.value, why)
@@ -166,7 +167,7 @@ class DriveConfig:
         if self.overtaken is not Overtaken.PHYSICS and self.vehicle_speeds is not VehicleSpeeds.MEASURED:
             raise OptionError("--overtaken", self.overtaken.value, "needs --vehicle-speeds measured (the profile "
                               "speaks of vehicles whose speed was measured; it applies to the sound model's drives)")
-        if self.overtaken is not Overtaken.PHYSICS and not get_engine(self.engine).overtaken_profile:
+        if self.overtaken is not Overtaken.PHYSICS and Semantics.WHOLE not in get_engine(self.engine).overtaken_profile:
             raise OptionError("--overtaken", self.overtaken.value, f"engine {self.engine} answers measured vehicles "
                               "by their physics only")
 

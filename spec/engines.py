@@ -16,6 +16,7 @@ from importlib.metadata import entry_points
 from spec.answers import Limits, SearchResult, Strategy
 from spec.dynamics import Overtaken
 from spec.errors import OptionError, ToolMissing
+from spec.escapes import Semantics
 from spec.scenario import Problem, Scenario
 
 Solver = Callable[[Problem, Strategy, Limits], SearchResult]
@@ -38,12 +39,12 @@ class Engine:
     sound: bool = False
     #: Whether it answers the sound model's commitment semantics (``spec.escapes``); the others its whole plans only.
     commit: bool = False
-    #: Whether it answers vehicles with their own measured speeds (``Scenario.left_mps``, ``spec.dynamics``); the
-    #: others answer every vehicle at its lane's speeds only.
-    measured_speeds: bool = False
-    #: Whether it answers the no-acceleration profile (``spec.dynamics.Overtaken``) for such vehicles; the others
-    #: answer their physics only.
-    overtaken_profile: bool = False
+    #: The semantics under which it answers vehicles with their own measured speeds (``Scenario.left_mps``,
+    #: ``spec.dynamics``); under the others it answers every vehicle at its lane's speeds only.
+    measured_speeds: tuple[Semantics, ...] = ()
+    #: The semantics under which it answers the no-acceleration profile (``spec.dynamics.Overtaken``) for such
+    #: vehicles; under the others it answers their physics only.
+    overtaken_profile: tuple[Semantics, ...] = ()
 
     def ready(self) -> None:
         """Check, before any work, that the engine can run here (exit 4 with the install command if not)."""
@@ -119,16 +120,32 @@ def check_model(engine: Engine, scenario: Scenario) -> None:
         raise OptionError("--semantics", "commit", f"engine {engine.name} answers the sound model's whole plans only "
                           f"(--semantics whole); committed actions with an escape are answered by: {able}")
     given = [(k, v) for k, v in (("left_mps", scenario.left_mps), ("right_mps", scenario.right_mps)) if v is not None]
-    if scenario.sound is not None and given and not engine.measured_speeds:
-        able = ", ".join(e.name for e in load_engines().values() if e.measured_speeds) or "none"
+    semantics = semantics_of(scenario)
+    if scenario.sound is not None and given and semantics not in engine.measured_speeds:
+        able = ", ".join(e.name for e in load_engines().values() if semantics in e.measured_speeds) or "none"
         raise OptionError(given[0][0], [list(s) for s in given[0][1]], f"engine {engine.name} answers every vehicle "
-                          f"at its lane's speeds only; vehicles with their own measured speeds are answered by: {able}")
+                          f"at its lane's speeds only{_under(engine.measured_speeds, semantics)}; vehicles with their "
+                          f"own measured speeds are answered by: {able}")
     if scenario.sound is not None and scenario.left_mps and scenario.sound.overtaken is not Overtaken.PHYSICS \
-            and not engine.overtaken_profile:
-        able = ", ".join(e.name for e in load_engines().values() if e.overtaken_profile) or "none"
+            and semantics not in engine.overtaken_profile:
+        able = ", ".join(e.name for e in load_engines().values() if semantics in e.overtaken_profile) or "none"
         raise OptionError("--overtaken", scenario.sound.overtaken.value, f"engine {engine.name} answers measured "
-                          f"vehicles by their physics only; the {scenario.sound.overtaken.value} profile is answered "
-                          f"by: {able}")
+                          f"vehicles by their physics only{_under(engine.overtaken_profile, semantics)}; the "
+                          f"{scenario.sound.overtaken.value} profile is answered by: {able}")
+
+
+def semantics_of(scenario: Scenario) -> Semantics:
+    """How ``scenario``'s sound model answers: its commitment semantics, or whole plans (the paper's rules too)."""
+    sound = scenario.sound
+    return Semantics.COMMIT if sound is not None and sound.commitment is not None else Semantics.WHOLE
+
+
+def _under(able: tuple[Semantics, ...], semantics: Semantics) -> str:
+    """Where an engine answers a feature under other semantics than ``semantics``: which (for its refusal)."""
+    if not able:
+        return ""
+    return f" under --semantics {semantics.value} (it answers them under --semantics " \
+           f"{', '.join(s.value for s in able)})"
 
 
 def answers(engine: Engine, scenario: Scenario) -> bool:

@@ -3,6 +3,7 @@ a verifier per snapshot, on the same snapshots, in one run.
 
 Usage: python -m ci.bench.loop [--km 2] [--seeds 1,2,3] [--engines interpreter,spin] [--cells 21]
                                [--traffic paper] [--sensor exact] [--compiled 10] [--commitments 40]
+                               [--commitment-engines interpreter,spin,z3] [--timeout 10]
 
 Every engine drives the same seeds under the sound model (``sensible``); each plan's time is the pipeline's as the
 drive counts it (``RunSummary.plan_ms``: final model, then preparations; every new measured speed of the AV builds
@@ -12,8 +13,9 @@ plans (the sensible plans are the same plans). Then ``--compiled`` of the first 
 the loop, and by a verifier compiled for the snapshot (``promela.runner.search_compiling``: spin -a, gcc, pan);
 each through the pipeline as a drive times it (``oracle.planner.solve``: without the interpreter's checks of the
 answer that ``plan`` adds after the clock stops). Last, ``--commitments`` snapshots of the first engine's drives are
-planned by each engine under the commitment semantics (``spec.commitment``; Spin's tables built afresh, as a new
-speed's): what a decision costs when the loop commits (every engine answering it: #61 moves the loop there).
+planned by each of ``--commitment-engines`` under the commitment semantics (``spec.commitment``; sensible where the
+engine answers it, else shortest; Spin's tables built afresh, as a new speed's; past ``--timeout`` seconds an answer
+is incomplete, counted): what a decision costs when the loop commits (#61 moves the loop there).
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ from sim.parts import DriveConfig
 from sim.simulator import run_drive
 from sim.summary import RunSummary
 from spec import windows
-from spec.answers import Status, Strategy
+from spec.answers import Limits, Status, Strategy
 from spec.engines import Engine, get_engine
 from spec.escapes import COMMIT
 from spec.files import scenario_from_dict
@@ -70,6 +72,9 @@ def main() -> None:
     parser.add_argument("--traffic", default="paper")
     parser.add_argument("--sensor", default="exact")
     parser.add_argument("--compiled", type=int, default=10, help="snapshots planned by compiling a verifier each")
+    parser.add_argument("--commitment-engines", default=None, help="the engines that plan those snapshots under the "
+                        "commitment semantics (default: --engines)")
+    parser.add_argument("--timeout", type=float, default=10.0, help="seconds per commitment, past them incomplete")
     parser.add_argument("--commitments", type=int, default=40, help="snapshots planned under the commitment "
                         "semantics by each engine")
     args = parser.parse_args()
@@ -110,8 +115,12 @@ def main() -> None:
         console.print(f"target: {engine}'s plans over the budget <= {TARGET_OVER:.0%}: "
                       f"{'met' if share <= TARGET_OVER else 'NOT met'} ({share:.1%}); same drives: "
                       f"{'yes' if same else 'NO'}")
+    committing = engines if args.commitment_engines is None else \
+        [e.strip() for e in args.commitment_engines.split(",") if e.strip()]
+    for engine in committing:
+        get_engine(engine)  # an unknown name: bad input before the drives' results are printed
     _commitments(console, [scenario_from_dict(s) for r in runs[reference] for s in r.snapshots][: args.commitments],
-                 engines, budget_ms)
+                 committing, budget_ms, args.timeout)
     snapshots = [scenario_from_dict(s) for r in runs.get("spin", []) for s in r.snapshots][: args.compiled]
     if not snapshots:
         return
@@ -130,27 +139,33 @@ def main() -> None:
                   f"{'met' if ratio >= TARGET_RATIO else 'NOT met'} ({ratio:.0f}x)")
 
 
-def _commitments(console: Console, snapshots: list[Scenario], engines: list[str], budget_ms: float) -> None:
+def _commitments(console: Console, snapshots: list[Scenario], engines: list[str], budget_ms: float,
+                 timeout_s: float) -> None:
     """The snapshots under the commitment semantics, per engine: ms per answer (the pipeline's, unchecked; Spin's
-    tables built afresh) against the budget, and which answers are commitments."""
+    tables built afresh) against the budget, which answers are commitments and which are incomplete."""
     committed = [replace(s, sound=replace(s.sound, commitment=COMMIT)) for s in snapshots if s.sound is not None]
     if not committed:
         return
     table = Table(title=f"the first drives' {len(committed)} snapshots under the commitment semantics (ms per answer)")
-    for col in ("engine", "n", "median", "p99", "max", f"over {budget_ms:.0f} ms", "commitments"):
+    for col in ("engine", "strategy", "n", "median", "p99", "max", f"over {budget_ms:.0f} ms", "commitments",
+                f"incomplete ({timeout_s:g} s)"):
         table.add_column(col, justify="right")
     for engine in engines:
         answers: list[Status] = []
+        strategy = Strategy.SENSIBLE if Strategy.SENSIBLE in get_engine(engine).strategies else Strategy.SHORTEST
 
-        def run(scenario: Scenario, engine: str = engine, answers: list[Status] = answers) -> None:
+        def run(scenario: Scenario, engine: str = engine, answers: list[Status] = answers,
+                strategy: Strategy = strategy) -> None:
             if engine == "spin":
                 _fresh_tables()
-            answers.append(solve(scenario, Strategy.SENSIBLE, engine=engine).status)
+            answers.append(solve(scenario, strategy, engine=engine, limits=Limits(timeout_s=timeout_s)).status)
 
         ms = timed(committed, run)
         over = int((ms > budget_ms).sum())
-        table.add_row(engine, str(len(ms)), f"{np.median(ms):.2f}", f"{np.percentile(ms, 99):.2f}", f"{ms.max():.2f}",
-                      f"{over} ({over / len(ms):.1%})", str(sum(s is Status.PLAN for s in answers[1:])))
+        table.add_row(engine, strategy.value, str(len(ms)), f"{np.median(ms):.2f}", f"{np.percentile(ms, 99):.2f}",
+                      f"{ms.max():.2f}", f"{over} ({over / len(ms):.1%})",
+                      str(sum(s is Status.PLAN for s in answers[1:])),
+                      str(sum(s is Status.INCOMPLETE for s in answers[1:])))
     console.print(table)
 
 

@@ -34,7 +34,7 @@ from oracle.coverage import CoverageTarget, rules_exercised, rules_on
 from spec.answers import Limits, Status
 from spec.constants import DEFAULT_HORIZON
 from spec.errors import OptionError, ScenarioError
-from spec.escapes import COMMIT
+from spec.escapes import COMMIT, Semantics
 from spec.files import scenario_from_dict, scenario_to_dict
 from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
@@ -202,6 +202,11 @@ class Campaign:
         if self.commit:  # and a campaign of whole plans
             key["semantics"] = "commit"
         return key
+
+    @property
+    def semantics(self) -> Semantics:
+        """The semantics the campaign holds the engines to (the paper's rules: whole plans)."""
+        return Semantics.COMMIT if self.commit else Semantics.WHOLE
 
     def with_model(self, scenario: Scenario) -> Scenario:
         """``scenario`` under the campaign's model (a drawn one keeps its own bounds), under its semantics."""

@@ -217,8 +217,9 @@ def hypothesis_job(name: str, campaign: Campaign, out_dir: str, profile_name: st
     @settings(PROFILES[profile_name], max_examples=campaign.count or PROFILES[profile_name].max_examples,
               database=DirectoryBasedExampleDatabase(str(out / "hypothesis" / name)))
     @given(scenarios(grid, campaign.horizon, campaign.sound,
-                     all(get_engine(e).measured_speeds for e in campaign.engines),
-                     all(get_engine(e).overtaken_profile for e in campaign.engines), campaign.commit))
+                     all(campaign.semantics in get_engine(e).measured_speeds for e in campaign.engines),
+                     all(campaign.semantics in get_engine(e).overtaken_profile for e in campaign.engines),
+                     campaign.commit))
     def test(scenario: Scenario) -> None:
         result = check_scenario(scenario, [prop], campaign.engines, campaign.timeout_s)
         if name not in done.get(result["key"], {}).get("verdicts", {}):

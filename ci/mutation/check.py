@@ -143,7 +143,7 @@ DETECTORS: tuple[Detector, ...] = (
     Detector("crossval sound commitments hypothesis (CI's)",
              lambda m, work: _crossval(work / "sound-commit-hypothesis", "--source", "hypothesis", "--seed",
                                        _ci_seed(), "--model", "sound", "--semantics", "commit", "--engines",
-                                       "interpreter,spin", "--timeout", "60"),
+                                       "interpreter,spin,z3", "--timeout", "60"),
              SOUND_DRAWS_FAIL, (("HYPOTHESIS_PROFILE", "ci"),)),
     Detector("tests (all)", lambda m, work: _pytest("tests", SELF_CHECK), (1,), tests=True),
 )

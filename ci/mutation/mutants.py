@@ -311,6 +311,16 @@ MUTANTS: tuple[Mutant, ...] = (
            "            window = table.state_window(state, action)\n",
            "Z3 checks a step known to be followed by another of a different speed to its end at its own speed",
            ("tests/oracle/test_bmc_commit.py",)),
+    Mutant("z3-measured-checked-only-while-braking", "oracle/bmc_own.py",
+           "        for ph in phases:\n            u0, u1 = max(t0_s, ph.t0_s), min(t1_s, ph.t1_s)",
+           "        for ph in phases[:1]:\n            u0, u1 = max(t0_s, ph.t0_s), min(t1_s, ph.t1_s)",
+           "Z3 checks a measured vehicle over the first phase of its travel bound only (braking, not standing after "
+           "it; speeding up, not holding its top)", ("tests/oracle/test_bmc_commit.py",)),
+    Mutant("z3-measured-follower-at-its-lanes-top", "oracle/bmc_own.py",
+           "                if rear_binds(self.sound.bounds, slowest, v):",
+           "                if rear_binds(self.sound.bounds, slowest):",
+           "Z3 holds a measured follower in the AV's lane to its lane's top, not to its own",
+           ("tests/oracle/test_bmc_commit.py",)),
     # -- the commitment semantics (spec.commitment, every engine's): each caught by the continuous-motion checks ----
     Mutant("commit-one-action-past-its-escape", "spec/commitment.py",
            "        if escape is not None:\n            return plan[:n], escape",
