@@ -13,6 +13,7 @@ from oracle.planner import plan as run_plan
 from spec.answers import Strategy
 from spec.engines import get_engine, load_engines
 from spec.errors import ExitCode
+from spec.escapes import Semantics
 from spec.library import BUILTINS
 
 
@@ -35,13 +36,21 @@ def scenarios(as_json: bool) -> None:
 
 @click.command()
 def engines() -> None:
-    """List the registered engines and the strategies each answers."""
+    """List the registered engines: the strategies each answers, the sound model's semantics, and under which of
+    them it answers measured speeds and the no-acceleration profile."""
     table = Table(title="engines")
-    for col in ("engine", "strategies", "description"):
+    for col in ("engine", "strategies", "sound model", "measured speeds", "no-acceleration", "description"):
         table.add_column(col)
     for engine in load_engines().values():
-        table.add_row(engine.name, ", ".join(s.value for s in engine.strategies), engine.description)
+        semantics = [Semantics.WHOLE] * engine.sound + [Semantics.COMMIT] * engine.commit
+        table.add_row(engine.name, ", ".join(s.value for s in engine.strategies), _under(tuple(semantics)),
+                      _under(engine.measured_speeds), _under(engine.overtaken_profile), engine.description)
     print_table(table)
+
+
+def _under(semantics: tuple[Semantics, ...]) -> str:
+    """The semantics a feature is answered under, in the options' words ("-": none)."""
+    return ", ".join(s.value for s in sorted(semantics, key=lambda s: s.value, reverse=True)) or "-"
 
 
 @click.command()
