@@ -27,7 +27,7 @@ from spec.dynamics import Dynamics, Overtaken, Phase
 from spec.lanes import Lane
 from spec.models import GoalRule
 from spec.scenario import Scenario
-from spec.sound import EPS_M, Vehicle, follower_limit_m, rear_binds, vehicles
+from spec.sound import EPS_M, Vehicle, follower_limit_m, rear_binds, scenario_vehicles
 from spec.windows import Binding, Instant, Stretch, Window
 
 Cond: TypeAlias = z3.BoolRef | bool
@@ -61,14 +61,14 @@ class Own:
     lanes; empty when no speed was measured)."""
 
     def __init__(self, scenario: Scenario) -> None:
-        s, sound = scenario, scenario.sound
+        sound = scenario.sound
         assert sound is not None
         self.sound = sound
-        found = vehicles(s.lane, s.left_lane, s.right_lane, s.grid, sound, s.left_m, s.right_m, s.left_mps,
-                         s.right_mps)
-        own = [v for v in found if v.dynamics is not None and v.index is not None]
+        own = [v for v in scenario_vehicles(scenario) if v.dynamics is not None and v.index is not None]
         self.same = {v.index: v for v in own if v.lane is Lane.LEFT and v.index is not None}
         self.oncoming = {v.index: v for v in own if v.lane is Lane.RIGHT and v.index is not None}
+        #: the indices the lane-wide conditions leave to these (``oracle.bmc_sound.Skip``)
+        self.skip_same, self.skip_oncoming = frozenset(self.same), frozenset(self.oncoming)
         self.held_passing = sound.overtaken is Overtaken.NO_ACCELERATION and bool(self.same)
         self.ex, self.ev = sound.tracking.position_m, sound.tracking.speed_mps
         self.length_m = sound.safety.vehicle_length_m

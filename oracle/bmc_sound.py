@@ -77,10 +77,9 @@ from spec.sound import (
     SoundState,
     advance,
     follower_limit_m,
+    hold_floor_mps,
     rear_binds,
     sensed_extents,
-    slowest_ahead_mps,
-    vehicles,
 )
 from spec.state import State
 from spec.windows import NO_SPEED, Instant, Stretch, Window, sound_table
@@ -594,7 +593,7 @@ class SoundEncoding:
         ``own``: its measured vehicles (``oracle.bmc_own``), each held to its own dynamics."""
         if not own:
             return z3.is_false(self._at(scenario, self.start_safe))
-        skip = Skip(frozenset(own.same), frozenset(own.oncoming))
+        skip = Skip(own.skip_same, own.skip_oncoming)
         window = self.table.start[scenario.lane]
         lane_bound = self._safe(window, ABSOLUTE, [False] * len(self.same), skip)
         return not (z3.is_true(self._at(scenario, _term(_and(*lane_bound))))
@@ -617,7 +616,7 @@ class SoundEncoding:
         them from the passing window's start)."""
         table, lane = self.table, scenario.lane
         own = own if own else None
-        skip = NO_SKIP if own is None else Skip(frozenset(own.same), frozenset(own.oncoming))
+        skip = NO_SKIP if own is None else Skip(own.skip_same, own.skip_oncoming)
         state = SoundState(lane, 0, 0, 0, 0, None, None)
         out_units: int | None = None  # when the AV moved out into the passing lane (``SoundRules.passing_from_s``)
         start = table.start[lane]
@@ -732,14 +731,6 @@ def shape(problem: Problem) -> Hashable:
     manoeuvre's hold speed, the prune."""
     return bmc.shape(problem), problem.scenario.sound, hold_floor_mps(problem.scenario), PRUNE
 
-
-def hold_floor_mps(scenario: Scenario) -> float:
-    """The speed the minimal-risk manoeuvre brakes to (``spec.sound.slowest_ahead_mps``: a standstill where a
-    same-direction vehicle's speed was measured): the table's windows are its vehicles'."""
-    s = scenario
-    assert s.sound is not None
-    return slowest_ahead_mps(s.sound, vehicles(s.lane, s.left_lane, s.right_lane, s.grid, s.sound, s.left_m, s.right_m,
-                                               s.left_mps, s.right_mps))
 
 
 _encodings: OrderedDict[Hashable, SoundEncoding] = OrderedDict()

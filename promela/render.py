@@ -26,7 +26,7 @@ from spec.lanes import Lane
 from spec.models import GOAL_RULES, MODEL_RULES, GoalKind, GoalRule, ModelKind, ModelRules
 from spec.rules import behind_line, collision_span, left_path, nearest_span, passed_line
 from spec.scenario import Problem, Scenario
-from spec.sound import sensed_extents, vehicles
+from spec.sound import scenario_vehicles, sensed_extents
 
 ENV_VAR = "OVERTAKE_SCENARIO"
 LANE_CODE = {Lane.LEFT: 0, Lane.RIGHT: 1}
@@ -171,8 +171,7 @@ def _measured_speeds(s: Scenario) -> list[object]:
     if s.sound is None or (s.left_mps is None and s.right_mps is None):
         return [0]
     words: list[object] = [1]
-    for v in vehicles(s.lane, s.left_lane, s.right_lane, s.grid, s.sound, s.left_m, s.right_m, s.left_mps,
-                      s.right_mps):
+    for v in scenario_vehicles(s):
         if v.index is None:
             continue  # a phantom: the verifier places it from its edge
         if v.dynamics is None:

@@ -55,7 +55,7 @@ from spec.errors import EngineError, ToolMissing
 from spec.grid import Grid
 from spec.lanes import Lane
 from spec.scenario import Problem
-from spec.sound import Sound
+from spec.sound import Sound, hold_floor_mps
 from spec.state import State
 
 MODEL_FILE = "model.pml"
@@ -245,7 +245,7 @@ def table_file(problem: Problem) -> Path:
     """The sound model's table for ``problem`` (``promela.sound.table_text``), in the cache and named by the hash of
     its text: written once (atomically: a concurrent writer of the same text wins or loses whole), found whole
     after, rewritten when damaged. Its path goes to the verifier with the scenario."""
-    data, name = _table_data(sound_model.table_sound(problem), problem.grid, sound_model.hold_floor_mps(problem))
+    data, name = _table_data(sound_model.table_sound(problem), problem.grid, hold_floor_mps(problem.scenario))
     path = cache_dir() / "sound-tables" / name
     if path in _WRITTEN:
         return path

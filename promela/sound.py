@@ -50,7 +50,7 @@ from spec.grid import Grid
 from spec.lanes import Lane
 from spec.models import GoalRule, ModelRules
 from spec.scenario import Problem
-from spec.sound import EPS_M, Checks, Sound, follower_limit_m, rear_binds, slowest_ahead_mps, vehicles
+from spec.sound import EPS_M, Checks, Sound, follower_limit_m, rear_binds
 from spec.windows import (
     NO_SPEED,
     Binding,
@@ -122,17 +122,6 @@ def table_sound(problem: Problem) -> Sound:
     if sound is None:
         raise ValueError("the problem's scenario has no sound model")
     return replace(sound, oncoming_view_m=None)
-
-
-def hold_floor_mps(problem: Problem) -> float:
-    """The speed ``problem``'s minimal-risk manoeuvre brakes to (``spec.sound.slowest_ahead_mps``: a standstill where
-    a same-direction vehicle's speed was measured, else its lane's slowest): its table's windows
-    (``spec.windows.sound_table``) are its vehicles'."""
-    s = problem.scenario
-    if s.sound is None:
-        raise ValueError("the problem's scenario has no sound model")
-    return slowest_ahead_mps(s.sound, vehicles(s.lane, s.left_lane, s.right_lane, s.grid, s.sound, s.left_m,
-                                               s.right_m, s.left_mps, s.right_mps))
 
 
 def shape_of(problem: Problem) -> SoundShape:

@@ -39,7 +39,7 @@ import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 from spec.actions import ACTION_RULES, Action
 from spec.assumptions import DEFAULT_PROFILE, Bounds, Phantom, check_bounds, parse_speeds, profile
@@ -55,6 +55,9 @@ from spec.motion import Ramp, action_speed_mps, ramp_gain_m, ramp_s
 from spec.physical import SENSORS
 from spec.safety import SAFETY, Conflict, SafetySpec
 from spec.tracking import VEHICLE_SPEED_CHANGE, Speed, SpeedChange
+
+if TYPE_CHECKING:
+    from spec.scenario import Scenario
 
 #: Conditions are held to this much slack on the safe side, so that float rounding never makes a gap look large.
 EPS_M = 1e-9
@@ -355,6 +358,22 @@ def vehicles(lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Gr
     for p in sound.phantoms():  # the whole unseen stretch: from the view's edge outwards
         out.append(Vehicle(p.lane, None, *p.stretch_m, f"phantom ({p.why}, {p.dx_m:+g} m)"))
     return tuple(out)
+
+
+def scenario_vehicles(scenario: Scenario) -> tuple[Vehicle, ...]:
+    """``vehicles`` of ``scenario`` under its own sound model: what it sensed of each vehicle's place and speed."""
+    s, sound = scenario, scenario.sound
+    if sound is None:
+        raise ValueError("the scenario has no sound model")
+    return vehicles(s.lane, s.left_lane, s.right_lane, s.grid, sound, s.left_m, s.right_m, s.left_mps, s.right_mps)
+
+
+def hold_floor_mps(scenario: Scenario) -> float:
+    """The speed ``scenario``'s minimal-risk manoeuvre brakes to (``slowest_ahead_mps`` of its vehicles: a standstill
+    where a same-direction vehicle's speed was measured, else its lane's slowest): every engine's table of it is
+    built for that speed (``spec.windows.sound_table``)."""
+    assert scenario.sound is not None
+    return slowest_ahead_mps(scenario.sound, scenario_vehicles(scenario))
 
 
 def measured_dynamics(sound: Sound, lane: Lane, speed_mps: Speed) -> Dynamics:

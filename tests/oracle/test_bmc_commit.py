@@ -162,7 +162,7 @@ def test_z3_holds_the_pass_beside_a_measured_target_only_under_the_no_accelerati
 def test_z3_holds_what_the_interpreter_holds_before_a_vehicle_standing_ahead(cell: int,
                                                                              start_mps: float | None) -> None:
     """A vehicle measured standing in the AV's lane: the minimal-risk manoeuvre must stop behind it, whose window
-    the table builds for a standstill (``bmc_sound.hold_floor_mps``)."""
+    the table builds for a standstill (``spec.sound.hold_floor_mps``)."""
     scenario = _standing_ahead(cell, start_mps)
     _same_proofs(replace(scenario, sound=replace(scenario.sound, commitment=COMMIT)))
 
