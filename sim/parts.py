@@ -29,7 +29,7 @@ from spec.assumptions import Bounds, speed_error_mps, world_bounds
 from spec.dynamics import Overtaken, VehicleSpeeds, parse_overtaken, parse_vehicle_speeds
 from spec.engines import Engine, check_strategy, get_engine, load_engines, parse_strategy
 from spec.errors import OptionError, check_number
-from spec.escapes import Semantics
+from spec.escapes import COMMIT, Semantics, parse_semantics
 from spec.faults import DEFAULT_STEERING_OFFSET_DEG, NO_FAULTS, FaultKind, FaultSpec, parse_faults
 from spec.grid import PAPER_GRID, Grid, grid_for
 from spec.lanes import Lane
@@ -139,6 +139,9 @@ class DriveConfig:
     #: stop at the first failure a sensing fault caused; restart after any other (counted apart): the reliability
     #: target's measure, km between sensing-caused failures (docs/faults.md)
     until_sensing_failure: bool = False
+    #: how the sound model decides (``spec.escapes``): whole plans proved to their end, or a committed part with a
+    #: proved escape, executed until the next decision (the escape when a decision finds no committed part)
+    semantics: Semantics = Semantics.WHOLE
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "strategy", parse_strategy(self.strategy))
@@ -156,20 +159,29 @@ class DriveConfig:
             check_number(option, value, high)
         world_bounds(self.traffic, self.sensor, self.range_sd_m, self.bounds_scale)  # checked here, not in a worker
         object.__setattr__(self, "faults", parse_faults(self.faults, "--faults", self.steering_offset_deg).text())
+        object.__setattr__(self, "semantics", parse_semantics(self.semantics, "--semantics"))
+        if self.semantics is not Semantics.WHOLE and self.model != "sound":
+            raise OptionError("--semantics", self.semantics.value, "needs --model sound (the paper's rules plan "
+                              "whole plans)")
+        if self.semantics is Semantics.COMMIT and not get_engine(self.engine).commit:
+            able = ", ".join(e.name for e in load_engines().values() if e.commit)
+            raise OptionError("--semantics", self.semantics.value, f"engine {self.engine} does not answer the "
+                              f"commitment semantics (answered by: {able})")
         object.__setattr__(self, "vehicle_speeds", parse_vehicle_speeds(self.vehicle_speeds))
         if self.vehicle_speeds is VehicleSpeeds.MEASURED:  # the sound model's drives read them (the paper's: cells)
             why = ("needs --tracking on (speeds are measured by the tracks)" if not self.tracking else
-                   None if Semantics.WHOLE in get_engine(self.engine).measured_speeds else
-                   f"engine {self.engine} answers every vehicle at its lane's speeds only")
+                   None if self.semantics in get_engine(self.engine).measured_speeds else
+                   f"engine {self.engine} answers every vehicle at its lane's speeds only under --semantics "
+                   f"{self.semantics.value}")
             if why is not None:
                 raise OptionError("--vehicle-speeds", self.vehicle_speeds.value, why)
         object.__setattr__(self, "overtaken", parse_overtaken(self.overtaken))
         if self.overtaken is not Overtaken.PHYSICS and self.vehicle_speeds is not VehicleSpeeds.MEASURED:
             raise OptionError("--overtaken", self.overtaken.value, "needs --vehicle-speeds measured (the profile "
                               "speaks of vehicles whose speed was measured; it applies to the sound model's drives)")
-        if self.overtaken is not Overtaken.PHYSICS and Semantics.WHOLE not in get_engine(self.engine).overtaken_profile:
+        if self.overtaken is not Overtaken.PHYSICS and self.semantics not in get_engine(self.engine).overtaken_profile:
             raise OptionError("--overtaken", self.overtaken.value, f"engine {self.engine} answers measured vehicles "
-                              "by their physics only")
+                              f"by their physics only under --semantics {self.semantics.value}")
 
     @property
     def stops_at_failure(self) -> bool:
@@ -201,7 +213,8 @@ class DriveConfig:
     def parts(self, observers: tuple[Observer, ...] = ()) -> Parts:
         """The assembly this configuration names."""
         # the sound model plans for the snapshot's age at the plan's start: the planner's time in the loop
-        sound = Sound(replace(self.bounds, latency_s=LOOP.plan_budget_s), overtaken=self.overtaken) \
+        sound = Sound(replace(self.bounds, latency_s=LOOP.plan_budget_s), overtaken=self.overtaken,
+                      commitment=COMMIT if self.semantics is Semantics.COMMIT else None) \
             if self.model == "sound" else None
         planner = Planner(get_engine(self.engine), self.strategy, self.grid, sound)
         traffic, sensor = TRAFFIC_MODELS[self.traffic], SENSOR_MODELS[self.sensor]
@@ -227,7 +240,7 @@ class DriveConfig:
         for key, default in (("restart_after_collision", False), ("opportunity_checks", 0), ("model", "paper"),
                              ("bounds_scale", 1.0), ("faults", ""), ("tracking", False),
                              ("until_sensing_failure", False), ("vehicle_speeds", VehicleSpeeds.LANE.value),
-                             ("overtaken", Overtaken.PHYSICS.value)):
+                             ("overtaken", Overtaken.PHYSICS.value), ("semantics", Semantics.WHOLE.value)):
             if data[key] == default:  # records written before these existed stay the same campaign
                 del data[key]
         return data
@@ -244,7 +257,7 @@ class DriveConfig:
                 "opportunity_checks": self.opportunity_checks, "model": self.model, "bounds_scale": self.bounds_scale,
                 "faults": self.faults, "steering_offset_deg": self.steering_offset_deg, "tracking": self.tracking,
                 "until_sensing_failure": self.until_sensing_failure, "vehicle_speeds": self.vehicle_speeds.value,
-                "overtaken": self.overtaken.value}
+                "overtaken": self.overtaken.value, "semantics": self.semantics.value}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> DriveConfig:

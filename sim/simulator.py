@@ -125,6 +125,8 @@ class Simulator:
         self.safety.forget()
         self._implied: dict[int, float] = {}  # body -> the gap the plan under way implies at the action's end
         self.pending: tuple[Action, ...] = ()  # the rest of the plan under way when a re-plan starts
+        self.escape_pending = False  # the plan under way ends in a proved escape (the commitment semantics)
+        self.pending_profiles: list[SpeedProfile] = []  # the proved reference's speed profile for ``pending``
         self.doing = "start-up"  # what the AV was executing: recorded with every collision
         self._side = {car.body: car.x_m > 0 for car in self.traffic.left}
         self.visible = RaySensor(self.scene, self.sensor_rng)  # exact rays, no draws: is a vehicle sensed now?
@@ -664,8 +666,11 @@ class Simulator:
         if answer.status is Status.PLAN and answer.actions:
             if not self._refused(answer.actions, self.pending):
                 self._sight(readings, pose.x_m)
+                escape = answer.commit.escape if answer.commit is not None else None
+                if escape is not None:
+                    self.summary.committed_parts += 1
                 return functools.partial(self._sound_execute, answer.actions, pose.speed_mps,
-                                         f"plan {self.summary.plans}")
+                                         f"plan {self.summary.plans}", escape=escape.actions if escape else ())
             why = "an overtake refused: the tracker holds a contradiction"
         elif answer.status not in (Status.PLAN, *NO_OVERTAKE):
             self._fail(FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
@@ -687,9 +692,12 @@ class Simulator:
         self.containment, self.interrupt = self.proved, False
         pending, self.pending = self.pending, ()
         if pending:
-            self.summary.kept_plans.append(self._event(FailureKind.PLANNER, why, "kept the rest of the last plan"))
+            self.summary.escapes += int(self.escape_pending)
+            self.summary.kept_plans.append(self._event(FailureKind.PLANNER, why, "kept the rest of the last plan"
+                                                       + (" and its escape" if self.escape_pending else "")))
             self._sight(self._sense(), *self._where_swept())
-            return self._sound_execute(pending, self.car.pose().speed_mps, "the last plan, kept", kept=True)
+            # on the last decision's reference and clock: its windows, its position reference, its speed profile
+            return self._run_proved(pending, self.pending_profiles, len(pending), "the last plan, kept")
         self.summary.minimal_risk_steps += 1
         self.doing = f"minimal-risk manoeuvre (the last decision's, {why})"
         self.enveloped = True
@@ -700,28 +708,40 @@ class Simulator:
             self.enveloped = False
             self._observe(self.summary.plans, 0, None, None, [], since_s)
 
-    def _sound_execute(self, actions: tuple[Action, ...], speed_mps: float, what: str, kept: bool = False) -> bool:
+    def _sound_execute(self, actions: tuple[Action, ...], speed_mps: float, what: str,
+                       escape: tuple[Action, ...] = ()) -> bool:
         """Execute a sound decision's actions from the speed it planned with (the reference starts at the car), while
         its containment holds as the AV senses it; a sensed breach ends it at once (after any sideways move), and the
-        next decision re-plans from a fresh snapshot. The caller has sighted what the decision knew (``_sight``)."""
+        next decision re-plans from a fresh snapshot. The caller has sighted what the decision knew (``_sight``).
+        Under the commitment semantics ``actions`` are the committed part and ``escape`` the escape's actions proved
+        after it. The reference is the proved sequence's, ramps into the escape included: what is left of it is what
+        a decision that proves nothing keeps (``_keep_proved``)."""
+        if self.containment is not None:
+            self.containment.passing((*actions, *escape))
+        self.executor.reset_reference()
+        self.escape_pending = bool(escape)
+        sequence = (*actions, *escape)
+        return self._run_proved(sequence, plan_profiles(sequence, speed_mps, self.grid, to_common=False),
+                                len(actions), what)
+
+    def _run_proved(self, sequence: tuple[Action, ...], profiles: list[SpeedProfile], steps: int, what: str) -> bool:
+        """Run the first ``steps`` (at most ``replan_after_actions``) of a proved ``sequence`` along its
+        ``profiles``, from where the position reference stands; the rest stays pending for the next decision."""
         self._hand_back()
         self.proved = self.containment
-        if self.containment is not None and not kept:  # a kept plan's windows are its decision's, on its clock
-            self.containment.passing(actions)
         # a breach sensed while a take-over was under way did not interrupt it; it ends this decision before its step
         self.interrupt = self.interrupt or (self.containment is not None and self.containment.sensed is not None)
-        self.executor.reset_reference()
         # a breach sensed before the first step (while a take-over was handing back): no step
-        executed = () if self.interrupt else actions[: LOOP.replan_after_actions]
-        self.pending = actions[len(executed):]
+        executed = 0 if self.interrupt else min(steps, LOOP.replan_after_actions)
+        self.pending, self.pending_profiles = sequence[executed:], profiles[executed:]
         self.enveloped = True
         try:
-            profiles = plan_profiles(executed, speed_mps, self.grid, to_common=False) if executed else []
-            for k, (action, profile) in enumerate(zip(executed, profiles)):
-                self.doing = f"{action.value} ({what}, step {k + 1} of {len(actions)})"
-                self.pending = actions[k + 1:]
+            for k in range(executed):
+                action = sequence[k]
+                self.doing = f"{action.value} ({what}, step {k + 1} of {steps})"
+                self.pending, self.pending_profiles = sequence[k + 1:], profiles[k + 1:]
                 since_s = self.summary.sim_time_s
-                ran = self.executor.run(action, self._tick, profile, stop=lambda: self.interrupt and self.swept())
+                ran = self.executor.run(action, self._tick, profiles[k], stop=lambda: self.interrupt and self.swept())
                 self._observe(self.summary.plans, k + 1, action, None, [], since_s)
                 if not ran:
                     return False

@@ -55,6 +55,8 @@ def totals_table(results: list[RunSummary]) -> Table:
              str(sum(r.shadowed for r in results))),
             ("sound model: keep-lane steps / minimal-risk manoeuvres",
              f"{sum(r.keep_lane_steps for r in results)} / {sum(r.minimal_risk_steps for r in results)}"),
+            ("sound model: committed parts with an escape / escapes kept (--semantics commit)",
+             f"{sum(r.committed_parts for r in results)} / {sum(r.escapes for r in results)}"),
             ("sound model: fallback take-overs (after a breach)",
              f"{sum(len(r.takeovers) for r in results)} ({sum(t.after_breach for r in results for t in r.takeovers)})"),
             ("collisions", str(sum(len(r.collisions) for r in results))),

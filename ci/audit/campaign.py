@@ -43,6 +43,7 @@ from sim.tolerance import HISTOGRAM_BIN, histogram_quantile
 from spec.answers import Limits, Status, Strategy
 from spec.engines import answers, get_engine
 from spec.errors import OptionError
+from spec.escapes import Semantics
 from spec.files import scenario_from_dict
 from spec.grid import STANDARD_CELLS_M
 from spec.kinds import FailureKind
@@ -65,16 +66,20 @@ class AuditPlan:
                                                                   opportunity_checks=50))
     models: tuple[str, ...] = ("paper",)
     bounds_scales: tuple[float, ...] = (1.0,)
+    #: how the sound model decides (each one a combination of its own; the paper model's are whole plans)
+    semantics: tuple[Semantics, ...] = (Semantics.WHOLE,)
 
     def configs(self) -> list[DriveConfig]:
         """One drive configuration per combination, in table order (validated: bad input raises here)."""
-        return [replace(self.base, cell_m=cell, traffic=traffic, sensor=sensing, model=model, bounds_scale=scale)
+        return [replace(self.base, cell_m=cell, traffic=traffic, sensor=sensing, model=model, bounds_scale=scale,
+                        semantics=semantics)
                 for cell in self.cells_m for traffic in self.traffic for sensing in self.sensing
-                for model in self.models for scale in self.bounds_scales]
+                for model in self.models for semantics in (self.semantics if model == "sound" else (Semantics.WHOLE,))
+                for scale in self.bounds_scales]
 
 
 #: What each combination sets itself; every other setting of a drive is the audit's, and must match to resume.
-PER_COMBINATION = ("cell_m", "traffic", "sensor", "model", "bounds_scale")
+PER_COMBINATION = ("cell_m", "traffic", "sensor", "model", "bounds_scale", "semantics")
 
 
 def check_resume(log: Path, audit: AuditPlan, where: str) -> None:
@@ -189,6 +194,7 @@ class Row:
     #: drive counted as that long (``sim.simulator``): each a plan that would have acted late (machine-dependent)
     late_plans: int = 0
     blocked: int = 0  # episodes given up because the AV stood (``sim.simulator.BLOCKED_S``; a stop, never a failure)
+    semantics: str = Semantics.WHOLE.value  # how the sound model decided (``spec.escapes.Semantics``)
 
     def per_1000_km(self, count: float) -> float:
         return 1000 * count / self.km if self.km else math.nan
@@ -251,6 +257,7 @@ class Row:
                 "missed_opportunities_per_1000_km_estimated": _num(self.missed_per_1000_km),
                 "delayed_overtakes_per_1000_km_estimated": _num(self.delayed_per_1000_km),
                 "missed_examples": self.missed_examples, "model": self.model, "bounds_scale": self.bounds_scale,
+                "semantics": self.semantics,
                 "overtakes": self.overtakes, "overtakes_per_km": _num(self.per_1000_km(self.overtakes) / 1000),
                 "decisions": self.decisions, "attributed": self.attributed, "breaches": self.breaches,
                 "breaches_per_1000_km": _num(self.per_1000_km(sum(self.breaches.values()))),
@@ -272,7 +279,7 @@ def _num(value: float | None) -> float | None:
     return None if value is None or not math.isfinite(value) else round(value, 2)
 
 
-Key = tuple[float, str, str, str, float]  # cell, traffic, sensing, model, bounds scale
+Key = tuple[float, str, str, str, float, str]  # cell, traffic, sensing, model, bounds scale, semantics
 
 
 def rows(results: Iterable[Done]) -> list[Row]:
@@ -280,7 +287,8 @@ def rows(results: Iterable[Done]) -> list[Row]:
     groups: dict[Key, list[RunSummary]] = {}
     for done in results:
         c = done.config
-        groups.setdefault((c.cell_m, c.traffic, c.sensor, c.model, c.bounds_scale), []).append(done.summary)
+        groups.setdefault((c.cell_m, c.traffic, c.sensor, c.model, c.bounds_scale, c.semantics.value),
+                          []).append(done.summary)
     return [_row(key, runs) for key, runs in groups.items()]
 
 
@@ -323,7 +331,7 @@ def _row(key: Key, runs: list[RunSummary]) -> Row:
                sum(len(r.of_kind(FailureKind.LOSS_OF_CONTROL)) for r in runs),
                sum(len(r.of_kind(FailureKind.SENSING)) for r in runs), _fault_counts(runs),
                late_plans=sum(m > 1000 * LOOP.plan_budget_s for m in plan_ms),
-               blocked=sum(len(r.of_kind(FailureKind.BLOCKED)) for r in runs))
+               blocked=sum(len(r.of_kind(FailureKind.BLOCKED)) for r in runs), semantics=key[5])
 
 
 def _at_most(edge: float | None, largest: float) -> float | None:
@@ -375,11 +383,12 @@ def planning_cost(results: Iterable[Done], engines: Iterable[str], timeout_s: fl
     speeds; its count says how many)."""
     by_cell: dict[tuple[float, str], list[dict[str, Any]]] = {}
     for done in results:
-        by_cell.setdefault((done.config.cell_m, done.config.model), []).extend(done.summary.snapshots)
+        by_cell.setdefault((done.config.cell_m, decider(done.config.model, done.config.semantics.value)),
+                           []).extend(done.summary.snapshots)
     costs = []
     for (cell_m, model), snapshots in by_cell.items():
         scenarios = [scenario_from_dict(s) for s in snapshots]
-        if model == "sound":
+        if model != "paper":
             scenarios = scenarios[:MAX_SOUND_SNAPSHOTS]
         seen = scenarios
         for engine in engines:
@@ -421,9 +430,14 @@ def write_reports(audit_rows: list[Row], costs: list[Cost], audit: AuditPlan, ou
     return paths
 
 
+def decider(model: str, semantics: str) -> str:
+    """A model as tables name it: the sound model with its semantics when it commits (``sound (commit)``)."""
+    return model + (f" ({semantics})" if semantics != Semantics.WHOLE.value else "")
+
+
 def label(r: Row) -> str:
-    """A combination's model and bounds as tables name them."""
-    return r.model + ("" if r.bounds_scale == 1 else f" (bounds x{r.bounds_scale:g})")
+    """A combination's model, semantics and bounds as tables name them."""
+    return decider(r.model, r.semantics) + ("" if r.bounds_scale == 1 else f" (bounds x{r.bounds_scale:g})")
 
 
 def models_markdown(audit_rows: list[Row]) -> list[str]:
@@ -559,15 +573,17 @@ def _plot_by_cell(audit_rows: list[Row], png: Path, panels: tuple[tuple[str, Cal
     """One panel per figure against cell size, one line per traffic, sensing, model and bound scale."""
     plt = pyplot()
     fig, axes = plt.subplots(1, len(panels), figsize=(11, 4))
-    lines = dict.fromkeys((r.traffic, r.sensing, r.model, r.bounds_scale) for r in audit_rows)
+    lines = dict.fromkeys((r.traffic, r.sensing, decider(r.model, r.semantics), r.bounds_scale) for r in audit_rows)
     worlds = list(dict.fromkeys((traffic, sensing) for traffic, sensing, _, _ in lines))  # a colour each
     scales = list(dict.fromkeys(scale for _, _, _, scale in lines))  # a marker each
+    styles = {"paper": "-", "sound": "--"}  # any other: the sound model's commitments
     for ax, (what, value) in zip(axes, panels):
         for traffic, sensing, model, scale in lines:
             mine = sorted((r.cell_m, value(r)) for r in audit_rows
-                          if (r.traffic, r.sensing, r.model, r.bounds_scale) == (traffic, sensing, model, scale))
+                          if (r.traffic, r.sensing, decider(r.model, r.semantics), r.bounds_scale)
+                          == (traffic, sensing, model, scale))
             name = f"{traffic}, {sensing}, {model}{'' if scale == 1 else f' x{scale:g}'}"
-            ax.plot(*zip(*mine), "-" if model == "paper" else "--", marker="osD^v<>"[scales.index(scale) % 7],
+            ax.plot(*zip(*mine), styles.get(model, ":"), marker="osD^v<>"[scales.index(scale) % 7],
                     color=f"C{worlds.index((traffic, sensing)) % 10}", label=name)
         ax.set_xlabel("cell length (m)")
         ax.set_ylabel(what)

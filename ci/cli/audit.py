@@ -39,6 +39,7 @@ from ci.shared.options import out_dir as out_dir_checked
 from ci.shared.records import campaign_lock
 from spec.dynamics import Overtaken, VehicleSpeeds
 from spec.errors import ExitCode, OptionError
+from spec.escapes import Semantics, parse_semantics
 from spec.grid import STANDARD_CELLS_M, grid_for
 from spec.physical import EVENTS, NOISE
 
@@ -48,6 +49,15 @@ def _models(option: str, text: str, known: dict[str, Any]) -> tuple[str, ...]:
     from sim.parts import check_name
 
     return names(option, text, lambda name: check_name(option, name, known))
+
+
+def _semantics(text: str, models: tuple[str, ...]) -> tuple[Semantics, ...]:
+    """Distinct semantics of the sound model (``spec.escapes.Semantics``); more than whole plans needs it audited."""
+    chosen = tuple(parse_semantics(word, "--semantics") for word in names("--semantics", text))
+    if chosen != (Semantics.WHOLE,) and "sound" not in models:
+        raise OptionError("--semantics", text, "needs the sound model among --model (the paper's rules plan whole "
+                          "plans)")
+    return chosen
 
 
 def _scales(text: str) -> tuple[float, ...]:
@@ -81,6 +91,9 @@ def parse_cells(text: str) -> tuple[float, ...]:
 @click.option("--model", "model_text", default="paper,sound", show_default=True,
               help="The models that plan, compared over the same seeds: paper (its rules), sound (under the world's "
                    "bounds, spec.assumptions.world_bounds).")
+@click.option("--semantics", "semantics_text", default=Semantics.WHOLE.value, show_default=True,
+              help="How the sound model decides, comma-separated, each a combination of its own: whole (plans proved "
+                   "to their end) or commit (a committed part with a proved escape; docs/closed-loop.md).")
 @click.option("--bounds-scale", "scale_text", default="1", show_default=True,
               help="Factors on the world's bounds' widths (speeds about their middle, the sensing error), "
                    "comma-separated: 1 is the rule's own bounds. Every drive's containment is measured against them.")
@@ -114,14 +127,15 @@ def parse_cells(text: str) -> tuple[float, ...]:
 @vehicle_speeds_option
 @overtaken_option
 @click.option("--json", "as_json", is_flag=True)
-def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, scale_text: str, km: float, runs: int,
+def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, semantics_text: str, scale_text: str,
+          km: float, runs: int,
           seed: int, engine: str,
           cost_engines: str, snapshots: int, opportunity_checks: int, stop_rate_per_h: float,
           min_spawn_gap_m: float, range_sd_m: float, miss_rate: float, workers: int, executor_kind: str,
           scheduler: str | None, out_dir: str, fresh: bool, faults: str, steering_offset_deg: float,
           tracking: bool, vehicle_speeds: VehicleSpeeds, overtaken: Overtaken, as_json: bool) -> None:
     """Audit the grid abstraction: cell size x traffic model x sensing model x seeds, driven closed-loop."""
-    from ci.audit.campaign import AuditPlan, figure, label, planning_cost, rows, run_audit, write_reports
+    from ci.audit.campaign import AuditPlan, decider, figure, label, planning_cost, rows, run_audit, write_reports
     from ci.shared.progress import km_progress
     from sim.parts import PLANNING_MODELS, SENSOR_MODELS, TRAFFIC_MODELS, DriveConfig
     from spec.engines import get_engine
@@ -136,9 +150,10 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
                        opportunity_checks=opportunity_checks, faults=faults,
                        steering_offset_deg=steering_offset_deg, tracking=tracking, vehicle_speeds=vehicle_speeds,
                        overtaken=overtaken)
+    deciding = _models("--model", model_text, dict(PLANNING_MODELS))
     plan = AuditPlan(parse_cells(cells), _models("--traffic", traffic_text, dict(TRAFFIC_MODELS)),
                      _models("--sensing", sensing_text, dict(SENSOR_MODELS)), tuple(range(seed, seed + runs)), base,
-                     _models("--model", model_text, dict(PLANNING_MODELS)), _scales(scale_text))
+                     deciding, _scales(scale_text), _semantics(semantics_text, deciding))
     configs = plan.configs()
     for config in configs:
         config.parts()  # the engine exists and answers each model: bad input before any run starts
@@ -147,7 +162,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sca
     print_header(err, f"audit: {len(configs)} combination(s) x seeds {seed}..{seed + runs - 1} = {total} run(s) of "
                  f"{km:g} km; planner {engine}; faults {base.faults or 'none'}; "
                  f"tracking {'on' if tracking else 'off'}; on {executor.describe(total)}", out_dir)
-    labels = {i: f"{c.cell_m:g} m, {c.traffic}, {c.sensor}, {c.model}"
+    labels = {i: f"{c.cell_m:g} m, {c.traffic}, {c.sensor}, {decider(c.model, c.semantics.value)}"
                  + ("" if c.bounds_scale == 1 else f" x{c.bounds_scale:g}") + f", seed {s}"
              for i, (c, s) in enumerate((c, s) for c in configs for s in plan.seeds)}
     with km_progress(err, total, km, "already in audit.jsonl (resumed; --fresh runs it again)") as bar:

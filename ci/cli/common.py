@@ -111,6 +111,16 @@ def overtaken_option(command: Any) -> Any:
                         "as 'accelerated while overtaken') not at all. Needs --vehicle-speeds measured.")(command)
 
 
+def loop_semantics_option(command: Any) -> Any:
+    """``--semantics whole|commit`` for the closed loop's sound model, handed to the command as a ``Semantics``."""
+    from spec.escapes import Semantics
+
+    return _enum_option("--semantics", Semantics, Semantics.WHOLE,
+                        "How the sound model decides in the loop: whole plans proved to their end, or a committed "
+                        "part with a proved escape, executed until the next decision; when a decision proves nothing, "
+                        "the rest of the last one and its escape (docs/closed-loop.md). Needs --model sound.")(command)
+
+
 def horizon_option() -> Any:
     from ci.shared.options import HORIZON
 

@@ -10,6 +10,7 @@ import click
 from ci.cli.common import (
     err,
     faults_options,
+    loop_semantics_option,
     overtaken_option,
     print_header,
     print_json,
@@ -25,6 +26,7 @@ from spec.answers import Strategy
 from spec.dynamics import Overtaken, VehicleSpeeds
 from spec.engines import get_engine
 from spec.errors import ExitCode, OptionError
+from spec.escapes import Semantics
 from spec.grid import PAPER_GRID
 from spec.physical import LOOP
 
@@ -67,13 +69,14 @@ from spec.physical import LOOP
 @faults_options
 @vehicle_speeds_option
 @overtaken_option
+@loop_semantics_option
 @click.option("--json", "as_json", is_flag=True)
 def simulate(km: float, until_failure: bool, until_sensing_failure: bool, seed: int, engine: str, strategy: Strategy,
              cell_m: float, model: str, runs: int,
              workers: int, executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool,
              step_tolerance: float, plan_tolerance: float, paper_replanning: bool, faults: str,
              steering_offset_deg: float, tracking: bool, vehicle_speeds: VehicleSpeeds, overtaken: Overtaken,
-             as_json: bool) -> None:
+             semantics: Semantics, as_json: bool) -> None:
     """Drive the PyBullet simulator closed-loop and check every action against the model's prediction."""
     from ci.shared.progress import km_progress
     from ci.simulation.campaign import RUNS_FILE
@@ -90,7 +93,7 @@ def simulate(km: float, until_failure: bool, until_sensing_failure: bool, seed: 
     campaign = DriveConfig(km, until_failure, engine, strategy, not paper_replanning, step_tolerance, plan_tolerance,
                            cell_m, model=model, faults=faults, steering_offset_deg=steering_offset_deg,
                            tracking=tracking, until_sensing_failure=until_sensing_failure,
-                           vehicle_speeds=vehicle_speeds, overtaken=overtaken)
+                           vehicle_speeds=vehicle_speeds, overtaken=overtaken, semantics=semantics)
     if vehicle_speeds is VehicleSpeeds.MEASURED and model != "sound":
         raise OptionError("--vehicle-speeds", vehicle_speeds.value, "needs --model sound (the paper's rules read "
                           "cells alone)")
@@ -98,7 +101,8 @@ def simulate(km: float, until_failure: bool, until_sensing_failure: bool, seed: 
     get_engine(engine).ready()  # its tools are installed (exit 4), or every plan of every run would fail
     limit = f"{km:g} km" + (" or until failure" if until_failure else "") + (
         " or until a failure a sensing fault caused (others restart the drive)" if until_sensing_failure else "")
-    print_header(err, f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; {model} model; engine {engine}, "
+    decides = f"{model} model" + (f" ({semantics.value})" if model == "sound" else "")
+    print_header(err, f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; {decides}; engine {engine}, "
               f"{strategy.value}, {campaign.grid.describe()}; faults {campaign.faults or 'none'}; "
               f"tracking {'on' if tracking else 'off'}; "
               f"on {executor.describe(runs)}", Path(out_dir) / RUNS_FILE)

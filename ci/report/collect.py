@@ -16,7 +16,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-from ci.audit.campaign import figure
+from ci.audit.campaign import decider, figure
 from ci.report.closest import closest_figures, gap_order
 from ci.report.document import Figure, Report, Section, Table, from_rich
 from ci.report.histograms import breach_histograms, deviation_histograms
@@ -263,7 +263,8 @@ def audit_section(folder: Path, key: str) -> Section:
 
 def _model(row: dict[str, Any]) -> str:
     scale = row.get("bounds_scale", 1.0)
-    return str(row.get("model", "paper")) + ("" if scale == 1 else f" (bounds x{scale:g})")
+    return decider(str(row.get("model", "paper")), str(row.get("semantics", "whole"))) + (
+        "" if scale == 1 else f" (bounds x{scale:g})")
 
 
 def _audit_findings(rows: list[dict[str, Any]]) -> list[str]:

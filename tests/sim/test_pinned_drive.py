@@ -2,10 +2,11 @@
 
 The golden files were written by that code: ``run_drive(3, 2.0, out_dir=...)``'s summary (less its
 wall-clock fields) and its trace. The default assembly must reproduce both exactly: the same
-kilometres, overtakes, plans, deviations and every traced number. Figures added to the summary since (safety, traffic
-collisions, restarts, opportunities, containment and the sound model's counts, the shadowed snapshots and sensed
-and unseen breaches among them, the sensors' sweeps and the faults injected) are not part of that record: measuring
-containment, and sensing at a fixed 10 Hz rate whenever the planner decides, change nothing an exact drive does.
+kilometres, overtakes, plans, deviations and every traced number. Figures added to the summary since (safety,
+traffic collisions, restarts, opportunities, containment and the sound model's counts, its committed parts and
+escapes, the shadowed snapshots and sensed and unseen breaches among them, the sensors' sweeps and the faults
+injected) are not part of that record: measuring containment, and sensing at a fixed 10 Hz rate whenever the planner
+decides, change nothing an exact drive does.
 """
 
 from __future__ import annotations
@@ -28,7 +29,8 @@ def test_the_default_assembly_drives_the_pinned_drive_exactly(tmp_path: Path) ->
                                                             "opportunities", "decisions", "containment",
                                                             "breach_replans", "keep_lane_steps", "minimal_risk_steps",
                                                             "takeovers", "sweeps", "faults", "refusals", "shadowed",
-                                                            "sensed_breaches", "unseen_breaches"}
+                                                            "sensed_breaches", "unseen_breaches", "committed_parts",
+                                                            "escapes"}
     assert summary["traffic_collisions"] == 0 and summary["safety"]["contacts"] == 0 and summary["restarts"] == 0
     assert (tmp_path / "trace-seed3.jsonl").read_text() == (GOLDEN / "drive-seed3-2km-trace.jsonl").read_text()
 

@@ -593,17 +593,22 @@ def test_planning_is_named_once_in_what_the_av_was_doing_however_many_decisions_
     assert sim.doing == "planning (brake (plan 3, step 1 of 2))" and held == [LOOP.plan_budget_s] * 3
 
 
-@pytest.mark.parametrize(("traffic", "speeds"), [("paper", "lane"), ("following", "lane"), ("following", "measured")])
-def test_spin_and_the_interpreter_drive_the_same_sound_drive(traffic: str, speeds: str, tmp_path: Path) -> None:
+@pytest.mark.parametrize(("traffic", "speeds", "semantics"), [
+    ("paper", "lane", "whole"), ("following", "lane", "whole"), ("following", "measured", "whole"),
+    ("paper", "lane", "commit"), ("following", "measured", "commit")])
+def test_spin_and_the_interpreter_drive_the_same_sound_drive(traffic: str, speeds: str, semantics: str,
+                                                             tmp_path: Path) -> None:
     """The sound model's sensible plans are the same plans whichever engine finds them: a pinned drive planned by
     Spin is the interpreter's, summary (less its wall-clock figures and its configuration, which names the engine)
-    and trace alike, with lane-wide speeds and with each tracked vehicle's own. One answer may be worded apart: where
+    and trace alike, with lane-wide speeds and with each tracked vehicle's own, deciding by whole plans and by
+    committed parts with their escapes. One answer may be worded apart: where
     the interpreter proves there is no plan at any horizon, Spin answers only that there is none within it
     (``Engine.prove_beyond``); the AV does the same either way."""
     drives, plans = {}, []
     for engine in ("interpreter", "spin"):
         config = DriveConfig(1.0, engine=engine, model="sound", traffic=traffic, sensor="noisy",
-                             tracking=speeds == "measured", vehicle_speeds=speeds)
+                             tracking=speeds == "measured", vehicle_speeds=speeds,
+                             semantics=semantics)
         summary = run_drive(3, config, str(tmp_path / engine)).to_json()
         plans.append(summary["plans"])
         text = json.dumps({k: v for k, v in summary.items() if k not in (*WALL_CLOCK, "config")}, sort_keys=True) \

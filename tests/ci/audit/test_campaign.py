@@ -161,6 +161,21 @@ def test_rows_keep_models_and_bound_scales_apart_and_split_encounters_by_attribu
     assert table[0].overtakes == 8 and table[1].per_1000_km(table[1].overtakes) == 1000.0
 
 
+def test_the_sound_models_semantics_are_combinations_of_their_own_named_in_every_table() -> None:
+    from ci.audit.campaign import Done, label, markdown
+    from sim.summary import RunSummary
+    from spec.escapes import Semantics
+
+    plan = AuditPlan((21.0,), ("paper",), ("exact",), (1,), DriveConfig(1.0), ("paper", "sound"),
+                     semantics=(Semantics.WHOLE, Semantics.COMMIT))
+    assert [(c.model, c.semantics) for c in plan.configs()] == [
+        ("paper", Semantics.WHOLE), ("sound", Semantics.WHOLE), ("sound", Semantics.COMMIT)]
+    table = rows([Done(c, RunSummary(1, km=2.0, overtakes=k)) for k, c in enumerate(plan.configs())])
+    assert [label(r) for r in table] == ["paper", "sound", "sound (commit)"]
+    assert [r.overtakes for r in table] == [0, 1, 2] and table[2].to_json()["semantics"] == "commit"
+    assert "| sound (commit) |" in markdown(table, [], {})
+
+
 def test_rows_count_faults_their_failures_losses_of_control_and_unreadable_snapshots() -> None:
     from ci.audit.campaign import Done, markdown
     from sim.summary import Failure, RunSummary

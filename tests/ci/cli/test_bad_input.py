@@ -331,7 +331,8 @@ CASES: list[Case] = [
     _case("simulate", "--seed=4294967295", "--runs=2", named="--seed"),
     _case("simulate", "--until-failure", "--until-sensing-failure", named="--until-sensing-failure"),
     *out_dirs("simulate"), *unknown("simulate"), no_spin("simulate", "--engine=spin"), *faults("simulate"),
-    *vehicle_speeds("simulate"),
+    *vehicle_speeds("simulate"), *choices("simulate", "--semantics"),
+    _case("simulate", "--semantics=commit", named="--semantics"),  # the paper model plans whole plans
     # audit
     *numbers("audit", "--km", "--min-spawn-gap-m", "--range-sd-m", "--miss-rate"),
     *numbers("audit", "--stop-rate-per-h"),  # at most one stop starting per vehicle and control step
@@ -347,7 +348,9 @@ CASES: list[Case] = [
     _case("audit", "--miss-rate=1.5", named="--miss-rate"),
     *schedulers("audit"), *out_dirs("audit"), *unknown("audit"),
     no_spin("audit", "--engine=spin"), no_spin("audit", "--engines=spin"), *faults("audit"),
-    *vehicle_speeds("audit"),
+    *vehicle_speeds("audit"), *choices("audit", "--semantics", lists=True),
+    _case("audit", "--semantics=commit", "--model=paper", named="--semantics"),
+    _case("audit", "--semantics=commit,commit", "--model=sound", named="--semantics"),
     # crossval
     *numbers("crossval", "--timeout", "--cell-m"),
     *whole("crossval", "--workers", WORKERS), *whole("crossval", "--seed", SEED),

@@ -1,0 +1,115 @@
+"""The sound model's commitment semantics in the closed loop: each decision executes its committed part along the
+reference proved with its escape, and a decision that proves nothing keeps the rest of the last one on that
+decision's reference and clock."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+
+from sim.parts import DriveConfig
+from sim.simulator import Simulator
+from sim.summary import RunSummary
+from spec.actions import ACTION_RULES, Action
+from spec.errors import OptionError
+from spec.escapes import Semantics
+from spec.motion import SpeedProfile, action_speed_mps, plan_profiles
+
+#: The paper's world with noisy sensing, seed 5: within its first 1.4 km a committed part is followed by a decision
+#: that proves nothing, and the rest of the committed part and its escape are kept.
+SEED = 5
+KEPT = DriveConfig(1.4, model="sound", sensor="noisy", semantics=Semantics.COMMIT, restart_after_collision=True)
+
+
+class Recorded(Simulator):
+    """A simulator that records every proved sequence a decision executes (with its reference profiles), every
+    reset of the position reference, and every run of the proved sequence kept from the last decision."""
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        self.decided: list[tuple[tuple[Action, ...], list[SpeedProfile], float]] = []  # sequence, profiles, start mps
+        self.kept: list[tuple[tuple[Action, ...], list[SpeedProfile], bool]] = []  # ..., whether the reference reset
+        self.resets = 0
+        reset = self.executor.reset_reference
+
+        def counted(ahead_m: float = 0.0) -> None:
+            self.resets += 1
+            reset(ahead_m)
+
+        self.executor.reset_reference = counted  # type: ignore[method-assign]
+
+    def _sound_execute(self, actions: tuple[Action, ...], speed_mps: float, what: str,
+                       escape: tuple[Action, ...] = ()) -> bool:
+        sequence = (*actions, *escape)
+        self.decided.append((sequence, plan_profiles(sequence, speed_mps, self.grid, to_common=False), speed_mps))
+        return super()._sound_execute(actions, speed_mps, what, escape)
+
+    def _keep_proved(self, why: str) -> bool:
+        before = self.resets
+        pending, profiles = self.pending, list(self.pending_profiles)
+        ok = super()._keep_proved(why)
+        if pending:
+            self.kept.append((pending, profiles, self.resets > before))
+        return ok
+
+
+@pytest.fixture(scope="module")
+def kept_drive() -> tuple[Recorded, RunSummary]:
+    sim = Recorded(SEED, KEPT.parts(), restart_after_collision=True)
+    try:
+        return sim, sim.drive(KEPT.km)
+    finally:
+        sim.close()
+
+
+def test_a_kept_escape_runs_on_the_proved_reference_of_its_decision_not_one_restarted_at_the_car(
+        kept_drive: tuple[Recorded, RunSummary]) -> None:
+    """The proof of a committed part and its escape is made for one reference from the snapshot, ramps between
+    actions centred on their boundaries (the ramp into the escape starts inside the committed part). A decision
+    that proves nothing keeps what is left of that reference: the same profiles, on the decision's clock, without
+    restarting the position reference at the car (which would start the escape's ramp late: on seed 1 of this world
+    it put the AV back into the left lane beside the vehicle it had dropped behind)."""
+    sim, summary = kept_drive
+    assert summary.escapes >= 1 and sim.kept
+    for pending, profiles, reset in sim.kept:
+        assert not reset
+        whole = next((seq, prof) for seq, prof, _ in reversed(sim.decided) if seq[len(seq) - len(pending):] == pending)
+        assert profiles == whole[1][len(whole[0]) - len(pending):]  # the tail of the decision's own reference
+        assert all(p.offset_s > 0 for p in profiles)  # on that decision's clock
+
+
+def test_a_committed_part_ramps_into_its_escape_as_the_proof_has_it(kept_drive: tuple[Recorded, RunSummary]) -> None:
+    """Where the escape is slower than the committed part's last action, that action is executed with the ramp into
+    the escape already begun before their boundary (centred on it), as the proof of the two as one sequence has it."""
+    sim, _ = kept_drive
+    grid = KEPT.grid
+    slower = [(seq, prof, k) for seq, prof, _ in sim.decided for k in range(1, len(seq))
+              if action_speed_mps(seq[k], grid) < action_speed_mps(seq[k - 1], grid)]
+    assert slower
+    for seq, prof, k in slower:
+        end_s = float(ACTION_RULES[seq[k - 1]].duration_s)
+        assert prof[k - 1].at(end_s - 0.05) < action_speed_mps(seq[k - 1], grid) - 0.5
+
+
+def test_the_commitment_semantics_overtakes_with_nothing_hit_inside_the_assumptions(
+        kept_drive: tuple[Recorded, RunSummary]) -> None:
+    _, summary = kept_drive
+    assert summary.overtakes >= 1 and summary.committed_parts >= 1
+    assert summary.safety.count("contact", True) == 0 and summary.safety.count("near_miss", True) == 0
+    assert not summary.collisions
+    assert RunSummary.from_json(summary.to_json()).to_json() == summary.to_json()
+
+
+def test_the_loops_semantics_is_part_of_a_drives_configuration_and_bad_input_names_the_option() -> None:
+    assert DriveConfig.from_json(KEPT.to_json()) == KEPT
+    assert "semantics" not in DriveConfig(1.0, model="sound").to_json()  # whole plans' records: the same campaign
+    assert DriveConfig(1.0, model="sound", semantics="commit").semantics is Semantics.COMMIT  # type: ignore[arg-type]
+    with pytest.raises(OptionError, match="needs --model sound") as paper:
+        DriveConfig(1.0, semantics=Semantics.COMMIT)
+    assert paper.value.key == "--semantics"
+    with pytest.raises(OptionError) as bad:
+        DriveConfig(1.0, model="sound", semantics="sometimes")  # type: ignore[arg-type]
+    assert bad.value.key == "--semantics"
+    assert replace(KEPT, semantics=Semantics.WHOLE).parts().planner.sound.commitment is None  # type: ignore[union-attr]
+    assert KEPT.parts().planner.sound.commitment is not None  # type: ignore[union-attr]
