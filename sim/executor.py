@@ -45,11 +45,12 @@ class Executor:
         self.x_ref_m = self.car.pose().x_m + ahead_m
 
     def run(self, action: Action, tick: Callable[[float], bool], profile: SpeedProfile | None = None,
-            stop: Callable[[], bool] | None = None) -> bool:
+            stop: Callable[[], bool] | None = None, skip_s: float = 0.0) -> bool:
         """Execute ``action`` for its duration along ``profile`` (default: its speed throughout); False as soon
         as ``tick`` reports a collision. ``stop`` is asked after every control step once any sideways move is over
         (an action in lane has none: from its first step); when it says so the action ends there, the AV in the
-        action's lane."""
+        action's lane. ``skip_s``: the action's first seconds have gone by already (its reference goes on from
+        there, on the action's clock)."""
         rule = ACTION_RULES[action]
         if rule.from_lane is not None and rule.from_lane is not self.lane:
             raise EngineError(f"simulator: {action.value} asked of an AV in the {self.lane.value} lane "
@@ -62,7 +63,7 @@ class Executor:
         duration_s = float(rule.duration_s)
         steps = max(1, round(duration_s / self.dt_s))
         lateral_s = min(duration_s, LOOP.lane_change_lateral_s)
-        for k in range(steps):
+        for k in range(min(steps, round(skip_s / self.dt_s)), steps):
             phase = min(1.0, (k + 1) * self.dt_s / lateral_s)
             y_ref = y_from + (y_to - y_from) * (1 - math.cos(math.pi * phase)) / 2
             vy_ref = (y_to - y_from) * math.pi * math.sin(math.pi * phase) / (2 * lateral_s)

@@ -127,6 +127,7 @@ class Simulator:
         self.pending: tuple[Action, ...] = ()  # the rest of the plan under way when a re-plan starts
         self.escape_pending = False  # the plan under way ends in a proved escape (the commitment semantics)
         self.pending_profiles: list[SpeedProfile] = []  # the proved reference's speed profile for ``pending``
+        self.boundary = (0.0, 0.0)  # when the last action of a proved sequence ended, and its position reference then
         self.doing = "start-up"  # what the AV was executing: recorded with every collision
         self._side = {car.body: car.x_m > 0 for car in self.traffic.left}
         self.visible = RaySensor(self.scene, self.sensor_rng)  # exact rays, no draws: is a vehicle sensed now?
@@ -696,8 +697,11 @@ class Simulator:
             self.summary.kept_plans.append(self._event(FailureKind.PLANNER, why, "kept the rest of the last plan"
                                                        + (" and its escape" if self.escape_pending else "")))
             self._sight(self._sense(), *self._where_swept())
-            # on the last decision's reference and clock: its windows, its position reference, its speed profile
-            return self._run_proved(pending, self.pending_profiles, len(pending), "the last plan, kept")
+            # on the last decision's reference and clock: its windows, its position reference, its speed profile; the
+            # control steps since its last action ended (the sweep awaited, this decision's planning: the AV held its
+            # reference speed) are the kept plan's first
+            return self._run_proved(pending, self.pending_profiles, len(pending), "the last plan, kept",
+                                    since=self.boundary)
         self.summary.minimal_risk_steps += 1
         self.doing = f"minimal-risk manoeuvre (the last decision's, {why})"
         self.enveloped = True
@@ -724,9 +728,13 @@ class Simulator:
         return self._run_proved(sequence, plan_profiles(sequence, speed_mps, self.grid, to_common=False),
                                 len(actions), what)
 
-    def _run_proved(self, sequence: tuple[Action, ...], profiles: list[SpeedProfile], steps: int, what: str) -> bool:
+    def _run_proved(self, sequence: tuple[Action, ...], profiles: list[SpeedProfile], steps: int, what: str,
+                    since: tuple[float, float] | None = None) -> bool:
         """Run the first ``steps`` (at most ``replan_after_actions``) of a proved ``sequence`` along its
-        ``profiles``, from where the position reference stands; the rest stays pending for the next decision."""
+        ``profiles``, from where the position reference stands; the rest stays pending for the next decision.
+        ``since``: when the sequence was due to start and where its reference stood then (the end of the action
+        before it); the control steps since went by at the reference speed the AV held, so the reference is put where
+        the proof's is now and goes on on the proof's clock."""
         self._hand_back()
         self.proved = self.containment
         # a breach sensed while a take-over was under way did not interrupt it; it ends this decision before its step
@@ -734,6 +742,12 @@ class Simulator:
         # a breach sensed before the first step (while a take-over was handing back): no step
         executed = 0 if self.interrupt else min(steps, LOOP.replan_after_actions)
         self.pending, self.pending_profiles = sequence[executed:], profiles[executed:]
+        skip_s = 0.0
+        if executed and since is not None:
+            dt_s = self.executor.dt_s
+            last_s = float(ACTION_RULES[sequence[0]].duration_s) - dt_s  # at least its last control step is run
+            skip_s = min(round((self.summary.sim_time_s - since[0]) / dt_s) * dt_s, last_s)
+            self.executor.x_ref_m = since[1] + profiles[0].distance_m(skip_s) - profiles[0].distance_m(0.0)
         self.enveloped = True
         try:
             for k in range(executed):
@@ -741,11 +755,13 @@ class Simulator:
                 self.doing = f"{action.value} ({what}, step {k + 1} of {steps})"
                 self.pending, self.pending_profiles = sequence[k + 1:], profiles[k + 1:]
                 since_s = self.summary.sim_time_s
-                ran = self.executor.run(action, self._tick, profiles[k], stop=lambda: self.interrupt and self.swept())
+                ran = self.executor.run(action, self._tick, profiles[k], stop=lambda: self.interrupt and self.swept(),
+                                        skip_s=skip_s if k == 0 else 0.0)
                 self._observe(self.summary.plans, k + 1, action, None, [], since_s)
                 if not ran:
                     return False
                 self.summary.actions += 1
+                self.boundary = (self.summary.sim_time_s, self.executor.x_ref_m)
                 if self.interrupt:
                     break
                 if self._sensed_anew():

@@ -5,6 +5,7 @@ decision's reference and clock."""
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any
 
 import pytest
 
@@ -28,29 +29,40 @@ class Recorded(Simulator):
 
     def __init__(self, *args: object, **kwargs: object) -> None:
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
-        self.decided: list[tuple[tuple[Action, ...], list[SpeedProfile], float]] = []  # sequence, profiles, start mps
+        #: per decision executed: its sequence, its reference's profiles, where the reference started and when
+        self.decided: list[tuple[tuple[Action, ...], list[SpeedProfile], float, float]] = []
         self.kept: list[tuple[tuple[Action, ...], list[SpeedProfile], bool]] = []  # ..., whether the reference reset
+        self.ends: list[tuple[float, float]] = []  # after every action run: the position reference, and when
         self.resets = 0
-        reset = self.executor.reset_reference
+        self.kept_ends: list[tuple[float, float]] = []  # each kept plan's first action's end: reference, when
+        reset, run = self.executor.reset_reference, self.executor.run
 
         def counted(ahead_m: float = 0.0) -> None:
             self.resets += 1
             reset(ahead_m)
 
+        def ran(*args: Any, **kwargs: Any) -> bool:
+            ok = run(*args, **kwargs)
+            self.ends.append((self.executor.x_ref_m, self.summary.sim_time_s))
+            return ok
+
         self.executor.reset_reference = counted  # type: ignore[method-assign]
+        self.executor.run = ran  # type: ignore[method-assign]
 
     def _sound_execute(self, actions: tuple[Action, ...], speed_mps: float, what: str,
                        escape: tuple[Action, ...] = ()) -> bool:
         sequence = (*actions, *escape)
-        self.decided.append((sequence, plan_profiles(sequence, speed_mps, self.grid, to_common=False), speed_mps))
+        profiles = plan_profiles(sequence, speed_mps, self.grid, to_common=False)
+        self.decided.append((sequence, profiles, self.car.pose().x_m, self.summary.sim_time_s))
         return super()._sound_execute(actions, speed_mps, what, escape)
 
     def _keep_proved(self, why: str) -> bool:
-        before = self.resets
+        before, runs = self.resets, len(self.ends)
         pending, profiles = self.pending, list(self.pending_profiles)
         ok = super()._keep_proved(why)
         if pending:
             self.kept.append((pending, profiles, self.resets > before))
+            self.kept_ends.append(self.ends[runs])
         return ok
 
 
@@ -72,11 +84,16 @@ def test_a_kept_escape_runs_on_the_proved_reference_of_its_decision_not_one_rest
     it put the AV back into the left lane beside the vehicle it had dropped behind)."""
     sim, summary = kept_drive
     assert summary.escapes >= 1 and sim.kept
-    for pending, profiles, reset in sim.kept:
+    for (pending, profiles, reset), (x_ref_m, t_s) in zip(sim.kept, sim.kept_ends, strict=True):
         assert not reset
-        whole = next((seq, prof) for seq, prof, _ in reversed(sim.decided) if seq[len(seq) - len(pending):] == pending)
-        assert profiles == whole[1][len(whole[0]) - len(pending):]  # the tail of the decision's own reference
-        assert all(p.offset_s > 0 for p in profiles)  # on that decision's clock
+        seq, prof, x0_m, t0_s = next(d for d in reversed(sim.decided) if d[0][len(d[0]) - len(pending):] == pending)
+        j = len(seq) - len(pending)
+        assert profiles == prof[j:]  # the tail of the decision's own reference
+        # the first kept action ends where and when that reference ends it: on its place and clock, the control step
+        # the decision that kept it spent planning included (the executor's reference sums speeds step by step)
+        duration_s = float(ACTION_RULES[seq[j]].duration_s)
+        assert x_ref_m == pytest.approx(x0_m + prof[j].distance_m(duration_s), abs=0.1)
+        assert t_s == pytest.approx(t0_s + prof[j].offset_s + duration_s, abs=1e-6)
 
 
 def test_a_committed_part_ramps_into_its_escape_as_the_proof_has_it(kept_drive: tuple[Recorded, RunSummary]) -> None:
@@ -84,7 +101,7 @@ def test_a_committed_part_ramps_into_its_escape_as_the_proof_has_it(kept_drive: 
     the escape already begun before their boundary (centred on it), as the proof of the two as one sequence has it."""
     sim, _ = kept_drive
     grid = KEPT.grid
-    slower = [(seq, prof, k) for seq, prof, _ in sim.decided for k in range(1, len(seq))
+    slower = [(seq, prof, k) for seq, prof, _, _ in sim.decided for k in range(1, len(seq))
               if action_speed_mps(seq[k], grid) < action_speed_mps(seq[k - 1], grid)]
     assert slower
     for seq, prof, k in slower:
