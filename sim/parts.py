@@ -49,6 +49,12 @@ PLANNING_MODELS: dict[str, str] = {"paper": "the paper's rules (cells, the commo
                                    "sound": "the sound model under the world's bounds (spec.assumptions.world_bounds)"}
 
 
+def loop_semantics(model: str) -> Semantics:
+    """How a model decides in the loop unless told: the sound model by commitments (``spec.escapes``: a committed
+    part with a proved escape), the paper's rules by whole plans (the only way they plan)."""
+    return Semantics.COMMIT if model == "sound" else Semantics.WHOLE
+
+
 def check_name(option: str, name: str, known: dict[str, Any]) -> None:
     """A registered model's name; anything else is bad input naming the option and the known names."""
     if name not in known:
@@ -139,9 +145,10 @@ class DriveConfig:
     #: stop at the first failure a sensing fault caused; restart after any other (counted apart): the reliability
     #: target's measure, km between sensing-caused failures (docs/faults.md)
     until_sensing_failure: bool = False
-    #: how the sound model decides (``spec.escapes``): whole plans proved to their end, or a committed part with a
-    #: proved escape, executed until the next decision (the escape when a decision finds no committed part)
-    semantics: Semantics = Semantics.WHOLE
+    #: how the sound model decides (``spec.escapes``): a committed part with a proved escape, executed until the next
+    #: decision (the rest and its escape when a decision proves nothing), or whole plans proved to their end. None:
+    #: the model's own (``loop_semantics``); always a ``Semantics`` once made
+    semantics: Semantics | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "strategy", parse_strategy(self.strategy))
@@ -159,29 +166,36 @@ class DriveConfig:
             check_number(option, value, high)
         world_bounds(self.traffic, self.sensor, self.range_sd_m, self.bounds_scale)  # checked here, not in a worker
         object.__setattr__(self, "faults", parse_faults(self.faults, "--faults", self.steering_offset_deg).text())
-        object.__setattr__(self, "semantics", parse_semantics(self.semantics, "--semantics"))
-        if self.semantics is not Semantics.WHOLE and self.model != "sound":
-            raise OptionError("--semantics", self.semantics.value, "needs --model sound (the paper's rules plan "
+        semantics = loop_semantics(self.model) if self.semantics is None else \
+            parse_semantics(self.semantics, "--semantics")
+        object.__setattr__(self, "semantics", semantics)
+        if semantics is not Semantics.WHOLE and self.model != "sound":
+            raise OptionError("--semantics", semantics.value, "needs --model sound (the paper's rules plan "
                               "whole plans)")
-        if self.semantics is Semantics.COMMIT and not get_engine(self.engine).commit:
+        if semantics is Semantics.COMMIT and self.model == "sound" and not get_engine(self.engine).commit:
             able = ", ".join(e.name for e in load_engines().values() if e.commit)
-            raise OptionError("--semantics", self.semantics.value, f"engine {self.engine} does not answer the "
+            raise OptionError("--semantics", semantics.value, f"engine {self.engine} does not answer the "
                               f"commitment semantics (answered by: {able})")
         object.__setattr__(self, "vehicle_speeds", parse_vehicle_speeds(self.vehicle_speeds))
         if self.vehicle_speeds is VehicleSpeeds.MEASURED:  # the sound model's drives read them (the paper's: cells)
             why = ("needs --tracking on (speeds are measured by the tracks)" if not self.tracking else
-                   None if self.semantics in get_engine(self.engine).measured_speeds else
+                   None if semantics in get_engine(self.engine).measured_speeds else
                    f"engine {self.engine} answers every vehicle at its lane's speeds only under --semantics "
-                   f"{self.semantics.value}")
+                   f"{semantics.value}")
             if why is not None:
                 raise OptionError("--vehicle-speeds", self.vehicle_speeds.value, why)
         object.__setattr__(self, "overtaken", parse_overtaken(self.overtaken))
         if self.overtaken is not Overtaken.PHYSICS and self.vehicle_speeds is not VehicleSpeeds.MEASURED:
             raise OptionError("--overtaken", self.overtaken.value, "needs --vehicle-speeds measured (the profile "
                               "speaks of vehicles whose speed was measured; it applies to the sound model's drives)")
-        if self.overtaken is not Overtaken.PHYSICS and self.semantics not in get_engine(self.engine).overtaken_profile:
+        if self.overtaken is not Overtaken.PHYSICS and semantics not in get_engine(self.engine).overtaken_profile:
             raise OptionError("--overtaken", self.overtaken.value, f"engine {self.engine} answers measured vehicles "
-                              f"by their physics only under --semantics {self.semantics.value}")
+                              f"by their physics only under --semantics {semantics.value}")
+
+    @property
+    def decides(self) -> Semantics:
+        """How the drive's model decides (``semantics``, resolved when the configuration was made)."""
+        return self.semantics or loop_semantics(self.model)
 
     @property
     def stops_at_failure(self) -> bool:
@@ -214,7 +228,7 @@ class DriveConfig:
         """The assembly this configuration names."""
         # the sound model plans for the snapshot's age at the plan's start: the planner's time in the loop
         sound = Sound(replace(self.bounds, latency_s=LOOP.plan_budget_s), overtaken=self.overtaken,
-                      commitment=COMMIT if self.semantics is Semantics.COMMIT else None) \
+                      commitment=COMMIT if self.decides is Semantics.COMMIT else None) \
             if self.model == "sound" else None
         planner = Planner(get_engine(self.engine), self.strategy, self.grid, sound)
         traffic, sensor = TRAFFIC_MODELS[self.traffic], SENSOR_MODELS[self.sensor]
@@ -240,9 +254,11 @@ class DriveConfig:
         for key, default in (("restart_after_collision", False), ("opportunity_checks", 0), ("model", "paper"),
                              ("bounds_scale", 1.0), ("faults", ""), ("tracking", False),
                              ("until_sensing_failure", False), ("vehicle_speeds", VehicleSpeeds.LANE.value),
-                             ("overtaken", Overtaken.PHYSICS.value), ("semantics", Semantics.WHOLE.value)):
+                             ("overtaken", Overtaken.PHYSICS.value)):
             if data[key] == default:  # records written before these existed stay the same campaign
                 del data[key]
+        if self.model != "sound":  # the paper's rules plan whole plans: its records stay the same campaign
+            del data["semantics"]
         return data
 
     def all_json(self) -> dict[str, Any]:
@@ -257,8 +273,10 @@ class DriveConfig:
                 "opportunity_checks": self.opportunity_checks, "model": self.model, "bounds_scale": self.bounds_scale,
                 "faults": self.faults, "steering_offset_deg": self.steering_offset_deg, "tracking": self.tracking,
                 "until_sensing_failure": self.until_sensing_failure, "vehicle_speeds": self.vehicle_speeds.value,
-                "overtaken": self.overtaken.value, "semantics": self.semantics.value}
+                "overtaken": self.overtaken.value, "semantics": self.decides.value}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> DriveConfig:
+        if data.get("model") == "sound" and "semantics" not in data:  # recorded when the loop planned whole plans
+            data = {**data, "semantics": Semantics.WHOLE.value}
         return cls(**data)

@@ -34,7 +34,7 @@ from ci.shared.records import append, campaign_lock, open_for_append, read_recor
 from ci.simulation.campaign import campaign_key, recorded_runs
 from oracle.planner import plan
 from sim.opportunity import Refusal
-from sim.parts import DriveConfig
+from sim.parts import DriveConfig, loop_semantics
 from sim.report import pyplot
 from sim.safety import attribution_key
 from sim.simulator import run_drive
@@ -66,8 +66,9 @@ class AuditPlan:
                                                                   opportunity_checks=50))
     models: tuple[str, ...] = ("paper",)
     bounds_scales: tuple[float, ...] = (1.0,)
-    #: how the sound model decides (each one a combination of its own; the paper model's are whole plans)
-    semantics: tuple[Semantics, ...] = (Semantics.WHOLE,)
+    #: how the sound model decides (each one a combination of its own; the paper model's are whole plans); by default
+    #: as the loop has it decide (``sim.parts.loop_semantics``)
+    semantics: tuple[Semantics, ...] = field(default_factory=lambda: (loop_semantics("sound"),))
 
     def configs(self) -> list[DriveConfig]:
         """One drive configuration per combination, in table order (validated: bad input raises here)."""
@@ -287,7 +288,7 @@ def rows(results: Iterable[Done]) -> list[Row]:
     groups: dict[Key, list[RunSummary]] = {}
     for done in results:
         c = done.config
-        groups.setdefault((c.cell_m, c.traffic, c.sensor, c.model, c.bounds_scale, c.semantics.value),
+        groups.setdefault((c.cell_m, c.traffic, c.sensor, c.model, c.bounds_scale, c.decides.value),
                           []).append(done.summary)
     return [_row(key, runs) for key, runs in groups.items()]
 
@@ -383,7 +384,7 @@ def planning_cost(results: Iterable[Done], engines: Iterable[str], timeout_s: fl
     speeds; its count says how many)."""
     by_cell: dict[tuple[float, str], list[dict[str, Any]]] = {}
     for done in results:
-        by_cell.setdefault((done.config.cell_m, decider(done.config.model, done.config.semantics.value)),
+        by_cell.setdefault((done.config.cell_m, decider(done.config.model, done.config.decides.value)),
                            []).extend(done.summary.snapshots)
     costs = []
     for (cell_m, model), snapshots in by_cell.items():
@@ -431,8 +432,8 @@ def write_reports(audit_rows: list[Row], costs: list[Cost], audit: AuditPlan, ou
 
 
 def decider(model: str, semantics: str) -> str:
-    """A model as tables name it: the sound model with its semantics when it commits (``sound (commit)``)."""
-    return model + (f" ({semantics})" if semantics != Semantics.WHOLE.value else "")
+    """A model as tables name it: the sound model with how it decided (``sound (commit)``, ``sound (whole)``)."""
+    return model + (f" ({semantics})" if model == "sound" else "")
 
 
 def label(r: Row) -> str:

@@ -3,7 +3,7 @@ a verifier per snapshot, on the same snapshots, in one run.
 
 Usage: python -m ci.bench.loop [--km 2] [--seeds 1,2,3] [--engines interpreter,spin] [--cells 21]
                                [--traffic paper] [--sensor exact] [--compiled 10] [--commitments 40]
-                               [--commitment-engines interpreter,spin,z3] [--timeout 10] [--semantics whole]
+                               [--commitment-engines interpreter,spin,z3] [--timeout 10] [--semantics commit]
 
 Every engine drives the same seeds under the sound model (``sensible``), deciding by whole plans or (``--semantics
 commit``) by committed parts with their escapes, as ``overtake simulate --semantics`` does; each plan's time is the
@@ -78,7 +78,7 @@ def main() -> None:
     parser.add_argument("--timeout", type=float, default=10.0, help="seconds per commitment, past them incomplete")
     parser.add_argument("--commitments", type=int, default=40, help="snapshots planned under the commitment "
                         "semantics by each engine")
-    parser.add_argument("--semantics", choices=[s.value for s in Semantics], default=Semantics.WHOLE.value,
+    parser.add_argument("--semantics", choices=[s.value for s in Semantics], default=Semantics.COMMIT.value,
                         help="how the drives' sound model decides")
     args = parser.parse_args()
     seeds = [int(s) for s in args.seeds.split(",")]

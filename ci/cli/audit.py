@@ -51,13 +51,17 @@ def _models(option: str, text: str, known: dict[str, Any]) -> tuple[str, ...]:
     return names(option, text, lambda name: check_name(option, name, known))
 
 
-def _semantics(text: str, models: tuple[str, ...]) -> tuple[Semantics, ...]:
-    """Distinct semantics of the sound model (``spec.escapes.Semantics``); more than whole plans needs it audited."""
-    chosen = tuple(parse_semantics(word, "--semantics") for word in names("--semantics", text))
-    if chosen != (Semantics.WHOLE,) and "sound" not in models:
+def _semantics(text: str | None, models: tuple[str, ...]) -> tuple[Semantics, ...]:
+    """Distinct semantics of the sound model (``spec.escapes.Semantics``; None: the loop's own), given only when the
+    sound model is audited."""
+    from sim.parts import loop_semantics
+
+    if text is None:
+        return (loop_semantics("sound"),)
+    if "sound" not in models:
         raise OptionError("--semantics", text, "needs the sound model among --model (the paper's rules plan whole "
                           "plans)")
-    return chosen
+    return tuple(parse_semantics(word, "--semantics") for word in names("--semantics", text))
 
 
 def _scales(text: str) -> tuple[float, ...]:
@@ -91,9 +95,10 @@ def parse_cells(text: str) -> tuple[float, ...]:
 @click.option("--model", "model_text", default="paper,sound", show_default=True,
               help="The models that plan, compared over the same seeds: paper (its rules), sound (under the world's "
                    "bounds, spec.assumptions.world_bounds).")
-@click.option("--semantics", "semantics_text", default=Semantics.WHOLE.value, show_default=True,
-              help="How the sound model decides, comma-separated, each a combination of its own: whole (plans proved "
-                   "to their end) or commit (a committed part with a proved escape; docs/closed-loop.md).")
+@click.option("--semantics", "semantics_text", default=None,
+              help="How the sound model decides, comma-separated, each a combination of its own: commit (a committed "
+                   "part with a proved escape, the default) or whole (plans proved to their end); "
+                   "docs/closed-loop.md.")
 @click.option("--bounds-scale", "scale_text", default="1", show_default=True,
               help="Factors on the world's bounds' widths (speeds about their middle, the sensing error), "
                    "comma-separated: 1 is the rule's own bounds. Every drive's containment is measured against them.")
@@ -127,8 +132,8 @@ def parse_cells(text: str) -> tuple[float, ...]:
 @vehicle_speeds_option
 @overtaken_option
 @click.option("--json", "as_json", is_flag=True)
-def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, semantics_text: str, scale_text: str,
-          km: float, runs: int,
+def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, semantics_text: str | None,
+          scale_text: str, km: float, runs: int,
           seed: int, engine: str,
           cost_engines: str, snapshots: int, opportunity_checks: int, stop_rate_per_h: float,
           min_spawn_gap_m: float, range_sd_m: float, miss_rate: float, workers: int, executor_kind: str,
@@ -162,7 +167,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sem
     print_header(err, f"audit: {len(configs)} combination(s) x seeds {seed}..{seed + runs - 1} = {total} run(s) of "
                  f"{km:g} km; planner {engine}; faults {base.faults or 'none'}; "
                  f"tracking {'on' if tracking else 'off'}; on {executor.describe(total)}", out_dir)
-    labels = {i: f"{c.cell_m:g} m, {c.traffic}, {c.sensor}, {decider(c.model, c.semantics.value)}"
+    labels = {i: f"{c.cell_m:g} m, {c.traffic}, {c.sensor}, {decider(c.model, c.decides.value)}"
                  + ("" if c.bounds_scale == 1 else f" x{c.bounds_scale:g}") + f", seed {s}"
              for i, (c, s) in enumerate((c, s) for c in configs for s in plan.seeds)}
     with km_progress(err, total, km, "already in audit.jsonl (resumed; --fresh runs it again)") as bar:

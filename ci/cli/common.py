@@ -112,13 +112,16 @@ def overtaken_option(command: Any) -> Any:
 
 
 def loop_semantics_option(command: Any) -> Any:
-    """``--semantics whole|commit`` for the closed loop's sound model, handed to the command as a ``Semantics``."""
+    """``--semantics commit|whole`` for the closed loop's sound model, handed to the command as a ``Semantics`` (None:
+    not given, the model's own: ``sim.parts.loop_semantics``)."""
     from spec.escapes import Semantics
 
-    return _enum_option("--semantics", Semantics, Semantics.WHOLE,
-                        "How the sound model decides in the loop: whole plans proved to their end, or a committed "
-                        "part with a proved escape, executed until the next decision; when a decision proves nothing, "
-                        "the rest of the last one and its escape (docs/closed-loop.md). Needs --model sound.")(command)
+    return click.option("--semantics", type=click.Choice([v.value for v in Semantics]), default=None,
+                        callback=lambda _ctx, _param, value: None if value is None else Semantics(value),
+                        help="How the sound model decides in the loop: commit (the default: a committed part with a "
+                             "proved escape, executed until the next decision; when a decision proves nothing, the "
+                             "rest of the last one and its escape) or whole (plans proved to their end). "
+                             "docs/closed-loop.md. Needs --model sound.")(command)
 
 
 def horizon_option() -> Any:

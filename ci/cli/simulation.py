@@ -76,7 +76,7 @@ def simulate(km: float, until_failure: bool, until_sensing_failure: bool, seed: 
              workers: int, executor_kind: str, scheduler: str | None, out_dir: str, fresh: bool,
              step_tolerance: float, plan_tolerance: float, paper_replanning: bool, faults: str,
              steering_offset_deg: float, tracking: bool, vehicle_speeds: VehicleSpeeds, overtaken: Overtaken,
-             semantics: Semantics, as_json: bool) -> None:
+             semantics: Semantics | None, as_json: bool) -> None:
     """Drive the PyBullet simulator closed-loop and check every action against the model's prediction."""
     from ci.shared.progress import km_progress
     from ci.simulation.campaign import RUNS_FILE
@@ -101,7 +101,7 @@ def simulate(km: float, until_failure: bool, until_sensing_failure: bool, seed: 
     get_engine(engine).ready()  # its tools are installed (exit 4), or every plan of every run would fail
     limit = f"{km:g} km" + (" or until failure" if until_failure else "") + (
         " or until a failure a sensing fault caused (others restart the drive)" if until_sensing_failure else "")
-    decides = f"{model} model" + (f" ({semantics.value})" if model == "sound" else "")
+    decides = f"{model} model" + (f" ({campaign.decides.value})" if model == "sound" else "")
     print_header(err, f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; {decides}; engine {engine}, "
               f"{strategy.value}, {campaign.grid.describe()}; faults {campaign.faults or 'none'}; "
               f"tracking {'on' if tracking else 'off'}; "

@@ -120,8 +120,12 @@ def test_the_commitment_semantics_overtakes_with_nothing_hit_inside_the_assumpti
 
 def test_the_loops_semantics_is_part_of_a_drives_configuration_and_bad_input_names_the_option() -> None:
     assert DriveConfig.from_json(KEPT.to_json()) == KEPT
-    assert "semantics" not in DriveConfig(1.0, model="sound").to_json()  # whole plans' records: the same campaign
-    assert DriveConfig(1.0, model="sound", semantics="commit").semantics is Semantics.COMMIT  # type: ignore[arg-type]
+    assert DriveConfig(1.0, model="sound").semantics is Semantics.COMMIT  # the sound model's own way in the loop
+    assert DriveConfig(1.0).semantics is Semantics.WHOLE and "semantics" not in DriveConfig(1.0).to_json()
+    assert DriveConfig(1.0, model="sound", semantics="whole").semantics is Semantics.WHOLE  # type: ignore[arg-type]
+    # a sound drive recorded before the loop committed planned whole plans: read back so, never mixed with commit runs
+    recorded = {k: v for k, v in DriveConfig(1.0, model="sound").to_json().items() if k != "semantics"}
+    assert DriveConfig.from_json(recorded).semantics is Semantics.WHOLE
     with pytest.raises(OptionError, match="needs --model sound") as paper:
         DriveConfig(1.0, semantics=Semantics.COMMIT)
     assert paper.value.key == "--semantics"
