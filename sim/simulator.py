@@ -674,13 +674,17 @@ class Simulator:
                                          f"plan {self.summary.plans}", escape=escape.actions if escape else ())
             why = "an overtake refused: the tracker holds a contradiction"
         elif answer.status not in (Status.PLAN, *NO_OVERTAKE):
-            self._fail(FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
+            self._fail(FailureKind.PLANNER, answer.status.value, answer.detail or self._no_plan(answer, scenario))
         step = keep_lane(problem_for(scenario, ModelKind.FINAL))
         if step is not None:
             self.summary.keep_lane_steps += 1
             self._sight(readings, pose.x_m)
             return functools.partial(self._sound_execute, (step,), pose.speed_mps, f"keeping the lane ({why})")
-        if self.proved is not None and self.proved.sensed is None and self.proved.sense(
+        # a start that breaks the specification is not left as it is: with nothing of the last plan left, its
+        # minimal-risk manoeuvre would keep the gap it broke (its hold speed may be the vehicle ahead's); the fallback
+        # opens it
+        unsafe = answer.status is Status.UNSAFE_START and not self.pending
+        if not unsafe and self.proved is not None and self.proved.sensed is None and self.proved.sense(
                 self.summary.sim_time_s, self.summary.km, pose.x_m, readings, self.doing) is None:
             return functools.partial(self._keep_proved, why)
         return functools.partial(self._fallback, f"{why}, and no safe step in lane")

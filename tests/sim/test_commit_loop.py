@@ -134,3 +134,18 @@ def test_the_loops_semantics_is_part_of_a_drives_configuration_and_bad_input_nam
     assert bad.value.key == "--semantics"
     assert replace(KEPT, semantics=Semantics.WHOLE).parts().planner.sound.commitment is None  # type: ignore[union-attr]
     assert KEPT.parts().planner.sound.commitment is not None  # type: ignore[union-attr]
+
+
+def test_a_start_that_breaks_the_specification_is_left_not_held() -> None:
+    """The paper's world, exact sensing, seed 9: a move back into the left lane ends nearer the vehicle ahead than
+    the next snapshot's specification allows (its sets add the AV's envelope at the start). With nothing of the last
+    plan left, its minimal-risk manoeuvre holds the hold speed, which is that vehicle's: the gap stays broken and
+    every decision after finds the start unsafe (912 of them in the 20 km that were left of the drive). The fallback
+    opens the gap instead, and the AV overtakes again."""
+    from sim.simulator import run_drive
+
+    summary = run_drive(9, DriveConfig(7.0, model="sound"))
+    unsafe = [f for f in summary.failures if f.cause == "unsafe_start"]
+    assert 1 <= len(unsafe) <= 3
+    assert summary.takeovers and summary.overtakes > 20
+    assert summary.safety.count("contact", True) == 0 and summary.safety.count("near_miss", True) == 0
