@@ -128,6 +128,7 @@ class Simulator:
         self.escape_pending = False  # the plan under way ends in a proved escape (the commitment semantics)
         self.pending_profiles: list[SpeedProfile] = []  # the proved reference's speed profile for ``pending``
         self.boundary = (0.0, 0.0)  # when the last action of a proved sequence ended, and its position reference then
+        self.unsafe_before = False  # the last sound decision found its start breaking the safety specification
         self.doing = "start-up"  # what the AV was executing: recorded with every collision
         self._side = {car.body: car.x_m > 0 for car in self.traffic.left}
         self.visible = RaySensor(self.scene, self.sensor_rng)  # exact rays, no draws: is a vehicle sensed now?
@@ -138,6 +139,7 @@ class Simulator:
         self.enveloped = False  # a sound decision's action is under way: the AV is held to its envelope
         self.interrupt = False  # a breach asks the sound model's decision under way to end
         self.broken_before = False  # a vehicle broke the previous decision's assumptions (the truth: bookkeeping)
+        self.previous: Containment | None = None  # the sets of the decision before the one under way
         self.takeover: Takeover | None = None  # the fallback's take-over under way
         self.proved: Containment | None = None  # the containment of the last sound decision that was executed
         self.sweep: tuple[Reading, ...] | None = ()  # the last sweep the sensors delivered (None: it was dropped)
@@ -226,6 +228,7 @@ class Simulator:
         """Containment from this snapshot on, against the drive's bounds and the snapshot's view of the oncoming lane
         (a snapshot that makes no scenario: none)."""
         old = self.containment
+        self.previous = old
         self.broken_before = old is not None and old.world_breached()
         if old is not None and not old.ended:
             old.ended = True
@@ -286,11 +289,14 @@ class Simulator:
 
     def _attribution(self, body: int) -> str | None:
         """Whether an encounter with ``body`` happened inside the assumptions (no breach by it under the decision
-        under way; the AV's own envelope breach counts as inside) or after one broke; None without bounds."""
+        under way, or while a decision plans under the one before it; the AV's own envelope breach counts as inside)
+        or after one broke; None without bounds."""
         if self.takeover is not None:
             return (f"{'after an assumption broke' if self.takeover.after_breach else 'inside the assumptions'}: "
                     f"fallback since {self.takeover.t_s:.1f} s ({self.takeover.cause})")
         c = self.containment
+        if self.doing.startswith("planning (") and self.previous is not None:
+            c = self.previous  # while a decision plans, the AV still does what the one before decided, under its sets
         if c is None:
             return None if self.watch is None else "after an assumption broke: no scenario from the snapshot"
         breach = c.breached.get(body)
@@ -680,10 +686,11 @@ class Simulator:
             self.summary.keep_lane_steps += 1
             self._sight(readings, pose.x_m)
             return functools.partial(self._sound_execute, (step,), pose.speed_mps, f"keeping the lane ({why})")
-        # a start that breaks the specification is not left as it is: with nothing of the last plan left, its
-        # minimal-risk manoeuvre would keep the gap it broke (its hold speed may be the vehicle ahead's); the fallback
-        # opens it
-        unsafe = answer.status is Status.UNSAFE_START and not self.pending
+        # a start that breaks the specification, again after the last decision's minimal-risk manoeuvre ran (with
+        # nothing of its plan left), is not left as it is: that manoeuvre keeps a broken gap when its hold speed is the
+        # vehicle ahead's; the fallback opens it
+        unsafe = answer.status is Status.UNSAFE_START and self.unsafe_before and not self.pending
+        self.unsafe_before = answer.status is Status.UNSAFE_START
         if not unsafe and self.proved is not None and self.proved.sensed is None and self.proved.sense(
                 self.summary.sim_time_s, self.summary.km, pose.x_m, readings, self.doing) is None:
             return functools.partial(self._keep_proved, why)

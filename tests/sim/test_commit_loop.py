@@ -149,3 +149,18 @@ def test_a_start_that_breaks_the_specification_is_left_not_held() -> None:
     assert 1 <= len(unsafe) <= 3
     assert summary.takeovers and summary.overtakes > 20
     assert summary.safety.count("contact", True) == 0 and summary.safety.count("near_miss", True) == 0
+
+
+def test_an_encounter_while_a_decision_plans_is_attributed_under_the_decision_the_av_still_executes() -> None:
+    """`spread` traffic, noisy sensing, seed 18: a decision's snapshot missed an oncoming vehicle 53 m ahead (a missed
+    reading) and committed to a right lane change; the next decision's snapshot shows it 24.6 m ahead (its start is
+    unsafe), and during that decision's planning the AV, still in the lane change's aftermath, nears it. The near miss
+    is the missed vehicle's, under the sets of the decision the AV was executing: after an assumption broke, not
+    inside the sets of a snapshot that had not acted yet."""
+    from sim.simulator import run_drive
+
+    summary = run_drive(18, DriveConfig(9.45, model="sound", traffic="spread", sensor="noisy"))
+    (near,) = [e for e in summary.safety.encounters if e.km > 9.3]
+    assert near.doing.startswith("planning (right_lane_change")
+    assert near.assumptions.startswith("after an assumption broke: appeared")
+    assert summary.safety.count("near_miss", True) == 0
