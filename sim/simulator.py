@@ -670,6 +670,7 @@ class Simulator:
         plan, a step in lane, what the last decision proved, or the fallback; it acts once the planner's time is over
         (``_while_planning``)."""
         why = answer.status.value
+        unsafe_before, self.unsafe_before = self.unsafe_before, answer.status is Status.UNSAFE_START
         if answer.status is Status.PLAN and answer.actions:
             if not self._refused(answer.actions, self.pending):
                 self._sight(readings, pose.x_m)
@@ -689,8 +690,7 @@ class Simulator:
         # a start that breaks the specification, again after the last decision's minimal-risk manoeuvre ran (with
         # nothing of its plan left), is not left as it is: that manoeuvre keeps a broken gap when its hold speed is the
         # vehicle ahead's; the fallback opens it
-        unsafe = answer.status is Status.UNSAFE_START and self.unsafe_before and not self.pending
-        self.unsafe_before = answer.status is Status.UNSAFE_START
+        unsafe = answer.status is Status.UNSAFE_START and unsafe_before and not self.pending
         if not unsafe and self.proved is not None and self.proved.sensed is None and self.proved.sense(
                 self.summary.sim_time_s, self.summary.km, pose.x_m, readings, self.doing) is None:
             return functools.partial(self._keep_proved, why)
