@@ -680,6 +680,8 @@ class Simulator:
                 return functools.partial(self._sound_execute, answer.actions, pose.speed_mps,
                                          f"plan {self.summary.plans}", escape=escape.actions if escape else ())
             why = "an overtake refused: the tracker holds a contradiction"
+        elif answer.status is Status.UNSAFE_START:  # an assumption broke before the snapshot: counted, no failure
+            self.summary.unsafe_starts += 1
         elif answer.status not in (Status.PLAN, *NO_OVERTAKE):
             self._fail(FailureKind.PLANNER, answer.status.value, answer.detail or self._no_plan(answer, scenario))
         step = keep_lane(problem_for(scenario, ModelKind.FINAL))

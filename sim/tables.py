@@ -57,6 +57,8 @@ def totals_table(results: list[RunSummary]) -> Table:
              f"{sum(r.keep_lane_steps for r in results)} / {sum(r.minimal_risk_steps for r in results)}"),
             ("sound model: committed parts with an escape / escapes kept (--semantics commit)",
              f"{sum(r.committed_parts for r in results)} / {sum(r.escapes for r in results)}"),
+            ("sound model: decisions whose start broke the safety specification",
+             str(sum(r.unsafe_starts for r in results))),
             ("sound model: fallback take-overs (after a breach)",
              f"{sum(len(r.takeovers) for r in results)} ({sum(t.after_breach for r in results for t in r.takeovers)})"),
             ("collisions", str(sum(len(r.collisions) for r in results))),

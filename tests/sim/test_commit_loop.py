@@ -145,8 +145,7 @@ def test_a_start_that_breaks_the_specification_is_left_not_held() -> None:
     from sim.simulator import run_drive
 
     summary = run_drive(9, DriveConfig(7.0, model="sound"))
-    unsafe = [f for f in summary.failures if f.cause == "unsafe_start"]
-    assert 1 <= len(unsafe) <= 3
+    assert 1 <= summary.unsafe_starts <= 3 and not summary.failures
     assert summary.takeovers and summary.overtakes > 20
     assert summary.safety.count("contact", True) == 0 and summary.safety.count("near_miss", True) == 0
 

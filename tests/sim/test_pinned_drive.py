@@ -30,7 +30,7 @@ def test_the_default_assembly_drives_the_pinned_drive_exactly(tmp_path: Path) ->
                                                             "breach_replans", "keep_lane_steps", "minimal_risk_steps",
                                                             "takeovers", "sweeps", "faults", "refusals", "shadowed",
                                                             "sensed_breaches", "unseen_breaches", "committed_parts",
-                                                            "escapes"}
+                                                            "escapes", "unsafe_starts"}
     assert summary["traffic_collisions"] == 0 and summary["safety"]["contacts"] == 0 and summary["restarts"] == 0
     assert (tmp_path / "trace-seed3.jsonl").read_text() == (GOLDEN / "drive-seed3-2km-trace.jsonl").read_text()
 

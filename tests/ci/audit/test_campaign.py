@@ -104,8 +104,9 @@ def test_the_audit_command_writes_its_reports(tmp_path: Path) -> None:
     result = json.loads(done.stdout)
     assert [(c["cell_m"], c["sensing"], c["model"]) for c in result["combinations"]] == [
         (21.0, "exact", "paper"), (21.0, "exact", "sound"), (21.0, "noisy", "paper"), (21.0, "noisy", "sound")]
+    assert {c["semantics"] for c in result["combinations"] if c["model"] == "sound"} == {"commit"}
     assert result["planning_cost"][0]["engine"] == "interpreter" and result["planning_cost"][0]["n"] >= 2
-    assert {c["model"] for c in result["planning_cost"]} == {"paper", "sound"}
+    assert {c["model"] for c in result["planning_cost"]} == {"paper", "sound (commit)"}
     for name in ("audit.json", "audit.md", "audit-safety.png", "audit-latency.png", "audit-models.png", AUDIT_FILE):
         assert (tmp_path / name).stat().st_size > 0
 
