@@ -196,6 +196,7 @@ class Row:
     late_plans: int = 0
     blocked: int = 0  # episodes given up because the AV stood (``sim.simulator.BLOCKED_S``; a stop, never a failure)
     semantics: str = Semantics.WHOLE.value  # how the sound model decided (``spec.escapes.Semantics``)
+    unsafe_starts: int = 0  # sound decisions whose snapshot already broke the safety specification (no failure)
 
     def per_1000_km(self, count: float) -> float:
         return 1000 * count / self.km if self.km else math.nan
@@ -258,7 +259,7 @@ class Row:
                 "missed_opportunities_per_1000_km_estimated": _num(self.missed_per_1000_km),
                 "delayed_overtakes_per_1000_km_estimated": _num(self.delayed_per_1000_km),
                 "missed_examples": self.missed_examples, "model": self.model, "bounds_scale": self.bounds_scale,
-                "semantics": self.semantics,
+                "semantics": self.semantics, "unsafe_starts": self.unsafe_starts,
                 "overtakes": self.overtakes, "overtakes_per_km": _num(self.per_1000_km(self.overtakes) / 1000),
                 "decisions": self.decisions, "attributed": self.attributed, "breaches": self.breaches,
                 "breaches_per_1000_km": _num(self.per_1000_km(sum(self.breaches.values()))),
@@ -332,7 +333,8 @@ def _row(key: Key, runs: list[RunSummary]) -> Row:
                sum(len(r.of_kind(FailureKind.LOSS_OF_CONTROL)) for r in runs),
                sum(len(r.of_kind(FailureKind.SENSING)) for r in runs), _fault_counts(runs),
                late_plans=sum(m > 1000 * LOOP.plan_budget_s for m in plan_ms),
-               blocked=sum(len(r.of_kind(FailureKind.BLOCKED)) for r in runs), semantics=key[5])
+               blocked=sum(len(r.of_kind(FailureKind.BLOCKED)) for r in runs), semantics=key[5],
+               unsafe_starts=sum(r.unsafe_starts for r in runs))
 
 
 def _at_most(edge: float | None, largest: float) -> float | None:
@@ -453,8 +455,8 @@ def models_markdown(audit_rows: list[Row]) -> list[str]:
              "| cell m | traffic | sensing | model | km | overtakes /km | collisions inside / after per 1,000 km | "
              "near misses inside / after per 1,000 km | breaches /1,000 km (by kind) | time after a breach | "
              "decisions | re-plans on a breach | keep-lane steps | minimal-risk | take-overs (after a breach) | "
-             "waits without a plan | delayed /1,000 km (est.) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "waits without a plan | starts breaking the specification | delayed /1,000 km (est.) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in audit_rows:
         kinds = ", ".join(f"{k} {v}" for k, v in sorted(r.breaches.items())) or "-"
         share = "-" if r.breached_share is None else f"{100 * r.breached_share:.1f}%"
@@ -464,7 +466,8 @@ def models_markdown(audit_rows: list[Row]) -> list[str]:
             f"{r.inside_after('contact')} | {r.inside_after('near_miss')} | "
             f"{figure(r.per_1000_km(sum(r.breaches.values())))} ({kinds}) | {share} | {r.decisions} | "
             f"{r.breach_replans} | {r.keep_lane_steps} | {r.minimal_risk_steps} | "
-            f"{r.takeovers} ({r.takeovers_after_breach}) | {r.waits_without_plan} | {figure(r.delayed_per_1000_km)} |")
+            f"{r.takeovers} ({r.takeovers_after_breach}) | {r.waits_without_plan} | {r.unsafe_starts} | "
+            f"{figure(r.delayed_per_1000_km)} |")
     return lines
 
 

@@ -171,10 +171,11 @@ def test_the_sound_models_semantics_are_combinations_of_their_own_named_in_every
                      semantics=(Semantics.WHOLE, Semantics.COMMIT))
     assert [(c.model, c.semantics) for c in plan.configs()] == [
         ("paper", Semantics.WHOLE), ("sound", Semantics.WHOLE), ("sound", Semantics.COMMIT)]
-    table = rows([Done(c, RunSummary(1, km=2.0, overtakes=k)) for k, c in enumerate(plan.configs())])
+    table = rows([Done(c, RunSummary(1, km=2.0, overtakes=k, unsafe_starts=k)) for k, c in enumerate(plan.configs())])
     assert [label(r) for r in table] == ["paper", "sound (whole)", "sound (commit)"]
     assert AuditPlan(models=("sound",)).configs()[0].semantics is Semantics.COMMIT  # the loop's own by default
     assert [r.overtakes for r in table] == [0, 1, 2] and table[2].to_json()["semantics"] == "commit"
+    assert [r.unsafe_starts for r in table] == [0, 1, 2]  # counted apart from the waits without a plan
     assert "| sound (commit) |" in markdown(table, [], {}) and "| sound (whole) |" in markdown(table, [], {})
 
 
