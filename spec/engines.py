@@ -10,13 +10,13 @@ parametrised over ``load_engines()`` and fail when an engine skips a strategy it
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib.metadata import entry_points
 
 from spec.answers import Limits, SearchResult, Strategy
 from spec.dynamics import Overtaken
 from spec.errors import OptionError, ToolMissing
-from spec.escapes import Semantics
+from spec.escapes import COMMIT, Semantics
 from spec.scenario import Problem, Scenario
 
 Solver = Callable[[Problem, Strategy, Limits], SearchResult]
@@ -138,6 +138,15 @@ def semantics_of(scenario: Scenario) -> Semantics:
     """How ``scenario``'s sound model answers: its commitment semantics, or whole plans (the paper's rules too)."""
     sound = scenario.sound
     return Semantics.COMMIT if sound is not None and sound.commitment is not None else Semantics.WHOLE
+
+
+def under_semantics(scenario: Scenario, semantics: Semantics) -> Scenario:
+    """``scenario`` with its sound model answering under ``semantics`` (the default commitment, or whole plans); the
+    paper's rules as they are."""
+    if scenario.sound is None:
+        return scenario
+    return replace(scenario, sound=replace(scenario.sound, commitment=COMMIT if semantics is Semantics.COMMIT
+                                           else None))
 
 
 def _under(able: tuple[Semantics, ...], semantics: Semantics) -> str:

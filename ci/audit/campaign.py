@@ -75,7 +75,8 @@ class AuditPlan:
         return [replace(self.base, cell_m=cell, traffic=traffic, sensor=sensing, model=model, bounds_scale=scale,
                         semantics=semantics)
                 for cell in self.cells_m for traffic in self.traffic for sensing in self.sensing
-                for model in self.models for semantics in (self.semantics if model == "sound" else (Semantics.WHOLE,))
+                for model in self.models for semantics in (self.semantics if model == "sound" else
+                                                           (loop_semantics(model),))
                 for scale in self.bounds_scales]
 
 

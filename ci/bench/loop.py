@@ -22,7 +22,6 @@ counted): what a decision costs when the loop commits, for every engine, Z3 amon
 from __future__ import annotations
 
 import argparse
-from dataclasses import replace
 
 import numpy as np
 from rich.console import Console
@@ -39,8 +38,8 @@ from sim.simulator import run_drive
 from sim.summary import RunSummary
 from spec import windows
 from spec.answers import Limits, Status, Strategy
-from spec.engines import Engine, get_engine
-from spec.escapes import COMMIT, Semantics
+from spec.engines import Engine, get_engine, under_semantics
+from spec.escapes import Semantics
 from spec.files import scenario_from_dict
 from spec.physical import LOOP
 from spec.scenario import Scenario
@@ -126,7 +125,8 @@ def main() -> None:
     _commitments(console, [scenario_from_dict(s) for r in runs[reference] for s in r.snapshots][: args.commitments],
                  committing, budget_ms, args.timeout)
     # whole plans: the verifier compiled per snapshot answers the sound model's whole plans only
-    snapshots = [_whole(scenario_from_dict(s)) for r in runs.get("spin", []) for s in r.snapshots][: args.compiled]
+    snapshots = [under_semantics(scenario_from_dict(s), Semantics.WHOLE) for r in runs.get("spin", [])
+                 for s in r.snapshots][: args.compiled]
     if not snapshots:
         return
     get_engine("spin").ready()
@@ -144,15 +144,11 @@ def main() -> None:
                   f"{'met' if ratio >= TARGET_RATIO else 'NOT met'} ({ratio:.0f}x)")
 
 
-def _whole(scenario: Scenario) -> Scenario:
-    return scenario if scenario.sound is None else replace(scenario, sound=replace(scenario.sound, commitment=None))
-
-
 def _commitments(console: Console, snapshots: list[Scenario], engines: list[str], budget_ms: float,
                  timeout_s: float) -> None:
     """The snapshots under the commitment semantics, per engine: ms per answer (the pipeline's, unchecked; Spin's
     tables built afresh) against the budget, which answers are commitments and which are incomplete."""
-    committed = [replace(s, sound=replace(s.sound, commitment=COMMIT)) for s in snapshots if s.sound is not None]
+    committed = [under_semantics(s, Semantics.COMMIT) for s in snapshots if s.sound is not None]
     if not committed:
         return
     table = Table(title=f"the first drives' {len(committed)} snapshots under the commitment semantics (ms per answer)")

@@ -236,13 +236,15 @@ def whole_sound_options(command: Any) -> Any:
 
 def _sound_options(command: Any, commitment: bool) -> Any:
     from ci.shared.options import ACCEL, LATENCY, METRES, SPEED
+    from spec.engines import under_semantics
+    from spec.escapes import Semantics
 
     names = SOUND_OPTIONS if commitment else SOUND_OPTIONS[:-len(COMMIT_OPTIONS)]
 
     def wrapper(**kwargs: Any) -> Any:
         given = {k: kwargs.pop(k) for k in names}
         kwargs["sound"] = (lambda scenario: with_sound(scenario, **given)) if commitment else \
-            (lambda scenario: _whole(with_sound(scenario, **given)))
+            (lambda scenario: under_semantics(with_sound(scenario, **given), Semantics.WHOLE))
         return command(**kwargs)
 
     wrapper.__name__, wrapper.__doc__ = command.__name__, command.__doc__
@@ -287,11 +289,6 @@ def _sound_options(command: Any, commitment: bool) -> Any:
     ) if commitment else ())):
         wrapper = decorate(wrapper)
     return wrapper
-
-
-def _whole(scenario: Scenario) -> Scenario:
-    """``scenario`` with the sound model's whole plans, where it has the sound model."""
-    return scenario if scenario.sound is None else replace(scenario, sound=replace(scenario.sound, commitment=None))
 
 
 def with_sound(scenario: Scenario, bounds: str | None, same_mps: str | None, oncoming_mps: str | None,

@@ -78,6 +78,7 @@ def simulate(km: float, until_failure: bool, until_sensing_failure: bool, seed: 
              steering_offset_deg: float, tracking: bool, vehicle_speeds: VehicleSpeeds, overtaken: Overtaken,
              semantics: Semantics | None, as_json: bool) -> None:
     """Drive the PyBullet simulator closed-loop and check every action against the model's prediction."""
+    from ci.audit.campaign import decider
     from ci.shared.progress import km_progress
     from ci.simulation.campaign import RUNS_FILE
     from ci.simulation.campaign import simulate as run_campaign
@@ -101,8 +102,8 @@ def simulate(km: float, until_failure: bool, until_sensing_failure: bool, seed: 
     get_engine(engine).ready()  # its tools are installed (exit 4), or every plan of every run would fail
     limit = f"{km:g} km" + (" or until failure" if until_failure else "") + (
         " or until a failure a sensing fault caused (others restart the drive)" if until_sensing_failure else "")
-    decides = f"{model} model" + (f" ({campaign.decides.value})" if model == "sound" else "")
-    print_header(err, f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; {decides}; engine {engine}, "
+    print_header(err, f"seeds {seed}..{seed + runs - 1}; {runs} run(s) of {limit}; "
+              f"model {decider(model, campaign.decides.value)}; engine {engine}, "
               f"{strategy.value}, {campaign.grid.describe()}; faults {campaign.faults or 'none'}; "
               f"tracking {'on' if tracking else 'off'}; "
               f"on {executor.describe(runs)}", Path(out_dir) / RUNS_FILE)
