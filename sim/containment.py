@@ -35,9 +35,9 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from sim.discretiser import in_window, reading_cell
+from sim.driver.readings import Reading
 from sim.faults import GHOST_BODY
 from sim.scene import Scene
-from sim.sensors import Reading
 from sim.vehicle import KinematicCar, Pose
 from spec.actions import Action
 from spec.assumptions import Bounds

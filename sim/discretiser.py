@@ -7,7 +7,7 @@ sensing failure: ``ScenarioError``).
 
 from __future__ import annotations
 
-from sim.sensors import Reading
+from sim.driver.readings import Reading
 from spec.cells import first_platoon, left_cell, oncoming_cell
 from spec.constants import DEFAULT_HORIZON
 from spec.grid import Grid

@@ -17,7 +17,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from sim.sensors import Reading, SensorModel, Truth
+from sim.driver.readings import Reading
+from sim.sensors import SensorModel, Truth
 from spec.cells import left_cell
 from spec.faults import GHOST_BEHIND_M, Fault, FaultKind, FaultSpec
 from spec.grid import Grid

@@ -19,9 +19,10 @@ import numpy as np
 
 from oracle.planner import plan
 from sim.discretiser import discretise
+from sim.driver.readings import Reading
 from sim.observers import Observer
 from sim.scene import Scene
-from sim.sensors import NoisySensor, RaySensor, Reading, SensorModel
+from sim.sensors import NoisySensor, RaySensor, SensorModel
 from sim.traffic import FollowingTraffic, PaperTraffic, SpreadTraffic, TrafficModel
 from sim.vehicle import WheeledCar
 from spec.answers import Answer, Strategy

@@ -16,28 +16,11 @@ from typing import Protocol
 
 import numpy as np
 
+from sim.driver.readings import Reading
 from sim.scene import Scene
 from sim.vehicle import KinematicCar
 from spec.lanes import Lane
 from spec.physical import CAR, NOISE, SENSORS, NoiseSpec, SensorSpec
-
-
-@dataclass(frozen=True, slots=True)
-class Reading:
-    """One sensed vehicle: its lane, its body, and its distance ahead of the AV along the road (m); a kept track that
-    no reading confirmed this sweep (``sim.tracking``) also says how far either side of it the vehicle may be."""
-
-    lane: Lane
-    body: int
-    dx_m: float
-    spread_m: tuple[float, float] = (0.0, 0.0)  # (below, above) dx_m: the vehicle is within [dx - below, dx + above]
-    rate_mps: float | None = None  # the range rate (how fast dx_m grows: a radar's Doppler reading); None: not read
-    #: a kept track's speed interval (m/s along its direction of travel) when the planner reads it; None: not told
-    speed_mps: tuple[float, float] | None = None
-
-    @property
-    def interval_m(self) -> tuple[float, float]:
-        return self.dx_m - self.spread_m[0], self.dx_m + self.spread_m[1]
 
 
 def _outside_av(x: float, y: float, end: tuple[float, float, float], z: float) -> tuple[float, float, float]:

@@ -31,13 +31,15 @@ from oracle.sound import keep_lane
 from sim import opportunity
 from sim.containment import Breach, BreachKind, Containment, Sighting
 from sim.discretiser import discretise, in_window, reading_cell
+from sim.driver import decide, fallback
+from sim.driver.nearest import Nearest
+from sim.driver.readings import Reading
 from sim.executor import Executor
 from sim.faults import GHOST_BODY, FaultEvent, FaultySensor, SteeringFault, attribute
-from sim.nearest import Nearest, drop_back_to, pass_first_s, room_ahead_of
 from sim.observers import StepEvent, TraceWriter
 from sim.parts import DriveConfig, Parts
 from sim.safety import SafetyMonitor
-from sim.sensors import RaySensor, Reading, SensorModel, in_range, oncoming_view_m
+from sim.sensors import RaySensor, SensorModel, in_range, oncoming_view_m
 from sim.summary import Failure, RunSummary, Takeover
 from sim.tolerance import ToleranceReport, Violation
 from sim.tracking import Detection, Track, Tracker
@@ -46,16 +48,15 @@ from spec.actions import ACTION_RULES, Action
 from spec.answers import Answer, Status
 from spec.assumptions import PROFILES
 from spec.dynamics import Overtaken
-from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING
+from spec.envelope import MINIMAL_RISK, TRACKING
 from spec.errors import ScenarioError
 from spec.faults import lost_control
 from spec.files import scenario_to_dict
 from spec.kinds import FailureKind
 from spec.lanes import Lane
 from spec.models import ModelKind
-from spec.motion import Ramp, SpeedProfile, action_speed_mps, plan_profiles, ramp_gain_m, reference_offset_m
+from spec.motion import SpeedProfile, action_speed_mps, plan_profiles, ramp_gain_m, reference_offset_m
 from spec.physical import CAR, LOOP, SENSORS
-from spec.safety import SAFETY
 from spec.scenario import Scenario, problem_for
 from spec.sound import Sound
 from spec.state import State
@@ -70,7 +71,6 @@ MIN_EPISODE_KM = 0.001  # a collision again before the AV has moved a metre sinc
 #: cannot pass (wrecks stand until left behind) held a drive for ever.
 BLOCKED_S = 4 * MINIMAL_RISK.return_wait_s
 SNAPSHOT_EVERY = 10
-NO_OVERTAKE = (Status.NO_PLAN, Status.NO_PLAN_WITHIN_HORIZON)  # the final model's answers that refuse an overtake
 SENSOR_STREAM = 1  # the second word of the sensor's seed: [seed, 1]
 Report = Callable[[tuple[int, float]], None]
 
@@ -669,34 +669,36 @@ class Simulator:
         """What a sound decision does, chosen when its snapshot (``readings``, the AV at ``pose``) was taken: the
         plan, a step in lane, what the last decision proved, or the fallback; it acts once the planner's time is over
         (``_while_planning``)."""
-        why = answer.status.value
         unsafe_before, self.unsafe_before = self.unsafe_before, answer.status is Status.UNSAFE_START
-        if answer.status is Status.PLAN and answer.actions:
-            if not self._refused(answer.actions, self.pending):
-                self._sight(readings, pose.x_m)
-                escape = answer.commit.escape if answer.commit is not None else None
-                if escape is not None:
-                    self.summary.committed_parts += 1
-                return functools.partial(self._sound_execute, answer.actions, pose.speed_mps,
-                                         f"plan {self.summary.plans}", escape=escape.actions if escape else ())
-            why = "an overtake refused: the tracker holds a contradiction"
-        elif answer.status is Status.UNSAFE_START:  # an assumption broke before the snapshot: counted, no failure
+        if answer.status is Status.UNSAFE_START:  # an assumption broke before the snapshot: counted, no failure
             self.summary.unsafe_starts += 1
-        elif answer.status not in (Status.PLAN, *NO_OVERTAKE):
+        elif decide.planner_failed(answer.status):
             self._fail(FailureKind.PLANNER, answer.status.value, answer.detail or self._no_plan(answer, scenario))
-        step = keep_lane(problem_for(scenario, ModelKind.FINAL))
-        if step is not None:
+
+        def proved_holds() -> bool:
+            return self.proved is not None and self.proved.sensed is None and self.proved.sense(
+                self.summary.sim_time_s, self.summary.km, pose.x_m, readings, self.doing) is None
+
+        choice = decide.choose(answer.status, bool(answer.actions),
+                               refused=lambda: self._refused(answer.actions, self.pending),
+                               step=lambda: keep_lane(problem_for(scenario, ModelKind.FINAL)),
+                               unsafe_before=unsafe_before, pending=bool(self.pending), proved_holds=proved_holds)
+        if choice.act is decide.Act.PLAN:
+            self._sight(readings, pose.x_m)
+            escape = answer.commit.escape if answer.commit is not None else None
+            if escape is not None:
+                self.summary.committed_parts += 1
+            return functools.partial(self._sound_execute, answer.actions, pose.speed_mps,
+                                     f"plan {self.summary.plans}", escape=escape.actions if escape else ())
+        if choice.act is decide.Act.STEP:
+            assert choice.step is not None
             self.summary.keep_lane_steps += 1
             self._sight(readings, pose.x_m)
-            return functools.partial(self._sound_execute, (step,), pose.speed_mps, f"keeping the lane ({why})")
-        # a start that breaks the specification, again after the last decision's minimal-risk manoeuvre ran (with
-        # nothing of its plan left), is not left as it is: that manoeuvre keeps a broken gap when its hold speed is the
-        # vehicle ahead's; the fallback opens it
-        unsafe = answer.status is Status.UNSAFE_START and unsafe_before and not self.pending
-        if not unsafe and self.proved is not None and self.proved.sensed is None and self.proved.sense(
-                self.summary.sim_time_s, self.summary.km, pose.x_m, readings, self.doing) is None:
-            return functools.partial(self._keep_proved, why)
-        return functools.partial(self._fallback, f"{why}, and no safe step in lane")
+            return functools.partial(self._sound_execute, (choice.step,), pose.speed_mps,
+                                     f"keeping the lane ({choice.why})")
+        if choice.act is decide.Act.KEEP:
+            return functools.partial(self._keep_proved, choice.why)
+        return functools.partial(self._fallback, choice.why)
 
     def _keep_proved(self, why: str) -> bool:
         """No plan and no step from the fresh snapshot (its cells may be coarser than what the last decision knew),
@@ -807,195 +809,54 @@ class Simulator:
                 if not self._await_room_to_return():
                     return False
                 self.executor.reset_reference()
-                if not self.executor.run(Action.LEFT_LANE_CHANGE, self._tick, self._return_profile()):
+                if not self.executor.run(Action.LEFT_LANE_CHANGE, self._tick,
+                                         fallback.return_profile(self._around(), self.car.pose().speed_mps)):
                     return False
             self.pending, self.proved = (), None
             return self._brake_in_lane(emergency=True)
         finally:
             self._observe(self.summary.plans, 0, None, None, [], since_s)
 
+    def _around(self) -> fallback.Around:
+        """What the fallback knows at the last sweep."""
+        return fallback.Around(self.lead, self.follower, self.oncoming, self.sweep is not None,
+                               None if self.watch is None else self.watch.bounds)
+
     def _await_room_to_return(self) -> bool:
-        """The fallback in the right lane: hold the lane until the sensed left lane leaves room to return
-        (``MinimalRisk``: nothing alongside within the specification's least gap, the vehicle ahead not nearer than
-        it allows at the fitted closing speed once the return, at the speed it starts at, is over, and where
-        followers keep their speed the vehicle behind not nearer than it allows then either), meanwhile driving at
-        the left lane's speed (``_waiting_mps``), until ``MinimalRisk.ends_wait`` (the oncoming lane leaves no time,
-        ``_oncoming_leaves_time``, or ``return_wait_s`` is over), then back regardless (the oncoming lane is the
-        greater danger). False on a collision."""
-        mr = MINIMAL_RISK
+        """The fallback in the right lane: hold the lane, at the speeds ``fallback.wait_command`` says, until it
+        says return (the sensed left lane leaves room, or the wait ends). False on a collision."""
         y_ref = self.scene.lane_y(Lane.RIGHT)
         command = self.car.pose().speed_mps
-        change_s = float(ACTION_RULES[Action.LEFT_LANE_CHANGE].duration_s)
         held = 0
         while True:
-            speed = self.car.pose().speed_mps
-            alongside = any(r.lane is Lane.LEFT and -mr.beside_m < r.dx_m <= 0
-                            for r in self._sense())
-            closing = 0.0 if self.lead is None else self.lead.closing_mps(speed)
-            # the return runs at the speed it starts at: the gap it will leave at its end must still do
-            near = self.lead is not None and self.lead.too_near_after(closing, change_s)
-            blocks = self._follower_blocks(change_s, speed)
-            if not alongside and not near and not blocks:
+            beside = fallback.alongside(self._sense())
+            after = fallback.wait_command(self._around(), self.car.pose().speed_mps, beside, command,
+                                          (held + 1) * self.executor.dt_s, self.executor.dt_s)
+            if after is None:
                 return True
-            held += 1
-            waited_s = held * self.executor.dt_s
-            # an oncoming vehicle sensed that leaves no time ends the wait whenever it comes (measured: seed 25 of the
-            # reliability campaign at 1153285 held the lane for a least wait of ``takeover_s`` while one closed from
-            # 49 m, and the return began 8.6 m from it)
-            if mr.ends_wait(waited_s, self.sweep is not None, self._oncoming_leaves_time(change_s, speed)):
-                return True
-            target = self._waiting_mps(speed, near, alongside, blocks)
-            if target is not None and command > target:
-                command = max(target, command - mr.emergency_decel_mps2 * self.executor.dt_s)
-            elif target is not None:
-                command = min(target, command + mr.accel_mps2 * self.executor.dt_s)
+            held, command = held + 1, after
             self.executor.reset_reference()
             if not self.executor.control(command, y_ref, 0.0, self._tick):
                 return False
 
-    def _return_profile(self) -> SpeedProfile:
-        """The return's speed reference: the speed it starts at, unless the vehicle ahead would then be nearer than
-        the specification allows at the return's end (only a return the oncoming lane forces starts so): then it
-        brakes, at the car's limit, down to that vehicle's speed by the fitted closing speed (not fitted yet: the
-        slowest the drive's bounds let a vehicle ahead be, not a standstill), from the start, or once it is clear of
-        a vehicle alongside it is passing (``pass_first_s``). Measured: seed 23 of the reliability campaign (the
-        code of 4952935) returned at constant speed into the vehicle ahead, 5.1 m away closing at 3 m/s; braking to
-        a standstill for a vehicle ahead just sensed (seeds 13 and 16 at 6994c0a) left the AV standing across the
-        lanes, and the vehicle it had passed ran into it."""
-        speed = self.car.pose().speed_mps
-        change_s = float(ACTION_RULES[Action.LEFT_LANE_CHANGE].duration_s)
-        if self.lead is None:
-            return SpeedProfile(speed, ())
-        if self.lead.measured_mps is not None:
-            closing = min(speed, self.lead.closing_mps(speed))
-        else:
-            closing = max(0.0, speed - (self.watch.bounds.same_mps.low_mps if self.watch is not None else 0.0))
-        if closing <= 0.0 or not self.lead.too_near_after(closing, change_s):
-            return SpeedProfile(speed, ())
-        brake_s = closing / MINIMAL_RISK.emergency_decel_mps2
-        return SpeedProfile(speed, (Ramp(pass_first_s(self.follower, self.lead, speed, closing), brake_s, -closing),))
-
-    def _waiting_mps(self, speed_mps: float, near: bool, alongside: bool, blocks: bool) -> float | None:
-        """The speed the fallback drives at while it waits in the right lane for room (None: the one it has): the
-        vehicle ahead's while it is too near (a vehicle beside the AV, its centre ahead of the AV's: ``open_mps`` slower
-        than the vehicle it drops back behind, ``drop_back_to``, unless the AV is the faster and passing it ends
-        sooner, ``MinimalRisk.pass_s`` and ``drop_back_s``: ``open_mps`` faster than it, or the speed it has when that
-        is more; its speed not measured yet: the one it has); a vehicle alongside behind: at least ``open_mps`` faster
-        than it if the AV is the faster, or if passing it ends sooner than dropping back behind it and the left lane
-        has room for the AV ahead of it then (``room_ahead_of``), else ``open_mps`` slower than it (it drops back),
-        and the vehicle ahead slows a passing AV only once its gap breaks the specification now, not the gap a return
-        would leave (matching its speed would hold the AV beside the vehicle it passes, measured: seed 12; and seed 22
-        of the reliability campaign, held beside it by a fake gap's copy ahead until the oncoming vehicle left no time
-        and the return cut into it; dropping back behind a vehicle 0.04 m/s the faster whose centre was 6.0 m behind
-        the AV's, 0.5 m short of clear, took 12.5 m at the fitted speeds, and the oncoming lane forced the return
-        into it: seed 69 of the 1,000 km campaign at 94bbc05); a follower too near (not alongside) that keeps its
-        speed: its speed (the closing speed that makes its gap too small goes). Speeds from the fitted closing speeds
-        (a vehicle ahead not measured yet: it may stand); the lowest target wins. Beside a vehicle faster than
-        ``open_mps`` a standstill is never the target (measured: seed 6 of the faults evaluation braked to 0 beside a
-        vehicle at 7 m/s, stood 3 s in the oncoming lane, and was rear-ended when it returned at a crawl)."""
-        mr, targets = MINIMAL_RISK, []
-        f = self.follower
-        f_own_mps = None if f is None else f.own_mps(speed_mps)
-        passing = False  # beside a vehicle the AV passes (its centre behind the AV's)
-        if alongside and f is not None and f_own_mps is not None and f.gap_m < SAFETY.min_gap_m:
-            f_closing_mps = f_own_mps - speed_mps
-            pass_s = mr.pass_s(-f_closing_mps, -f.dx_m)
-            passing = f_closing_mps < -CLOSING_EPS_MPS or (
-                pass_s < mr.drop_back_s(-f_closing_mps, -f.dx_m, f_own_mps)
-                and room_ahead_of(f, f_own_mps, self.lead, speed_mps, pass_s))
-        if near and self.lead is not None:
-            closing = self.lead.closing_mps(speed_mps)
-            lead_mps = max(0.0, speed_mps - closing)
-            if passing and not self.lead.too_near_after(closing, 0.0):
-                pass  # the gap ahead meets the specification now: on past the vehicle beside, not held beside it
-            elif self.lead.gap_m >= SAFETY.min_gap_m:
-                targets.append(lead_mps)
-            elif (lead_own_mps := self.lead.own_mps(speed_mps)) is not None:
-                # beside it (its centre ahead of the AV's): drop back unless the AV is the faster and passing it ends
-                # sooner, ``open_mps`` below the speed of the vehicle it drops behind, not the AV's (the closing speed
-                # braked for stops at 0, and a target under the AV's own speed every step ratcheted it to a
-                # standstill beside a reading moving away, seed 38 of the reliability campaign)
-                behind_m, behind_mps = drop_back_to(self.lead, f, speed_mps, lead_own_mps)
-                if lead_own_mps >= speed_mps - CLOSING_EPS_MPS or mr.drop_back_s(
-                        speed_mps - behind_mps, behind_m, behind_mps) <= mr.pass_s(speed_mps - lead_own_mps,
-                                                                                  self.lead.dx_m):
-                    targets.append(max(0.0, behind_mps - mr.open_mps))
-                else:
-                    targets.append(max(speed_mps, lead_own_mps + mr.open_mps))
-        if f is not None and f_own_mps is not None and (alongside or blocks):
-            if passing:  # at least ``open_mps`` faster than it, so that the pass ends
-                targets.append(max(speed_mps, f_own_mps + mr.open_mps))
-            elif f.gap_m < SAFETY.min_gap_m and f_own_mps >= speed_mps - CLOSING_EPS_MPS:  # not passing: drop back
-                targets.append(max(0.0, f_own_mps - mr.open_mps))
-            elif blocks:
-                targets.append(f_own_mps)
-        return min(targets) if targets else None
-
-    def _follower_blocks(self, change_s: float, speed_mps: float) -> bool:
-        """Where followers keep their speed (the drive's bounds: ``Bounds.followers_react`` False), whether the
-        vehicle sensed behind in the left lane would be nearer than the specification allows at its fitted closing
-        speed once a return of ``change_s`` is over (not measured yet: it blocks, for the two sweeps a fit needs)."""
-        f = self.follower
-        if f is None or self.watch is None or self.watch.bounds.followers_react:
-            return False
-        f_closing_mps = f.closing_now_mps(speed_mps)
-        if f_closing_mps is None or f_closing_mps > MINIMAL_RISK.open_mps:
-            return True  # not measured yet, or the AV slower than it by more than the fit's error: speed up first
-        return f.too_near_after(max(0.0, f_closing_mps), change_s)
-
-    def _oncoming_leaves_time(self, change_s: float, speed_mps: float) -> bool:
-        """Whether the fallback may wait one more sweep in the right lane: the nearest oncoming vehicle sensed would
-        still be farther than the specification allows at its fitted closing speed after that sweep and a return of
-        ``change_s`` (none sensed within the front-right sensor's range: yes, each sweep looks again; a dropped
-        sweep: no; its speed not measured yet, for the sweeps a fit needs: the AV's ``speed_mps`` plus the fastest
-        oncoming speed the drive's bounds state)."""
-        if self.sweep is None:
-            return False
-        o = self.oncoming
-        if o is None:
-            return True
-        o_closing_mps = o.closing_now_mps(speed_mps)
-        if o_closing_mps is not None:
-            closing = max(0.0, o_closing_mps)
-        elif self.watch is not None:
-            closing = speed_mps + self.watch.bounds.oncoming_mps.high_mps
-        else:
-            return False
-        return not o.too_near_after(closing, change_s + 1 / SENSORS.sweep_hz)
-
     def _brake_in_lane(self, emergency: bool) -> bool:
-        """The minimal-risk manoeuvre for ``MINIMAL_RISK.takeover_s``: brake in lane to the hold speed; with
-        ``emergency`` (the fallback), down to the sensed vehicle ahead's speed while it is nearer than the safety
-        specification allows at the closing speed measured over the last sweeps (``fallback_closing_mps``; not
-        measured: the AV's whole speed, it may stand). Without it (a proved continuation), a
-        breach ends it at once, and the position reference runs on from the plan's (the envelope the proof assumed
-        bounds the car's position about it; a speed command alone would let the car drift for as long as the
-        manoeuvre lasts)."""
-        mr = MINIMAL_RISK
+        """The minimal-risk manoeuvre for ``MINIMAL_RISK.takeover_s``: brake in lane to the hold speed, each control
+        step's command from ``fallback.brake_command``. With ``emergency`` (the fallback) no position is kept.
+        Without it (a proved continuation), a breach ends it at once, and the position reference runs on from the
+        plan's (the envelope the proof assumed bounds the car's position about it; a speed command alone would let
+        the car drift for as long as the manoeuvre lasts)."""
         assert self.watch is not None
         low = self.watch.bounds.same_mps.low_mps
         if not emergency and self.containment is not None:  # the proved manoeuvre's own hold speed
             low = self.containment.hold_floor_mps
-        hold = mr.fallback_hold_mps(low) if emergency else mr.hold_mps(self.car.pose().speed_mps, low)
+        hold = fallback.in_lane_hold_mps(emergency, self.car.pose().speed_mps, low)
         command = self.car.pose().speed_mps
         y_ref = self.scene.lane_y(self.executor.lane)
         self.executor.lane_due = self.executor.lane
-        for _ in range(max(1, round(mr.takeover_s / self.executor.dt_s))):
-            target, decel = hold, mr.decel_mps2
-            if emergency and self.lead is not None:
-                speed = self.car.pose().speed_mps
-                closing = self.lead.closing_mps(speed)
-                if self.lead.too_near_after(closing, 0.0):
-                    target, decel = max(0.0, speed - closing), mr.emergency_decel_mps2
-                    if (now_mps := self.lead.closing_now_mps(speed)) is not None and now_mps > CLOSING_EPS_MPS:
-                        target = min(target, max(0.0, command - decel * self.executor.dt_s))  # it still closes
-                elif (lead_own_mps := self.lead.own_mps(speed)) is not None and \
-                        self._room_needed(mr.handback_mps(speed, hold)):
-                    target = min(hold, max(0.0, lead_own_mps - mr.open_mps))
-            if command > target:
-                command = max(target, command - decel * self.executor.dt_s)
-            elif emergency:
-                command = min(target, command + mr.accel_mps2 * self.executor.dt_s)
+        dt_s = self.executor.dt_s
+        for _ in range(max(1, round(MINIMAL_RISK.takeover_s / dt_s))):
+            command = fallback.brake_command(self._around(), self.car.pose().speed_mps, command, hold, emergency,
+                                             self._room_needed, dt_s)
             if emergency:  # towards a standstill no position is to be kept; a proved continuation keeps its own
                 self.executor.reset_reference()
             if not self.executor.control(command, y_ref, 0.0, self._tick):
@@ -1005,18 +866,15 @@ class Simulator:
         return True
 
     def _room_needed(self, speed_mps: float) -> bool:
-        """Whether the fallback opens the gap ahead (``MinimalRisk.open_mps``): a decision from the last sweep at
-        ``speed_mps`` would find no safe step in lane, the vehicle ahead (its speed measured) is nearer than the one
-        behind, and the one behind is farther than the specification allows at the opening's closing speed. Asked
-        once per sweep."""
+        """Whether the fallback opens the gap ahead (``MinimalRisk.open_mps``): it may (``fallback.may_open_gap``)
+        and a decision from the last sweep at ``speed_mps`` would find no safe step in lane. Asked once per
+        sweep."""
         if self.sweep is None or self.lead is None or self.planner.sound is None:
             return False  # a dropped sweep, nothing ahead, or the paper's rules (no decision to hand back to)
         if self._room_sweep is self.sweep:
             return self._room
         self._room_sweep, self._room = self.sweep, False
-        rear_m = self.follower.gap_m if self.follower is not None else math.inf  # the same sweep's vehicle behind
-        ahead_m = self.lead.gap_m
-        if ahead_m >= rear_m or SAFETY.violated(rear_m, MINIMAL_RISK.open_mps):
+        if not fallback.may_open_gap(self._around()):
             return False
         try:
             scenario = self.planner.scenario(self.sweep, self.executor.lane, speed_mps,
@@ -1059,7 +917,7 @@ class Simulator:
     @staticmethod
     def _refusal(answer: Answer) -> opportunity.Refusal | None:
         """Why ``answer`` does not start an overtake now, or None when it does (or could not tell: incomplete)."""
-        if any(kind is ModelKind.FINAL and status in NO_OVERTAKE for kind, status, _ in answer.stages):
+        if any(kind is ModelKind.FINAL and status in decide.NO_OVERTAKE for kind, status, _ in answer.stages):
             return opportunity.Refusal.REFUSED
         if answer.status is not Status.PLAN:
             return None

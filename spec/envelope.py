@@ -136,7 +136,7 @@ class MinimalRisk:
     vehicle first sensed at any distance used to end the wait at once; a stated rule, no failure measured); a return
     that would end nearer the vehicle ahead than the specification allows (one the oncoming lane forces) brakes at
     ``emergency_decel_mps2`` to that vehicle's fitted speed, or, not fitted yet, the slowest the bounds let it be, from
-    its start or once clear of a vehicle it is passing (``sim.nearest.pass_first_s``) (measured: seed 23
+    its start or once clear of a vehicle it is passing (``sim.driver.nearest.pass_first_s``) (measured: seed 23
     returned at constant speed into it, 5.1 m away closing at 3 m/s; braking to a standstill for a vehicle just sensed
     left the AV standing across the lanes in front of the vehicle it had passed, seeds 13 and 16); then it brakes in
     lane at ``decel_mps2`` to the hold speed and, while the sensed vehicle ahead is nearer than the safety specification

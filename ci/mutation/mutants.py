@@ -129,6 +129,16 @@ MUTANTS: tuple[Mutant, ...] = (
            "car = first_contact(self.scene, self.car.body, self.traffic.cars())",
            "car = first_contact(self.scene, self.car.body, self.traffic.oncoming)",
            "contacts with same-direction vehicles ignored by the simulator"),
+    Mutant("fallback-brake-closing-at-hold-speed", "sim/driver/fallback.py",
+           "        closing = lead.closing_mps(speed_mps)\n        if lead.too_near_after(closing, 0.0):",
+           "        closing = lead.closing_mps(hold_mps)\n        if lead.too_near_after(closing, 0.0):",
+           "the fallback's emergency brake reads the closing speed on the vehicle ahead at the hold speed, not at the "
+           "car's own: behind a vehicle slower than the hold speed it brakes on below that vehicle's speed"),
+    Mutant("decide-unsafe-start-kept-again", "sim/driver/decide.py",
+           "unsafe_again = status is Status.UNSAFE_START and unsafe_before and not pending",
+           "unsafe_again = status is Status.UNSAFE_START and unsafe_before and pending",
+           "a start that breaks the safety specification again, nothing of the last plan left, keeps the last "
+           "decision's minimal-risk manoeuvre (which holds the broken gap) instead of handing over to the fallback"),
     Mutant("traffic-oncoming-odds-reversed", "sim/traffic.py",
            "    odds = np.array([float(f) for f in spec.oncoming_gap_odds])",
            "    odds = np.array([float(f) for f in spec.oncoming_gap_odds][::-1])",

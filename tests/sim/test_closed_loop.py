@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 import sim.parts as parts_module
+from sim.driver.readings import Reading
 from sim.parts import DriveConfig
-from sim.sensors import Reading
 from sim.simulator import START_UP_S, Simulator
 from spec.actions import Action
 from spec.errors import ScenarioError

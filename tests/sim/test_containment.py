@@ -11,7 +11,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from sim.containment import BreachKind, Containment, ContainmentReport, Sighting
-from sim.sensors import Reading
+from sim.driver.readings import Reading
 from sim.vehicle import Pose
 from spec.assumptions import world_bounds
 from spec.envelope import TRACKING

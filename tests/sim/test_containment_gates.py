@@ -15,7 +15,7 @@ import pytest
 
 from sim.containment import BreachKind, Containment
 from sim.discretiser import discretise
-from sim.sensors import Reading
+from sim.driver.readings import Reading
 from spec.assumptions import world_bounds
 from spec.dynamics import Dynamics
 from spec.grid import PAPER_GRID

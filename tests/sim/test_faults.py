@@ -11,8 +11,9 @@ from collections.abc import Callable
 
 import pytest
 
+from sim.driver.readings import Reading
 from sim.faults import GHOST_BODY, FaultySensor, SteeringFault
-from sim.sensors import Reading, Truth
+from sim.sensors import Truth
 from spec.cells import left_cell
 from spec.faults import (
     DEFAULT_STEERING_OFFSET_DEG,

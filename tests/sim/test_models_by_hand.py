@@ -19,9 +19,10 @@ import pytest
 from scipy.stats import binom, chi2, norm
 
 from sim.discretiser import reading_cell
+from sim.driver.readings import Reading
 from sim.parts import SENSOR_MODELS, TRAFFIC_MODELS
 from sim.scene import Scene
-from sim.sensors import Reading, Truth, in_range
+from sim.sensors import Truth, in_range
 from sim.traffic import Driver, PaperTraffic, SpreadTraffic, draw_speed_mps
 from sim.vehicle import KinematicCar, Pose
 from spec.grid import PAPER_GRID

@@ -8,8 +8,9 @@ import dataclasses
 
 import pytest
 
+from sim.driver.readings import Reading
 from sim.faults import FaultySensor
-from sim.sensors import Reading, Truth
+from sim.sensors import Truth
 from sim.tracking import Detection, TrackedSweep, Tracker, hides
 from spec.assumptions import world_bounds
 from spec.faults import Fault, FaultKind, FaultSpec

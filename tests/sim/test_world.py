@@ -9,8 +9,9 @@ import pytest
 
 from oracle.planner import plan
 from sim.discretiser import discretise
+from sim.driver.readings import Reading
 from sim.scene import Scene
-from sim.sensors import RaySensor, Reading, in_range
+from sim.sensors import RaySensor, in_range
 from sim.traffic import left_gap_cells, oncoming_gap_cells
 from sim.vehicle import KinematicCar
 from spec.actions import Action

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from sim.sensors import Reading
+from sim.driver.readings import Reading
 from spec.envelope import CLOSING_EPS_MPS, MINIMAL_RISK, TRACKING, fitted_closing_mps, own_motion_closing_mps
 from spec.lanes import Lane
 from spec.physical import CAR

@@ -1,0 +1,66 @@
+"""What a decision of the sound model does with its planner's answer: the plan (its committed part and escape), a
+safe step in lane, what the last decision proved, or the fallback. The rules, apart from their execution: the
+simulator asks the questions they need (lazily: some of them watch the world) and runs what they choose."""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from spec.actions import Action
+from spec.answers import Status
+
+#: The final model's answers that refuse an overtake (no failure of the planner).
+NO_OVERTAKE = (Status.NO_PLAN, Status.NO_PLAN_WITHIN_HORIZON)
+
+
+class Act(enum.Enum):
+    """What a decision does."""
+
+    PLAN = "plan"  # the answer's plan: its committed part, then its escape (a whole plan: to its end)
+    STEP = "step in lane"  # one safe step in lane (``oracle.sound.keep_lane``)
+    KEEP = "keep the last proof"  # the rest of the last decision's plan and escape, or its minimal-risk manoeuvre
+    FALLBACK = "fallback"  # ``spec.envelope.MinimalRisk``
+
+
+@dataclass(frozen=True, slots=True)
+class Choice:
+    """A decision's act, why (the answer's status, or why its plan was not taken) and, for a step, which."""
+
+    act: Act
+    why: str
+    step: Action | None = None
+
+
+def planner_failed(status: Status) -> bool:
+    """Whether the answer is a failure of the planner: neither a plan, nor a refusal of the overtake, nor a start
+    that already breaks the safety specification (an assumption broke before the snapshot: counted apart)."""
+    return status not in (Status.PLAN, Status.UNSAFE_START, *NO_OVERTAKE)
+
+
+def choose(status: Status, planned: bool, *, refused: Callable[[], bool], step: Callable[[], Action | None],
+           unsafe_before: bool, pending: bool, proved_holds: Callable[[], bool]) -> Choice:
+    """A decision's act from its answer's ``status`` (``planned``: a plan with actions):
+
+    - a plan, unless the tracker's contradiction ``refused`` the overtake it starts;
+    - else a safe ``step`` in lane, if there is one;
+    - else what the last decision proved, while its assumptions hold (``proved_holds``), unless this start breaks
+      the safety specification again right after the last decision's start did (``unsafe_before``) with nothing of
+      its plan left (not ``pending``): its minimal-risk manoeuvre would keep the broken gap, the fallback opens it;
+    - else the fallback.
+
+    Each question is asked only when the rules reach it, in this order (``refused``, ``proved_holds`` act on what the
+    AV senses)."""
+    why = status.value
+    if status is Status.PLAN and planned:
+        if not refused():
+            return Choice(Act.PLAN, why)
+        why = "an overtake refused: the tracker holds a contradiction"
+    safe = step()
+    if safe is not None:
+        return Choice(Act.STEP, why, safe)
+    unsafe_again = status is Status.UNSAFE_START and unsafe_before and not pending
+    if not unsafe_again and proved_holds():
+        return Choice(Act.KEEP, why)
+    return Choice(Act.FALLBACK, f"{why}, and no safe step in lane")

@@ -1,0 +1,67 @@
+"""The sound model's decision rules (``sim.driver.decide``), each at its boundary, with scripted answers to the
+questions the simulator would ask: no planner, no physics engine."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from sim.driver.decide import Act, Choice, choose, planner_failed
+from spec.actions import Action
+from spec.answers import Status
+
+
+def asked(log: list[str], name: str, value: object) -> Callable[[], object]:
+    def answer() -> object:
+        log.append(name)
+        return value
+    return answer
+
+
+def decide(status: Status, planned: bool = True, *, refused: bool = False, step: Action | None = None,
+           unsafe_before: bool = False, pending: bool = False, holds: bool = True) -> tuple[Choice, list[str]]:
+    log: list[str] = []
+    choice = choose(status, planned, refused=asked(log, "refused", refused),  # type: ignore[arg-type]
+                    step=asked(log, "step", step), unsafe_before=unsafe_before, pending=pending,  # type: ignore[arg-type]
+                    proved_holds=asked(log, "holds", holds))  # type: ignore[arg-type]
+    return choice, log
+
+
+def test_a_plan_is_executed_unless_the_tracker_refuses_the_overtake_it_starts() -> None:
+    assert decide(Status.PLAN) == (Choice(Act.PLAN, "plan"), ["refused"])
+    choice, log = decide(Status.PLAN, refused=True, step=Action.DRIVE)
+    assert choice == Choice(Act.STEP, "an overtake refused: the tracker holds a contradiction", Action.DRIVE)
+    assert log == ["refused", "step"]
+
+
+def test_an_empty_plan_is_no_plan_to_execute_it_keeps_the_lane() -> None:
+    choice, log = decide(Status.PLAN, planned=False, step=Action.DRIVE)
+    assert choice.act is Act.STEP and log == ["step"]
+
+
+@pytest.mark.parametrize("status", [Status.NO_PLAN, Status.NO_PLAN_WITHIN_HORIZON, Status.UNSAFE_START,
+                                    Status.INCOMPLETE])
+def test_without_a_plan_a_safe_step_in_lane_then_the_last_proof_then_the_fallback(status: Status) -> None:
+    assert decide(status, step=Action.DRIVE)[0] == Choice(Act.STEP, status.value, Action.DRIVE)
+    assert decide(status) == (Choice(Act.KEEP, status.value), ["step", "holds"])
+    choice, _ = decide(status, holds=False)
+    assert choice == Choice(Act.FALLBACK, f"{status.value}, and no safe step in lane")
+
+
+def test_a_start_that_breaks_the_specification_twice_in_a_row_with_nothing_left_to_keep_goes_to_the_fallback() -> None:
+    """Seed 9 of the paper's world: the last decision's minimal-risk manoeuvre held the vehicle ahead's speed and
+    kept a broken gap for the rest of the drive. The second such start in a row, nothing of the last plan pending,
+    hands over to the fallback without asking the last proof; the first one, or one with a plan pending, keeps it."""
+    choice, log = decide(Status.UNSAFE_START, unsafe_before=True)
+    assert choice.act is Act.FALLBACK and log == ["step"]
+    assert decide(Status.UNSAFE_START, unsafe_before=False)[0].act is Act.KEEP
+    assert decide(Status.UNSAFE_START, unsafe_before=True, pending=True)[0].act is Act.KEEP
+    assert decide(Status.NO_PLAN, unsafe_before=True)[0].act is Act.KEEP  # only a start that breaks it again
+    assert decide(Status.UNSAFE_START, unsafe_before=True, step=Action.DRIVE)[0].act is Act.STEP
+
+
+def test_only_an_answer_that_is_neither_a_plan_a_refusal_nor_an_unsafe_start_is_the_planners_failure() -> None:
+    assert [s for s in Status if planner_failed(s)] == [
+        s for s in Status if s not in (Status.PLAN, Status.NO_PLAN, Status.NO_PLAN_WITHIN_HORIZON, Status.UNSAFE_START)]
+    assert planner_failed(Status.INCOMPLETE) and not planner_failed(Status.UNSAFE_START)
