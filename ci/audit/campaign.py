@@ -417,7 +417,8 @@ def planning_cost(results: Iterable[Done], engines: Iterable[str], timeout_s: fl
 
 
 def write_reports(audit_rows: list[Row], costs: list[Cost], audit: AuditPlan, out_dir: str) -> list[Path]:
-    """``audit.json``, ``audit.md`` and the two plots in ``out_dir``; the files written."""
+    """``audit.json``, ``audit.md`` and the plots (the headline's, ``audit-tradeoff.png``, first in ``audit.md``) in
+    ``out_dir``; the files written."""
     out = Path(out_dir)
     settings = {k: v for k, v in audit.base.all_json().items() if k not in PER_COMBINATION}
     settings |= {"cells_m": list(audit.cells_m), "traffic": list(audit.traffic), "sensing": list(audit.sensing),
@@ -425,12 +426,15 @@ def write_reports(audit_rows: list[Row], costs: list[Cost], audit: AuditPlan, ou
     data = {"settings": settings, "combinations": [r.to_json() for r in audit_rows],
             "planning_cost": [c.to_json() for c in costs]}
     paths = [out / "audit.json", out / "audit.md", out / "audit-safety.png", out / "audit-latency.png",
-             out / "audit-models.png"]
+             out / "audit-models.png", out / "audit-tradeoff.png"]
     paths[0].write_text(json.dumps(data, indent=1))
     paths[1].write_text(markdown(audit_rows, costs, settings))
     _plot_safety(audit_rows, paths[2])
     _plot_latency(costs, paths[3])
     _plot_models(audit_rows, paths[4])
+    fig = plot_tradeoffs(tradeoffs(r.to_json() for r in audit_rows))
+    fig.savefig(paths[5], dpi=100)
+    pyplot().close(fig)
     return paths
 
 
@@ -441,7 +445,92 @@ def decider(model: str, semantics: str) -> str:
 
 def label(r: Row) -> str:
     """A combination's model, semantics and bounds as tables name them."""
-    return decider(r.model, r.semantics) + ("" if r.bounds_scale == 1 else f" (bounds x{r.bounds_scale:g})")
+    return record_label(r.to_json())
+
+
+def record_label(record: dict[str, Any]) -> str:
+    """A combination's model, semantics and bounds as tables name them, from its ``audit.json`` record (one written
+    before the semantics were recorded decided by whole plans)."""
+    scale = record.get("bounds_scale", 1.0)
+    return decider(str(record.get("model", "paper")), str(record.get("semantics", Semantics.WHOLE.value))) + (
+        "" if scale == 1 else f" (bounds x{scale:g})")
+
+
+@dataclass(frozen=True, slots=True)
+class Tradeoff:
+    """One model in one world (traffic and sensing), over every cell size and seed the audit drove it: what its
+    safety cost in progress, a point of the audit's headline figure."""
+
+    model: str  # as tables name it (``record_label``)
+    traffic: str
+    sensing: str
+    km: float
+    overtakes: int
+    collisions: int
+    inside: int  # of them, inside the model's assumptions (a soundness failure)
+
+    @property
+    def overtakes_per_km(self) -> float:
+        return self.overtakes / self.km if self.km else math.nan
+
+    @property
+    def collisions_per_1000_km(self) -> float:
+        return 1000 * self.collisions / self.km if self.km else math.nan
+
+
+def tradeoffs(records: Iterable[dict[str, Any]]) -> list[Tradeoff]:
+    """The headline's points from the combinations' ``audit.json`` records: one per model and world, in the order
+    the audit drove them."""
+    points: dict[tuple[str, str, str], list[dict[str, Any]]] = {}
+    for r in records:
+        points.setdefault((record_label(r), str(r["traffic"]), str(r["sensing"])), []).append(r)
+    return [Tradeoff(model, traffic, sensing, sum(float(r["km"]) for r in mine),
+                     sum(int(r.get("overtakes", 0)) for r in mine), sum(int(r["collisions"]) for r in mine),
+                     sum(int(r.get("attributed", {}).get(attribution_key("contact", True), 0)) for r in mine))
+            for (model, traffic, sensing), mine in points.items()]
+
+
+def plot_tradeoffs(points: list[Tradeoff]) -> Any:
+    """The headline figure: overtakes per km against collisions per 1,000 km, a point per model and world (a colour
+    per world, a marker per model; a point with collisions inside its assumptions ringed red and labelled). The
+    collision axis is linear up to 1 per 1,000 km and logarithmic beyond, so that none and hundreds both show."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    worlds = list(dict.fromkeys((p.traffic, p.sensing) for p in points))
+    models = list(dict.fromkeys(p.model for p in points))
+    for p in points:
+        colour = f"C{worlds.index((p.traffic, p.sensing)) % 10}"
+        ax.scatter([p.collisions_per_1000_km], [p.overtakes_per_km], s=70, color=colour,
+                   marker="osD^v<>P"[models.index(p.model) % 8], edgecolors="red" if p.inside else colour,
+                   linewidths=2.5 if p.inside else 1.0, zorder=3)
+        if p.inside:
+            ax.annotate(f"{p.inside} inside", (p.collisions_per_1000_km, p.overtakes_per_km), fontsize=7,
+                        color="red", xytext=(5, 5), textcoords="offset points")
+    for i, (traffic, sensing) in enumerate(worlds):
+        ax.plot([], [], color=f"C{i % 10}", linewidth=6, label=f"{traffic}, {sensing}")
+    for i, model in enumerate(models):
+        ax.scatter([], [], color="grey", marker="osD^v<>P"[i % 8], label=model)
+    ax.set_xscale("symlog", linthresh=1.0)
+    ax.set_xlim(left=-0.2)
+    ax.set_ylim(bottom=0)
+    ax.set_xlabel("collisions per 1,000 km (all; ringed red: some inside the assumptions)")
+    ax.set_ylabel("overtakes per km")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="best")
+    ax.set_title("what each model's safety costs in progress: a point per model and world")
+    fig.tight_layout()
+    return fig
+
+
+def tradeoff_markdown(points: list[Tradeoff]) -> list[str]:
+    """The headline: each model's overtakes per km beside its collisions per 1,000 km, per world, and the figure."""
+    lines = ["## What each model's safety costs in progress (every cell size)", "",
+             "| traffic | sensing | model | km | overtakes /km | collisions /1,000 km | "
+             "of them inside the assumptions |",
+             "|---|---|---|---|---|---|---|"]
+    lines += [f"| {p.traffic} | {p.sensing} | {p.model} | {p.km:.1f} | {figure(p.overtakes_per_km, 2)} | "
+              f"{figure(p.collisions_per_1000_km)} | {p.inside} |" for p in points]
+    return [*lines, "", "![overtakes per km against collisions per 1,000 km](audit-tradeoff.png)"]
 
 
 def models_markdown(audit_rows: list[Row]) -> list[str]:
@@ -459,7 +548,7 @@ def models_markdown(audit_rows: list[Row]) -> list[str]:
              "waits without a plan | starts breaking the specification | delayed /1,000 km (est.) |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in audit_rows:
-        kinds = ", ".join(f"{k} {v}" for k, v in sorted(r.breaches.items())) or "-"
+        kinds = ", ".join(f"{k} {figure(r.per_1000_km(v))}" for k, v in sorted(r.breaches.items())) or "-"
         share = "-" if r.breached_share is None else f"{100 * r.breached_share:.1f}%"
         lines.append(
             f"| {r.cell_m:g} | {r.traffic} | {r.sensing} | {label(r)} | {r.km:.1f} | "
@@ -475,7 +564,9 @@ def models_markdown(audit_rows: list[Row]) -> list[str]:
 def markdown(audit_rows: list[Row], costs: list[Cost], settings: dict[str, Any]) -> str:
     """The audit's tables as Markdown."""
     lines = ["# Audit of the grid abstraction", "",
-             "Settings: " + ", ".join(f"{k} {v}" for k, v in settings.items()), "",
+             "Settings: " + ", ".join(f"{k} {v}" for k, v in settings.items()), ""]
+    lines += tradeoff_markdown(tradeoffs(r.to_json() for r in audit_rows))
+    lines += ["", "## Every combination", "",
              "| cell m | traffic | sensing | model | runs | km | collisions | per 1,000 km | near misses | "
              "per 1,000 km | overtakes not started, replays that succeeded (checked) | missed per 1,000 km (est.) | "
              "delayed per 1,000 km (est.) | "

@@ -16,9 +16,9 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-from ci.audit.campaign import decider, figure
+from ci.audit.campaign import figure, plot_tradeoffs, record_label, tradeoffs
 from ci.report.closest import closest_figures, gap_order
-from ci.report.document import Figure, Report, Section, Table, from_rich
+from ci.report.document import Figure, Report, Section, Table, from_rich, png_bytes
 from ci.report.histograms import breach_histograms, deviation_histograms
 from ci.report.road import reproducer_drawing
 from sim.paper import MEDIAN_KM
@@ -230,7 +230,7 @@ def audit_section(folder: Path, key: str) -> Section:
                           str(folder))
         section.findings.append(f"{len(rows)} combinations, seeds {settings.get('seeds')}, "
                                 f"{sum(float(r['km']) for r in rows):.1f} km in all")
-        section.facts = {"models": _audit_findings(rows)}
+        section.facts = {"models": _audit_findings(rows), "tradeoffs": tradeoffs(rows)}
         section.findings += section.facts["models"]
         section.tables.append(Table("collisions, near misses and containment per combination", AUDIT_HEADERS, tuple(
             (f"{r['cell_m']:g}", r["traffic"], r["sensing"], _model(r), f"{r['km']:.1f}",
@@ -238,6 +238,14 @@ def audit_section(folder: Path, key: str) -> Section:
              _inside_after(r, "contact"), rate(r["near_misses"], r["km"]), _inside_after(r, "near_miss"),
              rate(sum(r.get("breaches", {}).values()), r["km"])) for r in rows),
             "inside / after: attributed inside the model's assumptions (a soundness failure) or after one broke"))
+        kinds = sorted({k for r in rows for k in r.get("breaches", {})})
+        if kinds:
+            section.tables.append(Table(
+                "breaches of the assumptions per 1,000 km, by kind", ("cell m", "traffic", "sensing", "model",
+                                                                       *kinds),
+                tuple((f"{r['cell_m']:g}", r["traffic"], r["sensing"], _model(r),
+                       *(rate(r.get("breaches", {}).get(k, 0), r["km"]) for k in kinds)) for r in rows),
+                "measured from the truth against the world's bounds under both models (sim.containment)"))
         section.tables.append(Table("planning latency per engine on the snapshots the planner saw",
                                     ("cell m", "model", "engine", "n", "median ms", "p99 ms", "incomplete"),
                                     tuple((f"{c['cell_m']:g}", c["model"], c["engine"], str(c["n"]),
@@ -262,9 +270,7 @@ def audit_section(folder: Path, key: str) -> Section:
 
 
 def _model(row: dict[str, Any]) -> str:
-    scale = row.get("bounds_scale", 1.0)
-    return decider(str(row.get("model", "paper")), str(row.get("semantics", "whole"))) + (
-        "" if scale == 1 else f" (bounds x{scale:g})")
+    return record_label(row)
 
 
 def _audit_findings(rows: list[dict[str, Any]]) -> list[str]:
@@ -381,7 +387,20 @@ def headline(sections: list[Section]) -> Section:
     for kind, (question, answer) in answers.items():
         mine = by_kind.get(kind, [])
         head.findings.append(f"{question} " + (answer(mine) if mine else f"Not answered: no {kind} output given."))
+    audits = by_kind.get("audit", [])
+    head.findings.append("What does each model's safety cost in progress? " + (
+        _costs(audits) if audits else "Not answered: no audit output given."))
+    for i, s in enumerate(audits, 1):  # the headline figure, drawn from each audit's records
+        head.figures.append(Figure(None, f"overtakes per km against collisions per 1,000 km, a point per model and "
+                                         f"world ({s.source})", png_bytes(plot_tradeoffs(s.facts["tradeoffs"])),
+                                   f"headline-tradeoff-{i}"))
     return head
+
+
+def _costs(sections: list[Section]) -> str:
+    return "; ".join(f"{p.model} in {p.traffic} traffic, {p.sensing} sensing: {p.overtakes_per_km:.2f} overtakes "
+                     f"per km, {rate(p.collisions, p.km)} collisions per 1,000 km ({p.inside} inside its assumptions)"
+                     for s in sections for p in s.facts["tradeoffs"]) + "."
 
 
 def _agree(sections: list[Section]) -> str:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from ci.audit.campaign import AUDIT_FILE, AuditPlan, rows, run_audit
+from ci.audit.campaign import AUDIT_FILE, AuditPlan, Tradeoff, plot_tradeoffs, rows, run_audit, tradeoffs
 from ci.shared.executors import ExecutorChoice
 from sim.parts import DriveConfig
 from tests.conftest import run_cli as run
@@ -107,7 +107,8 @@ def test_the_audit_command_writes_its_reports(tmp_path: Path) -> None:
     assert {c["semantics"] for c in result["combinations"] if c["model"] == "sound"} == {"commit"}
     assert result["planning_cost"][0]["engine"] == "interpreter" and result["planning_cost"][0]["n"] >= 2
     assert {c["model"] for c in result["planning_cost"]} == {"paper", "sound (commit)"}
-    for name in ("audit.json", "audit.md", "audit-safety.png", "audit-latency.png", "audit-models.png", AUDIT_FILE):
+    for name in ("audit.json", "audit.md", "audit-safety.png", "audit-latency.png", "audit-models.png",
+                 "audit-tradeoff.png", AUDIT_FILE):
         assert (tmp_path / name).stat().st_size > 0
 
 
@@ -203,3 +204,23 @@ def test_rows_count_faults_their_failures_losses_of_control_and_unreadable_snaps
     assert "| 21 | paper | exact | paper | 4.0 | 5 / 100 / 1 | 1 / 20 / 1 | 1 | 1 | 1 |" in text
     (plain,) = rows([Done(DriveConfig(1.0), RunSummary(1, km=2.0))])
     assert plain.faults == {} and "Faults injected" not in markdown([plain], [], {})
+
+
+def test_the_headline_puts_each_models_overtakes_beside_its_collisions_per_world_over_every_cell_size() -> None:
+    """A point per model and world: the cell sizes' km, overtakes and collisions added up, the collisions inside the
+    assumptions apart; the sound model named with how it decided, records without a semantics as whole plans."""
+    def record(cell_m: float, model: str, km: float, overtakes: int, collisions: int, inside: int = 0,
+               **more: object) -> dict[str, object]:
+        return {"cell_m": cell_m, "traffic": "spread", "sensing": "noisy", "model": model, "km": km,
+                "overtakes": overtakes, "collisions": collisions, "attributed": {"contact inside": inside}, **more}
+
+    points = tradeoffs([record(21, "paper", 100, 300, 40, 30), record(21, "sound", 100, 20, 3, semantics="commit"),
+                        record(10.5, "paper", 50, 100, 20, 10), record(10.5, "sound", 50, 5, 0, semantics="commit"),
+                        record(21, "sound", 100, 0, 0)])
+    assert points == [Tradeoff("paper", "spread", "noisy", 150, 400, 60, 40),
+                      Tradeoff("sound (commit)", "spread", "noisy", 150, 25, 3, 0),
+                      Tradeoff("sound (whole)", "spread", "noisy", 100, 0, 0, 0)]
+    assert points[0].overtakes_per_km == pytest.approx(400 / 150)
+    assert points[1].collisions_per_1000_km == pytest.approx(20.0)
+    figure = plot_tradeoffs(points)
+    assert len(figure.axes[0].collections) >= len(points)

@@ -52,6 +52,11 @@ def test_every_campaign_kind_is_read_and_the_other_folder_skipped_with_its_reaso
     questions = report.headline.findings
     assert questions[0].startswith("Do the engines agree? Yes: every property held")
     assert "Not answered: no mutation output given" in questions[3]
+    assert questions[4].startswith("What does each model's safety cost in progress? paper in paper traffic, exact "
+                                   "sensing: ") and "sound (commit) in paper traffic" in questions[4]
+    assert [f.name for f in report.headline.figures] == ["headline-tradeoff-1"]
+    assert report.headline.figures[0].png().startswith(b"\x89PNG")
+    assert "Not answered: no audit output given" in collect([campaigns / "sim"]).headline.findings[4]
     assert all(s.tables for s in report.sections) and all(t.rows for s in report.sections for t in s.tables)
 
 
@@ -104,8 +109,9 @@ def test_the_command_writes_the_page_and_markdown_with_links_that_resolve(campai
     assert "Do the engines agree?" in done.stdout and str(page) in done.stdout
     html, text = page.read_text(), markdown.read_text()
     assert "<script" not in html and "http://" not in html and "https://" not in html  # nothing to fetch, nothing run
-    # the space-time plot, the audit's three, the simulation's histograms (deviations; breaches when there were any)
-    assert html.count("data:image/png;base64,") == 4 + _histograms(campaigns)
+    # the headline's trade-off, the space-time plot, the audit's three, the simulation's histograms (deviations;
+    # breaches when there were any)
+    assert html.count("data:image/png;base64,") == 5 + _histograms(campaigns)
     for target in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", text):
         assert (markdown.parent / target).is_file(), target
     for output in (html, text, done.stdout):
@@ -163,7 +169,7 @@ def test_the_page_passes_in_headless_chromium(campaigns: Path, tmp_path: Path) -
     page.write_text(to_html(collect([campaigns]), "test"))
     check = open_page(page, shot)
     assert check.problems() == []
-    assert check.blocked == [] and len(check.images) == 4 + _histograms(campaigns)
+    assert check.blocked == [] and len(check.images) == 5 + _histograms(campaigns)
     assert all(w > 0 for _, w in check.images)
     assert {"headline", "inputs", "crossval-1", "simulate-1", "audit-1"} <= {key for key, _, _ in check.sections}
     assert shot.stat().st_size > 10_000
