@@ -105,50 +105,38 @@ class MinimalRisk:
     """The minimal-risk manoeuvre after a plan (and the fallback's): stay in lane and brake, at the share of the car's
     braking limit the executor's ramps use, down to a hold speed no vehicle ahead can be slower than.
 
-    The fallback (the simplex pattern; RSS's proper response) takes over in the closed loop when a decision from a fresh
-    snapshot has neither a plan nor a safe step in lane (``oracle.sound.keep_lane``), when the snapshot makes no
-    scenario, or when a vehicle that broke the assumptions under one decision breaks them again under the next. It
-    returns to the left lane when the AV is in the right one (a lane change at its speed), once the sensed left lane
-    leaves room (nothing alongside within the specification's least gap, the vehicle ahead not nearer than the
-    specification allows at the closing speed when the lane change is over, the car's envelope taken
-    (``too_near_after``), and, where followers keep their speed, the
-    vehicle behind not nearer than it allows at its closing speed then either, nor faster than the AV by more than
-    ``open_mps``: measured, seeds 6 and 8 of the faults evaluation were rear-ended after returning slower than the
-    follower, and seed 21 of the reliability campaign after a return begun at a standstill, whose sideways move took 5
-    s, not the lane change's 3), driving meanwhile in the right lane at the left lane's speed: the vehicle ahead's while
-    it is too near, ``open_mps`` below it while beside it (its centre ahead of the AV's) unless the AV is the faster and
-    passing it ends sooner (``pass_s``, ``drop_back_s``: measured, seed 51 of the 1,000 km campaign kept its speed 1.2
-    m/s faster than a vehicle whose rear was 1.25 m ahead, a 10 s pass where a drop back takes 1 s, until the oncoming
-    lane forced a return into it; dropping back every time would hold a car 5 m/s faster and level with a vehicle for 6
-    s, not a pass's 1.4; passing, at least ``open_mps`` above it), beside a vehicle alongside behind at least
-    ``open_mps`` above it when the AV is the faster, or when passing it ends sooner than dropping back behind it and the
-    left lane has a slot for the AV ahead of it (measured: seed 69 of the 1,000 km campaign at 94bbc05 dropped back 12.5
-    m behind a vehicle 0.04 m/s the faster where 0.5 m more ahead cleared it, and the oncoming lane forced the return
-    into it), else ``open_mps`` below it (passing, slowed by the vehicle ahead only once that gap breaks the
-    specification now: matching the vehicle ahead held the AV beside the vehicle it was passing, seed 22), a too-near or
-    faster follower's own where followers keep their speed (measured: braking to a standstill beside a vehicle left the
-    AV standing in the oncoming lane, then returning at a crawl in front of a follower), up to ``return_wait_s``, while
-    the nearest oncoming vehicle sensed stays farther than the specification allows at its closing speed after one more
-    sweep and the lane change, from the wait's start (a least wait of ``takeover_s`` first was measured: seed 25 of the
-    reliability campaign held the lane while an oncoming vehicle closed from 49 m; a dropped sweep, which shows nothing,
-    ends the wait only after ``takeover_s``) (a return into a vehicle ahead at 13 m/s was measured: seed 2; before its
-    speed is fitted, the AV's speed plus the fastest oncoming speed the bounds state, for the two sweeps a fit needs: a
-    vehicle first sensed at any distance used to end the wait at once; a stated rule, no failure measured); a return
-    that would end nearer the vehicle ahead than the specification allows (one the oncoming lane forces) brakes at
-    ``emergency_decel_mps2`` to that vehicle's fitted speed, or, not fitted yet, the slowest the bounds let it be, from
-    its start or once clear of a vehicle it is passing (``sim.driver.nearest.pass_first_s``) (measured: seed 23
-    returned at constant speed into it, 5.1 m away closing at 3 m/s; braking to a standstill for a vehicle just sensed
-    left the AV standing across the lanes in front of the vehicle it had passed, seeds 13 and 16); then it brakes in
-    lane at ``decel_mps2`` to the hold speed and, while the sensed vehicle ahead is nearer than the safety specification
-    allows at the closing speed (``fallback_closing_mps``), at ``emergency_decel_mps2`` down to that vehicle's speed (a
-    standstill when it is not known), and on below it while the measured gap still closes (the car may run above its
-    speed command: measured, 0.17 m/s at 7 m/s, and the gap closed until contact). Where the gap ahead is within the
-    specification but a decision from the last sweep would still find no safe step in lane (the planner's own check,
-    with its margins for the car's envelope and the sensing error), and the gap ahead is the smaller of the two in the
-    lane, it drives ``open_mps`` slower than the vehicle ahead, at ``decel_mps2``, while the vehicle behind stays
-    farther than the specification allows at that closing speed: the AV moves towards the middle of its slot instead of
-    holding a gap no decision accepts (measured: 1,648 take-overs in a row, seed 12, 35 km at a 2 m gap). It holds for
-    ``takeover_s``, then hands back to a new decision (which may take over again).
+    The fallback (the simplex pattern; RSS's proper response) takes over in the closed loop when a decision from a
+    fresh snapshot has neither a plan nor a safe step in lane (``oracle.sound.keep_lane``), when the snapshot makes
+    no scenario, or when a vehicle that broke the assumptions under one decision breaks them again under the next.
+    Its rules (``sim.driver.fallback`` applies them; the drives that made each one are in CHANGELOG.md):
+
+    - **In the right lane, wait for room, then return.** Room: nothing alongside within ``beside_m``; the vehicle
+      ahead not nearer than the specification allows at its closing speed once the lane change is over, the car's
+      envelope taken (``too_near_after``); where followers keep their speed, the vehicle behind neither nearer than
+      that nor faster than the AV by more than ``open_mps``.
+    - **While it waits**, it drives at the left lane's speed: the vehicle ahead's while that one is too near;
+      beside a vehicle (its centre ahead of the AV's) ``open_mps`` below it, unless the AV is the faster and
+      passing ends sooner (``pass_s`` against ``drop_back_s``), then at least ``open_mps`` above it; beside a
+      vehicle alongside behind, ``open_mps`` above it when the AV is the faster or passing ends sooner and the
+      left lane has a slot ahead of it (``leaves_slot``), else ``open_mps`` below it; passing, only a gap ahead
+      that breaks the specification now holds it back; a too-near or faster follower's own speed where followers
+      keep theirs. Never a standstill beside a vehicle faster than ``open_mps``.
+    - **The wait ends** (``ends_wait``) when the sensed left lane leaves room, when the nearest oncoming vehicle
+      sensed would be nearer than the specification allows after one more sweep and the lane change (before its
+      speed is fitted: the AV's speed plus the bounds' fastest oncoming speed), after ``takeover_s`` when sweeps
+      are dropped, and after ``return_wait_s`` whatever it sees: the oncoming lane is the greater danger.
+    - **The return** runs at the speed it starts at, unless it would end nearer the vehicle ahead than the
+      specification allows (only a return the oncoming lane forces): then it brakes at ``emergency_decel_mps2`` to
+      that vehicle's fitted speed (not fitted yet: the slowest the bounds let it be), from its start or once clear
+      of a vehicle it is passing (``sim.driver.nearest.pass_first_s``).
+    - **In lane**, it brakes at ``decel_mps2`` to the hold speed (``fallback_hold_mps``) and, while the sensed
+      vehicle ahead is nearer than the specification allows at the closing speed (``fallback_closing_mps``), at
+      ``emergency_decel_mps2`` down to that vehicle's speed (a standstill when it is not known), and on below it
+      while the measured gap still closes (the car may run above its command). Where the gap ahead is within the
+      specification but a decision from the last sweep would find no safe step in lane, and it is the smaller of
+      the two gaps in the lane, it drives ``open_mps`` below the vehicle ahead while the vehicle behind stays
+      farther than the specification allows at that closing speed, towards the middle of its slot.
+    - It holds for ``takeover_s``, then hands back to a new decision (which may take over again).
     """
 
     decel_mps2: float = RAMP_SHARE * CAR.max_brake_mps2
