@@ -866,16 +866,14 @@ class Simulator:
         return True
 
     def _room_needed(self, speed_mps: float) -> bool:
-        """Whether the fallback opens the gap ahead (``MinimalRisk.open_mps``): it may (``fallback.may_open_gap``)
-        and a decision from the last sweep at ``speed_mps`` would find no safe step in lane. Asked once per
-        sweep."""
-        if self.sweep is None or self.lead is None or self.planner.sound is None:
-            return False  # a dropped sweep, nothing ahead, or the paper's rules (no decision to hand back to)
+        """Whether a decision from the last sweep at ``speed_mps`` would find no safe step in lane, where the fallback
+        may open the gap ahead (``fallback.brake_command`` asks, once ``fallback.may_open_gap``). Asked of the planner
+        once per sweep."""
+        if self.sweep is None or self.planner.sound is None:
+            return False  # a dropped sweep, or the paper's rules (no decision to hand back to)
         if self._room_sweep is self.sweep:
             return self._room
         self._room_sweep, self._room = self.sweep, False
-        if not fallback.may_open_gap(self._around()):
-            return False
         try:
             scenario = self.planner.scenario(self.sweep, self.executor.lane, speed_mps,
                                              self._view_m(self.sweep, self.car.pose().y_m))

@@ -423,8 +423,8 @@ def write_reports(audit_rows: list[Row], costs: list[Cost], audit: AuditPlan, ou
     settings = {k: v for k, v in audit.base.all_json().items() if k not in PER_COMBINATION}
     settings |= {"cells_m": list(audit.cells_m), "traffic": list(audit.traffic), "sensing": list(audit.sensing),
                  "models": list(audit.models), "bounds_scales": list(audit.bounds_scales), "seeds": list(audit.seeds)}
-    data = {"settings": settings, "combinations": [r.to_json() for r in audit_rows],
-            "planning_cost": [c.to_json() for c in costs]}
+    records = [r.to_json() for r in audit_rows]
+    data = {"settings": settings, "combinations": records, "planning_cost": [c.to_json() for c in costs]}
     paths = [out / "audit.json", out / "audit.md", out / "audit-safety.png", out / "audit-latency.png",
              out / "audit-models.png", out / "audit-tradeoff.png"]
     paths[0].write_text(json.dumps(data, indent=1))
@@ -432,7 +432,7 @@ def write_reports(audit_rows: list[Row], costs: list[Cost], audit: AuditPlan, ou
     _plot_safety(audit_rows, paths[2])
     _plot_latency(costs, paths[3])
     _plot_models(audit_rows, paths[4])
-    fig = plot_tradeoffs(tradeoffs(r.to_json() for r in audit_rows))
+    fig = plot_tradeoffs(tradeoffs(records))
     fig.savefig(paths[5], dpi=100)
     pyplot().close(fig)
     return paths
@@ -443,17 +443,20 @@ def decider(model: str, semantics: str) -> str:
     return model + (f" ({semantics})" if model == "sound" else "")
 
 
-def label(r: Row) -> str:
+def model_label(model: str, semantics: str, bounds_scale: float) -> str:
     """A combination's model, semantics and bounds as tables name them."""
-    return record_label(r.to_json())
+    return decider(model, semantics) + ("" if bounds_scale == 1 else f" (bounds x{bounds_scale:g})")
+
+
+def label(r: Row) -> str:
+    return model_label(r.model, r.semantics, r.bounds_scale)
 
 
 def record_label(record: dict[str, Any]) -> str:
-    """A combination's model, semantics and bounds as tables name them, from its ``audit.json`` record (one written
-    before the semantics were recorded decided by whole plans)."""
-    scale = record.get("bounds_scale", 1.0)
-    return decider(str(record.get("model", "paper")), str(record.get("semantics", Semantics.WHOLE.value))) + (
-        "" if scale == 1 else f" (bounds x{scale:g})")
+    """``model_label`` from a combination's ``audit.json`` record (one written before the semantics were recorded
+    decided by whole plans)."""
+    return model_label(str(record.get("model", "paper")), str(record.get("semantics", Semantics.WHOLE.value)),
+                       record.get("bounds_scale", 1.0))
 
 
 @dataclass(frozen=True, slots=True)

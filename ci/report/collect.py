@@ -233,7 +233,7 @@ def audit_section(folder: Path, key: str) -> Section:
         section.facts = {"models": _audit_findings(rows), "tradeoffs": tradeoffs(rows)}
         section.findings += section.facts["models"]
         section.tables.append(Table("collisions, near misses and containment per combination", AUDIT_HEADERS, tuple(
-            (f"{r['cell_m']:g}", r["traffic"], r["sensing"], _model(r), f"{r['km']:.1f}",
+            (f"{r['cell_m']:g}", r["traffic"], r["sensing"], record_label(r), f"{r['km']:.1f}",
              number(r["overtakes"] / r["km"] if r["km"] else None), rate(r["collisions"], r["km"]),
              _inside_after(r, "contact"), rate(r["near_misses"], r["km"]), _inside_after(r, "near_miss"),
              rate(sum(r.get("breaches", {}).values()), r["km"])) for r in rows),
@@ -243,7 +243,7 @@ def audit_section(folder: Path, key: str) -> Section:
             section.tables.append(Table(
                 "breaches of the assumptions per 1,000 km, by kind", ("cell m", "traffic", "sensing", "model",
                                                                        *kinds),
-                tuple((f"{r['cell_m']:g}", r["traffic"], r["sensing"], _model(r),
+                tuple((f"{r['cell_m']:g}", r["traffic"], r["sensing"], record_label(r),
                        *(rate(r.get("breaches", {}).get(k, 0), r["km"]) for k in kinds)) for r in rows),
                 "measured from the truth against the world's bounds under both models (sim.containment)"))
         section.tables.append(Table("planning latency per engine on the snapshots the planner saw",
@@ -257,8 +257,8 @@ def audit_section(folder: Path, key: str) -> Section:
             section.tables.append(Table("the closest calls (collisions first, then the smallest true gaps)",
                                         ("cell m", "traffic", "sensing", "model", "kind", "at km", "true gap m",
                                          "doing", "assumptions"),
-                                        tuple((f"{r['cell_m']:g}", r["traffic"], r["sensing"], _model(r), e["kind"],
-                                               number(e["km"], 3), number(e["gap_m"]), e["doing"],
+                                        tuple((f"{r['cell_m']:g}", r["traffic"], r["sensing"], record_label(r),
+                                               e["kind"], number(e["km"], 3), number(e["gap_m"]), e["doing"],
                                                e.get("assumptions") or "-") for r, e in worst)))
     except (KeyError, TypeError, ValueError, AttributeError, ZeroDivisionError) as error:
         raise Unreadable(f"audit.json: not an audit ({type(error).__name__}: {error})") from None
@@ -269,15 +269,11 @@ def audit_section(folder: Path, key: str) -> Section:
     return section
 
 
-def _model(row: dict[str, Any]) -> str:
-    return record_label(row)
-
-
 def _audit_findings(rows: list[dict[str, Any]]) -> list[str]:
     """Per model: where it collided inside its assumptions (unsound) and after them; its overtakes per km."""
     lines = []
-    for model in sorted({_model(r) for r in rows}):
-        mine = [r for r in rows if _model(r) == model]
+    for model in sorted({record_label(r) for r in rows}):
+        mine = [r for r in rows if record_label(r) == model]
         km = sum(float(r["km"]) for r in mine)
         inside = [r for r in mine if r.get("attributed", {}).get("contact inside", 0)]
         after = sum(r.get("attributed", {}).get("contact after", 0) for r in mine)

@@ -199,8 +199,9 @@ def brake_command(a: Around, speed_mps: float, command_mps: float, hold_mps: flo
     (the fallback) also up to it at ``accel_mps2``, and, while the sensed vehicle ahead is nearer than the safety
     specification allows at the closing speed at the car's own ``speed_mps`` (``Nearest.closing_mps``), down to that
     vehicle's speed at the car's braking limit, and on below it while the measured gap still closes (the car may run
-    above its command); where a decision at the hand-back speed would find no safe step in lane (``room_needed``,
-    asked only then), ``open_mps`` below the vehicle ahead's speed."""
+    above its command); where the fallback may open the gap ahead (``may_open_gap``) and a decision at the hand-back
+    speed would find no safe step in lane (``room_needed``, asked only then), ``open_mps`` below the vehicle ahead's
+    speed."""
     mr = MINIMAL_RISK
     target, decel = hold_mps, mr.decel_mps2
     lead = a.lead
@@ -210,7 +211,7 @@ def brake_command(a: Around, speed_mps: float, command_mps: float, hold_mps: flo
             target, decel = max(0.0, speed_mps - closing), mr.emergency_decel_mps2
             if (now_mps := lead.closing_now_mps(speed_mps)) is not None and now_mps > CLOSING_EPS_MPS:
                 target = min(target, max(0.0, command_mps - decel * dt_s))  # it still closes
-        elif (lead_own_mps := lead.own_mps(speed_mps)) is not None and \
+        elif (lead_own_mps := lead.own_mps(speed_mps)) is not None and may_open_gap(a) and \
                 room_needed(mr.handback_mps(speed_mps, hold_mps)):
             target = min(hold_mps, max(0.0, lead_own_mps - mr.open_mps))
     return ramp_mps(command_mps, target, decel, dt_s, mr.accel_mps2 if emergency else None)
