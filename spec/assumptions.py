@@ -8,7 +8,9 @@ error widens every sensed position by that much either way, on top of the cell i
 (a cell means anywhere within it, ``spec.cells``). A phantom is a vehicle assumed at the edge of
 a sensor's view in each lane (its range; in the oncoming lane, nearer where a left-lane vehicle
 hides the lane), moving within that lane's bounds, so that a vehicle arriving from beyond what the
-sensors see is inside the assumptions.
+sensors see is inside the assumptions. Nothing touches the AV at a snapshot (a vehicle that does has
+already collided with it, an event of its own), so a vehicle in the AV's lane that cannot be clear
+ahead of it is behind it (``spec.sound.follower_limit_m``).
 """
 
 from __future__ import annotations

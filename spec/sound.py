@@ -428,14 +428,15 @@ def top_mps(bounds: Bounds, v: Vehicle) -> float:
 
 def follower_limit_m(x0_m: float, safety: SafetySpec, tracking: Tracking) -> float:
     """At a plan's start, the AV in the left lane at ``x0_m``: a same-direction vehicle whose every position is short
-    of this (bumpers clear behind every position of the AV, its envelope's position error taken) follows the AV: a
-    lane keeps its order, and the specification has no conflict behind the AV in its own lane.
+    of this cannot be clear ahead of any position of the AV (its envelope's position error taken): it is behind the AV,
+    or touching it, which is a collision already happened (``spec.assumptions``: no vehicle touches the AV at a
+    snapshot). A lane keeps its order, so it follows the AV, and the specification's only conflict with a follower is
+    ``BEHIND`` where followers keep their speed (``Bounds.followers_react`` False).
 
-    A vehicle neither that far behind nor clear ahead with its gap may touch the AV already: the start breaks the
+    A vehicle short of neither this nor clear ahead with its gap may be clear ahead too near: the start breaks the
     specification (``start_violation``), an answer of its own, never a plan (``spec.answers.Status.UNSAFE_START``).
-    On 21 m cells the cell behind the AV's reaches to its centre, so a start from cells alone right after an
-    overtake's return is such a start; one from what the snapshot measured (``Scenario.left_m``) is not."""
-    return x0_m - tracking.position_m - safety.vehicle_length_m
+    So the vehicle in the cell behind the AV's, or one measured at the least gap behind it, follows."""
+    return x0_m - tracking.position_m + safety.vehicle_length_m
 
 
 Extent = tuple[float, float]  # where a vehicle's centre can be, metres ahead of the AV's (negative: behind)
@@ -534,7 +535,7 @@ class Segment:
     t1_s: float
     lanes: frozenset[Lane]
     entering_left: bool  # vehicles of the left lane are classified: certainly ahead, or certainly behind
-    at_start: bool = False  # the plan's start: one behind is a follower (bumpers clear), not a cut-in
+    at_start: bool = False  # the plan's start: one that cannot be clear ahead is a follower, not a cut-in
 
 
 Shapes = dict[tuple[float, Action | None, Lane, Lane | None], list[tuple[Segment, list[Bounded]]]]

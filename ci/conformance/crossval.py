@@ -392,6 +392,16 @@ def write_reports(data: dict[str, Any], summary: Summary, campaign: Campaign, ou
     return paths
 
 
+def _sound_header(campaign: dict[str, Any]) -> str:
+    """The sound model's bounds and the semantics the campaign held the engines to: its own key (``Campaign.key``),
+    not the bounds' table, whose ``semantics`` is the model's before the campaign applies its own."""
+    bounds = campaign["bounds"]
+    if isinstance(bounds, dict):
+        bounds = {k: v for k, v in bounds.items() if k != "semantics"}
+    semantics = campaign.get("semantics", Semantics.WHOLE.value)
+    return f"the sound model, bounds {bounds}, semantics {semantics}."
+
+
 def markdown(data: dict[str, Any]) -> str:
     c = data["campaign"]
     lines = ["# Cross-validation", "",
@@ -399,7 +409,7 @@ def markdown(data: dict[str, Any]) -> str:
                  f", seed {c['seed']}" if c["seed"] is not None else "") + (
                  f", at most {c['count']} (--count)" if c.get("count") else "")
              + f"; engines {', '.join(c['engines'])}; {data['scenarios']} scenarios; cell {c['cell_m']:g} m; "
-             + (f"the sound model, bounds {c['bounds']}." if c.get("model") == "sound" else "the paper's rules."), "",
+             + (_sound_header(c) if c.get("model") == "sound" else "the paper's rules."), "",
              "| property | checked | held | failed | incomplete |", "|---|---|---|---|---|"]
     lines += [f"| {name} | {v['checked']} | {v['held']} | {v['failed']} | {v['incomplete']} |"
               for name, v in data["properties"].items()]

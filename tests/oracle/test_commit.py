@@ -159,9 +159,10 @@ def test_validate_says_which_part_fails_and_why() -> None:
 
 # -- an unsafe start ----------------------------------------------------------------------------------------------
 def test_a_start_that_already_breaks_the_specification_is_an_answer_of_its_own() -> None:
-    """The vehicle read in cell 9 may overlap the AV with the sensing error: never the empty plan; under the
-    commitment semantics ``unsafe_start`` and the in-lane minimal-risk manoeuvre, under whole plans "no plan"."""
-    start = make_scenario("left", [9, 17], [20], 0)
+    """The vehicle read in cell 11, the AV's next, may be clear ahead of it and far too near with the sensing error:
+    never the empty plan; under the commitment semantics ``unsafe_start`` and the in-lane minimal-risk manoeuvre,
+    under whole plans "no plan"."""
+    start = make_scenario("left", [11, 17], [20], 0)
     answer = plan(replace(start, sound=sound_from(None, "default")))
     assert answer.status is Status.UNSAFE_START and answer.commit is not None and answer.commit.escape is not None
     assert answer.commit.escape.kind is EscapeKind.MINIMAL_RISK and not answer.commit.escape_proved
@@ -173,11 +174,17 @@ def test_a_start_that_already_breaks_the_specification_is_an_answer_of_its_own()
     assert right.commit.escape.actions == (Action.LEFT_LANE_CHANGE,)
 
 
-def test_a_vehicle_read_clear_behind_is_a_follower_not_an_unsafe_start() -> None:
-    """What the snapshot measured: the overtaken vehicle 21 m behind, bumpers well clear, follows the AV."""
+@pytest.mark.parametrize("behind_m", [(-21.0, -21.0), (-6.5, -6.5), None])
+def test_a_vehicle_behind_the_av_follows_it_however_near(behind_m: tuple[float, float] | None) -> None:
+    """What the snapshot measured: the overtaken vehicle 21 m behind, or at the least gap behind (2 m, bumpers not
+    clear of the AV's envelope with the sensing error), or anywhere in the cell behind the AV's (cells alone): it
+    cannot be clear ahead, so it follows the AV (nothing touches the AV at a snapshot), and the start is no unsafe
+    one."""
     from spec.scenario import sensed
 
-    start = sensed(make_scenario("left", [9, 17], [20], 0), ((-21.0, -21.0), (147.0, 147.0)), ((215.0, 215.0),))
+    start = make_scenario("left", [9, 17], [20], 0)
+    if behind_m is not None:
+        start = sensed(start, (behind_m, (147.0, 147.0)), ((215.0, 215.0),))
     answer = plan(replace(start, sound=sound_from(None, "default")))
     assert answer.status is Status.PLAN
 

@@ -209,7 +209,7 @@ def test_under_the_commitment_semantics_an_unsafe_start_names_its_violation_and_
     code, text = explain_cli("no_plan_boxed_in", "--bounds", "default", "--json")
     result = json.loads(text)
     assert code == 0 and result["status"] in ("unsafe_start", "no_plan")
-    start = make_scenario("left", [9, 17], [20], 0)
+    start = make_scenario("left", [11, 17], [20], 0)
     unsafe = explain_sound(replace(start, sound=sound_from(None, "default")))
     assert unsafe.status is Status.UNSAFE_START and unsafe.violation is not None
     assert unsafe.answer.commit is not None and unsafe.answer.commit.escape is not None

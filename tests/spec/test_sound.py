@@ -17,7 +17,17 @@ from spec.grid import PAPER_GRID
 from spec.lanes import Lane
 from spec.motion import action_speed_mps
 from spec.safety import Conflict
-from spec.sound import Sound, SoundRules, SoundState, sound_from, sound_from_table, sound_to_table, vehicles
+from spec.sound import (
+    EPS_M,
+    Sound,
+    SoundRules,
+    SoundState,
+    follower_limit_m,
+    sound_from,
+    sound_from_table,
+    sound_to_table,
+    vehicles,
+)
 
 DEFAULT = Sound(profile("default"))
 finite = st.floats(-50.0, 50.0)
@@ -113,6 +123,23 @@ def test_a_follower_is_no_conflict_at_the_start_but_a_cut_in_is() -> None:
     rules = _rules(Sound(_bounds(same=(7.0, 12.0), phantoms=False)), lane=Lane.RIGHT, left=(9,))
     found = rules.step_violation(SoundState(Lane.RIGHT, 0, 0, 0, 0, None, None), Action.LEFT_LANE_CHANGE)
     assert found is not None and found.conflict is Conflict.CUT_IN
+
+
+@pytest.mark.parametrize("dx_m,follows", [(-6.0, True), (0.0, True), (1.5 - 2 * EPS_M, True), (1.5 + 0.01, False)])
+def test_a_vehicle_that_cannot_be_clear_ahead_follows_and_one_that_can_breaks_the_start(dx_m: float,
+                                                                                          follows: bool) -> None:
+    """Nothing touches the AV at a snapshot, so a vehicle in its lane that cannot be clear ahead of any position of
+    the AV is behind it, however near: measured at ``dx_m`` (centre to centre) with 1.5 m of sensing error and the
+    AV's 1.5 m envelope, it can be clear ahead from 1.5 m (4.5 m long cars). One that can is an ``ahead`` conflict
+    at the start, too near by far."""
+    sound = Sound(_bounds(error=1.5, phantoms=False))
+    limit = follower_limit_m(0.0, sound.safety, sound.tracking)
+    assert limit == pytest.approx(-TRACKING.position_m + sound.safety.vehicle_length_m) == pytest.approx(3.0)
+    rules = SoundRules(sound, Lane.LEFT, (10,), (), PAPER_GRID, (), left_m=((dx_m, dx_m),))
+    found = rules.start_violation(SoundState(Lane.LEFT, 0, 0, 0, 0, None, None))
+    assert (found is None) is follows
+    if not follows:
+        assert found is not None and found.conflict is Conflict.AHEAD and found.gap_m < 0
 
 
 @pytest.mark.parametrize("bounds,key", [

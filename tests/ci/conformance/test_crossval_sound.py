@@ -43,7 +43,8 @@ def test_a_sound_campaign_on_the_library_holds_and_records_its_bounds(tmp_path: 
     assert data is not None and data["campaign"]["model"] == "sound"
     assert data["campaign"]["bounds"]["same_mps"] == [7.0, 7.0]
     assert data["rule_coverage"] == {}  # the paper's rules are not the sound model's: none shown
-    assert "the sound model, bounds" in (tmp_path / "summary.md").read_text()
+    header = (tmp_path / "summary.md").read_text().splitlines()[2]
+    assert "the sound model, bounds" in header and header.endswith("semantics whole.")
     records = [json.loads(line) for line in (tmp_path / VERDICTS_FILE).read_text().splitlines()]
     assert records and all(r["result"]["scenario"]["bounds"]["same_mps"] == [7.0, 7.0] for r in records)
 
@@ -136,3 +137,14 @@ def test_bounds_a_record_of_an_older_version_lacks_are_named_as_not_recorded() -
     here = {"same_mps": [4.9, 9.1], "latency_s": 0.0}
     assert _difference(here, {"same_mps": [4.9, 9.1]}) == "latency_s not recorded there, 0.0 here"
     assert _difference(here, {"same_mps": [6.0, 8.0], "latency_s": 0.0}) == "same_mps [6.0, 8.0] there, [4.9, 9.1] here"
+
+
+def test_a_commitment_campaigns_summary_names_the_semantics_it_held_the_engines_to(tmp_path: Path) -> None:
+    """The bounds' own table says ``whole`` (the campaign applies its semantics to each scenario): the header says
+    the campaign's."""
+    code, stderr, data = _crossval(tmp_path, "--model", "sound", "--bounds", "paper", "--semantics", "commit",
+                                   "--properties", "existence")
+    assert code == 0, stderr
+    assert data is not None and data["campaign"]["semantics"] == "commit"
+    header = (tmp_path / "summary.md").read_text().splitlines()[2]
+    assert header.endswith("semantics commit.") and "'semantics'" not in header
