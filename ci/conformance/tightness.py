@@ -269,6 +269,17 @@ def _reference(path: Path, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return x, v
 
 
+def _follow_limit_m(scenario: Scenario, path: Path, entry_s: float) -> float:
+    """Where a same-direction vehicle must be, at most, when the AV got into the left lane at ``entry_s`` to follow
+    it: in the lane from the start, short of ``spec.sound.follower_limit_m`` (it cannot be clear ahead); else behind
+    every position of the AV, bumpers clear."""
+    assert scenario.sound is not None
+    tr, length = scenario.sound.tracking, scenario.sound.safety.vehicle_length_m
+    if entry_s == 0.0 and scenario.lane is Lane.LEFT:
+        return follower_limit_m(0.0, scenario.sound.safety, tr)
+    return path.position(entry_s) - tr.position_m - length
+
+
 def judge(scenario: Scenario, path: Path, car: Vehicle, chunk: _Chunk, start_m: float, speed_mps: float,
           av_offset_m: float, av_speed_offset_mps: float, t_s: float) -> tuple[Conflict, float, float] | None:
     """The specification at one instant for one concrete motion (the vehicle from ``start_m`` at a constant
@@ -276,7 +287,7 @@ def judge(scenario: Scenario, path: Path, car: Vehicle, chunk: _Chunk, start_m: 
     the vehicle is in no conflict then."""
     assert scenario.sound is not None
     spec = scenario.sound.safety
-    length, ex = spec.vehicle_length_m, scenario.sound.tracking.position_m
+    length = spec.vehicle_length_m
     x, v = path.position(t_s) + av_offset_m, path.speed(t_s) + av_speed_offset_mps
     if car.lane is Lane.RIGHT:
         if Lane.RIGHT not in chunk.lanes:
@@ -289,12 +300,8 @@ def judge(scenario: Scenario, path: Path, car: Vehicle, chunk: _Chunk, start_m: 
         return None
     y = start_m + speed_mps * t_s
     if chunk.entry_s is not None:
-        at_entry = start_m + speed_mps * chunk.entry_s
-        if chunk.entry_s == 0.0 and scenario.lane is Lane.LEFT:  # in the lane from the start: it can never be ahead
-            follows = at_entry <= follower_limit_m(0.0, spec, scenario.sound.tracking)
-        else:  # behind every position of the AV, bumpers clear, when it got into the lane
-            follows = at_entry + length <= path.position(chunk.entry_s) - ex
-        if follows:  # a follower: a conflict only where it keeps its speed and the AV is slower (BEHIND)
+        if start_m + speed_mps * chunk.entry_s <= _follow_limit_m(scenario, path, chunk.entry_s):
+            # a follower: a conflict only where it keeps its speed and the AV is slower (BEHIND)
             if rear_binds(scenario.sound.bounds, path.speed(t_s)):
                 return Conflict.BEHIND, x - y - length, spec.required_gap_m(speed_mps - v)
             return None
@@ -356,7 +363,7 @@ def witness(scenario: Scenario, refusal: Refusal, dt_s: float = MAX_DT_S, path: 
             if not same:  # the nearest position not yet past
                 target, free_target = x - length + NUDGE_M, x - length + NUDGE_M
             elif chunk.entry_s is not None:  # the nearest position that did not follow when the AV got into the lane
-                follow_m = path.position(chunk.entry_s) - ex - length
+                follow_m = _follow_limit_m(scenario, path, chunk.entry_s)
                 target = follow_m + fixed * (t - chunk.entry_s) + NUDGE_M
                 free_target = follow_m + low * (t - chunk.entry_s) + NUDGE_M
             else:  # level with the AV: the worst of ahead and behind

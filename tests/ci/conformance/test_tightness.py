@@ -213,3 +213,11 @@ def test_the_step_checked_whole_refused_is_committed_under_the_commitment_semant
     assert any(tightness.escape_refusal(rules, first, Action.ACCELERATE, e) is None for e in escapes)
     counts = tightness.measure_commit(_committing(base))
     assert counts.committable >= 1 and counts.by_where[Where.STEP][Tightness.NEITHER] == 0
+
+
+def test_an_unsafe_start_of_a_vehicle_that_may_be_just_ahead_is_exhibited() -> None:
+    """The vehicle in the cell ahead of the AV's may be behind it (it follows) or clear ahead far too near: the witness
+    is the motion just past ``spec.sound.follower_limit_m``, not an end of its interval (each end is safe: behind, it
+    follows; at its far end it is clear ahead with its gap)."""
+    counts = tightness.measure_commit(_with("default", "left", [11], [], 1))
+    assert counts.by_where[Where.START] == {Tightness.EXHIBITED: 2, Tightness.ROUNDING: 0, Tightness.NEITHER: 0}
