@@ -159,7 +159,7 @@ class Own:
             d = self._dyn(v)
             ahead = z3.Or(*[self._over(b, d.slowest, self._ahead(v.lo_m)) for b in s.pieces])
             if s.at_start:  # already in the lane: one that cannot be clear ahead follows
-                limit = follower_limit_m(s.pieces[0].start.x_m, self.sound.safety, self.sound.tracking)
+                limit = follower_limit_m(s.pieces[0].start.x_m, self.sound)
                 behind: z3.BoolRef = _r(v.hi_m) > _r(limit - EPS_M)
             else:
                 fast = (d if held_s is None else d.held_from(held_s)).fastest

@@ -411,7 +411,7 @@ class SoundEncoding:
             if frame is not ABSOLUTE:
                 raise EngineError("z3: a start stretch in a moved window")
             first = s.pieces[0].start
-            behind = follower_limit_m(first.x_m, self.sound.safety, self.sound.tracking)
+            behind = follower_limit_m(first.x_m, self.sound)
         else:
             behind = min(self._behind_allow(b.behind) for b in s.pieces)
         return [_or(self._atom(v.lo, self.low, frame, ">=", ahead + EPS_M),

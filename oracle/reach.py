@@ -235,9 +235,9 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
         return interval_ok(t0, mid, m0, m_mid, lanes, entering, behind) or \
             interval_ok(mid, t1, m_mid, m1, lanes, entering, behind)
 
-    # at the start in the left lane, one that cannot be clear ahead follows (``spec.sound.follower_limit_m``)
+    # at the start in the left lane, one short of ``spec.sound.follower_limit_m`` follows
     behind = {i for i, c in enumerate(cars) if scenario.lane is Lane.LEFT and c.lane is Lane.LEFT
-              and c.hi_m <= follower_limit_m(0.0, sound.safety, sound.tracking) - TOLERANCE_M}
+              and c.hi_m <= follower_limit_m(0.0, sound) - TOLERANCE_M}
     previous: tuple[float, float] | None = None
     for t in path.times(dt_s):
         lanes, entering = path.occupancy(t)
@@ -436,10 +436,10 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
     own = [motion.start_mps[i] if motion.start_mps and c.dynamics is not None else None for i, c in enumerate(cars)]
     dev, dev_k = 0.0, 0
     times = path.times(dt_s)
-    # at the start in the left lane: one that cannot be clear ahead follows (``follower_limit_m``; one clear ahead
-    # too near is an unsafe start)
+    # at the start in the left lane: one short of ``follower_limit_m`` follows (one not, and not clear ahead with its
+    # gap, is an unsafe start)
     followers = {i for i, c in enumerate(cars) if c.lane is Lane.LEFT and scenario.lane is Lane.LEFT
-                 and pos[i] <= follower_limit_m(0.0, sound.safety, sound.tracking)}
+                 and pos[i] <= follower_limit_m(0.0, sound)}
     goal_checked, was_entering = goal is None, False
     windows = held_windows_s(sound, scenario.lane, actions)
     held: list[float | None] = [None] * len(cars)  # a measured same-direction vehicle's speed as a window began

@@ -200,7 +200,7 @@ def table_text(sound: Sound, grid: Grid, hold_floor_mps: float | None = None) ->
     lines = [f"# overtake-mc sound table: {sound.describe()}{start}; {grid.describe()}; rendered from spec/",
              " ".join(map(str, [TABLE_FORMAT, grid.road_cells, CONTINUATION, len(phantoms), *phantoms])),
              " ".join(_f(x) for x in (table.unit_s, table.cell_m, tr.position_m, s.vehicle_length_m,
-                                      follower_limit_m(0.0, s, tr), b.same_mps.low_mps, b.same_mps.high_mps,
+                                      follower_limit_m(0.0, sound), b.same_mps.low_mps, b.same_mps.high_mps,
                                       b.oncoming_mps.low_mps, b.oncoming_mps.high_mps, sound.start_error_m)),
              " ".join(_f(x) for x in (s.min_gap_m, s.time_gap_s, tr.speed_mps, change.accel_mps2, change.brake_mps2,
                                       float(b.followers_react), CLOSING_EPS_MPS)) +

@@ -426,17 +426,22 @@ def top_mps(bounds: Bounds, v: Vehicle) -> float:
     return top if v.dynamics is None else max(top, v.dynamics.highest_mps)
 
 
-def follower_limit_m(x0_m: float, safety: SafetySpec, tracking: Tracking) -> float:
+def follower_limit_m(x0_m: float, sound: Sound) -> float:
     """At a plan's start, the AV in the left lane at ``x0_m``: a same-direction vehicle whose every position is short
-    of this cannot be clear ahead of any position of the AV (its envelope's position error taken): it is behind the AV,
-    or touching it, which is a collision already happened (``spec.assumptions``: no vehicle touches the AV at a
-    snapshot). A lane keeps its order, so it follows the AV, and the specification's only conflict with a follower is
-    ``BEHIND`` where followers keep their speed (``Bounds.followers_react`` False).
+    of this follows the AV (a lane keeps its order), and the start has no conflict with it.
 
-    A vehicle short of neither this nor clear ahead with its gap may be clear ahead too near: the start breaks the
-    specification (``start_violation``), an answer of its own, never a plan (``spec.answers.Status.UNSAFE_START``).
-    So the vehicle in the cell behind the AV's, or one measured at the least gap behind it, follows."""
-    return x0_m - tracking.position_m + safety.vehicle_length_m
+    Where followers brake for the AV (``Bounds.followers_react``), that is every vehicle that cannot be clear ahead of
+    any position of the AV (its envelope's position error taken): it is behind the AV, or touching it, which is a
+    collision already happened (``spec.assumptions``: nothing touches the AV at a snapshot), and a rear-end is the
+    follower's to avoid. Where they keep their speed, the car's own drift back within its envelope must not reach one
+    (``rear_binds`` exempts a follower while the reference is not slower than it): bumpers clear behind every position
+    of the AV.
+
+    A vehicle short of neither this nor clear ahead with its gap breaks the specification at the start
+    (``start_violation``), an answer of its own, never a plan (``spec.answers.Status.UNSAFE_START``). So where
+    followers react, the vehicle in the cell behind the AV's, or one measured at the least gap behind it, follows."""
+    length, error_m = sound.safety.vehicle_length_m, sound.tracking.position_m
+    return x0_m - error_m + (length if sound.bounds.followers_react else -length)
 
 
 Extent = tuple[float, float]  # where a vehicle's centre can be, metres ahead of the AV's (negative: behind)
@@ -535,7 +540,7 @@ class Segment:
     t1_s: float
     lanes: frozenset[Lane]
     entering_left: bool  # vehicles of the left lane are classified: certainly ahead, or certainly behind
-    at_start: bool = False  # the plan's start: one that cannot be clear ahead is a follower, not a cut-in
+    at_start: bool = False  # the plan's start: one short of ``follower_limit_m`` is a follower, not a cut-in
 
 
 Shapes = dict[tuple[float, Action | None, Lane, Lane | None], list[tuple[Segment, list[Bounded]]]]
@@ -808,9 +813,11 @@ class SoundRules:
                    Conflict.BEHIND: same_high - v + tr.speed_mps}[conflict]
         return s.required_gap_m(closing)
 
-    def _violation(self, conflict: Conflict, v: Vehicle, p: Piece, need: tuple[float, float], lo: bool) -> Violation:
-        """A violation: the vehicle's start interval misses the threshold ``need`` (at its lower or upper end)."""
-        short = (need[0] - v.lo_m) if lo else (v.hi_m - need[0])
+    def _violation(self, conflict: Conflict, v: Vehicle, p: Piece, need: tuple[float, float], lo: bool,
+                   nearest_m: float | None = None) -> Violation:
+        """A violation: the vehicle's start interval misses the threshold ``need`` (at its lower or upper end; or at
+        ``nearest_m``, the nearest position the assumptions allow, where not its lower end)."""
+        short = (need[0] - (v.lo_m if nearest_m is None else nearest_m)) if lo else (v.hi_m - need[0])
         required = self._required(conflict, p, need[1], v)
         return Violation(conflict, v, need[1], required - short, required)
 
@@ -897,7 +904,7 @@ class SoundRules:
             -> Violation | None:
         """Entering the left lane: each same-direction vehicle certainly ahead (AHEAD) or certainly behind (CUT_IN)
         over the whole sideways move. At the plan's start (``margin`` False) the AV is already in the lane: one
-        behind need only be one that cannot be clear ahead (``follower_limit_m``); it is a follower, not a cut-in.
+        behind need only be short of ``follower_limit_m``; it is a follower, not a cut-in.
         A move back from the passing lane under ``Overtaken.NO_ACCELERATION`` (``held_from_s``): a measured vehicle
         cut in ahead of has not sped up since the move out began."""
         lane_ahead = max(pieces, key=lambda b: b.ahead[0])
@@ -917,11 +924,14 @@ class SoundRules:
                                            for b in pieces), key=lambda found: found[0][0]) if margin else \
                     (lane_behind.behind, lane_behind.piece)
             if not margin:
-                allow = (follower_limit_m(behind_piece.x0_m, self.sound.safety, self.sound.tracking),
+                allow = (follower_limit_m(behind_piece.x0_m, self.sound),
                          behind_piece.t0_s)
             if v.lo_m >= need[0] + EPS_M or v.hi_m <= allow[0] - EPS_M:
                 continue
-            if not margin or v.lo_m - need[0] > allow[0] - v.hi_m:  # nearer to being ahead: that conflict
+            if not margin:  # at the start: ahead, its gap at least 0 (nothing touches the AV at a snapshot)
+                touching_m = ahead_piece.x0_m + self.sound.tracking.position_m + self.sound.safety.vehicle_length_m
+                return self._violation(Conflict.AHEAD, v, ahead_piece, need, True, max(v.lo_m, touching_m))
+            if v.lo_m - need[0] > allow[0] - v.hi_m:  # nearer to being ahead: that conflict
                 return self._violation(Conflict.AHEAD, v, ahead_piece, need, True)
             return self._violation(Conflict.CUT_IN, v, behind_piece, allow, False)
         return None

@@ -18,7 +18,7 @@ phantoms, ``spec.assumptions``), its growth with its lane's speed bounds, the AV
 - entering the left lane (``entering``), per same-direction vehicle: safe when it is ahead (the
   ``AHEAD`` test above, not refused) at every piece, or behind at every piece: ``hi + high t <= x
   - e_x - L - gap(high - v + e_v) - EPS_M`` at each ``behind`` instant (at the plan's start,
-  ``at_start``, one that cannot be clear ahead follows: ``hi <= spec.sound.follower_limit_m(x0) - EPS_M``);
+  ``at_start``, one short of ``spec.sound.follower_limit_m(x0)`` follows: ``hi <= limit - EPS_M``);
 - followers: at the start, and at the boundary of a move into the left lane (``boundary``), the
   same-direction vehicles not held ahead there; they stay followers until the next such move; over
   a piece marked ``rear`` (``spec.sound.rear_binds``: followers keep their speed and the reference

@@ -271,13 +271,22 @@ def _reference(path: Path, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _follow_limit_m(scenario: Scenario, path: Path, entry_s: float) -> float:
     """Where a same-direction vehicle must be, at most, when the AV got into the left lane at ``entry_s`` to follow
-    it: in the lane from the start, short of ``spec.sound.follower_limit_m`` (it cannot be clear ahead); else behind
-    every position of the AV, bumpers clear."""
+    it: in the lane from the start, short of ``spec.sound.follower_limit_m``; else behind every position of the AV,
+    bumpers clear."""
     assert scenario.sound is not None
     tr, length = scenario.sound.tracking, scenario.sound.safety.vehicle_length_m
     if entry_s == 0.0 and scenario.lane is Lane.LEFT:
-        return follower_limit_m(0.0, scenario.sound.safety, tr)
+        return follower_limit_m(0.0, scenario.sound)
     return path.position(entry_s) - tr.position_m - length
+
+
+def _touches(start_m: float, av_m: float | None, x0_m: float, length_m: float, error_m: float) -> bool:
+    """Whether a same-lane vehicle starting at ``start_m`` touches the AV at the snapshot: the AV at ``av_m`` when
+    the instant judged is the snapshot's, else anywhere its envelope allows around ``x0_m`` (touching wherever it
+    is)."""
+    if av_m is not None:
+        return abs(start_m - av_m) < length_m
+    return abs(start_m - x0_m) < length_m - error_m
 
 
 def judge(scenario: Scenario, path: Path, car: Vehicle, chunk: _Chunk, start_m: float, speed_mps: float,
@@ -298,6 +307,9 @@ def judge(scenario: Scenario, path: Path, car: Vehicle, chunk: _Chunk, start_m: 
         return Conflict.ONCOMING, y - x - length, spec.required_gap_m(v + speed_mps)
     if Lane.LEFT not in chunk.lanes:
         return None
+    if scenario.lane is Lane.LEFT and _touches(start_m, path.position(0.0) + av_offset_m if t_s == 0.0 else None,
+                                               path.position(0.0), length, scenario.sound.tracking.position_m):
+        return None  # outside the assumptions: nothing touches the AV at a snapshot
     y = start_m + speed_mps * t_s
     if chunk.entry_s is not None:
         if start_m + speed_mps * chunk.entry_s <= _follow_limit_m(scenario, path, chunk.entry_s):
@@ -313,6 +325,29 @@ def judge(scenario: Scenario, path: Path, car: Vehicle, chunk: _Chunk, start_m: 
 
 def witness(scenario: Scenario, refusal: Refusal, dt_s: float = MAX_DT_S, path: Path | None = None) -> Witness | None:
     """The first motion of the refusal's binding vehicle within the bounds that breaks the specification in the
+    refused window (``_witness``), searched over each part of the vehicle's interval whose start does not touch the
+    AV at the snapshot wherever its envelope puts it (``_apart``): the assumptions allow no other."""
+    path = path or plan_path(scenario, refusal)
+    for part in _apart(scenario, refusal.violation.vehicle):
+        found = _witness(scenario, replace(refusal, violation=replace(refusal.violation, vehicle=part)), dt_s, path)
+        if found is not None:
+            return found
+    return None
+
+
+def _apart(scenario: Scenario, car: Vehicle) -> list[Vehicle]:
+    """``car``'s interval less the starts that touch the AV at the snapshot wherever it is (``_touches``): behind and
+    ahead of them, each part that is left, or the whole where the AV starts in the other lane."""
+    assert scenario.sound is not None
+    if scenario.lane is not Lane.LEFT or car.lane is not Lane.LEFT:
+        return [car]
+    reach_m = scenario.sound.safety.vehicle_length_m - scenario.sound.tracking.position_m
+    parts = [replace(car, hi_m=min(car.hi_m, -reach_m)), replace(car, lo_m=max(car.lo_m, reach_m))]
+    return [p for p in parts if p.lo_m <= p.hi_m]
+
+
+def _witness(scenario: Scenario, refusal: Refusal, dt_s: float, path: Path) -> Witness | None:
+    """The first motion of the refusal's binding vehicle within the bounds that breaks the specification in the
     refused window, sampled at most ``dt_s`` apart (``FAR_DT_S`` far after a plan) and at the violation's own time.
 
     The motions: the vehicle at a constant speed within its lane's interval, starting anywhere in its interval; at
@@ -325,7 +360,6 @@ def witness(scenario: Scenario, refusal: Refusal, dt_s: float = MAX_DT_S, path: 
     if sound is None:
         raise ValueError("the scenario has no sound model")
     car = refusal.violation.vehicle
-    path = path or plan_path(scenario, refusal)
     w0, w1 = window_s(refusal, path)
     at_s = refusal.violation.time_s
     spec, tr, b = sound.safety, sound.tracking, sound.bounds

@@ -133,13 +133,26 @@ def test_a_vehicle_that_cannot_be_clear_ahead_follows_and_one_that_can_breaks_th
     AV's 1.5 m envelope, it can be clear ahead from 1.5 m (4.5 m long cars). One that can is an ``ahead`` conflict
     at the start, too near by far."""
     sound = Sound(_bounds(error=1.5, phantoms=False))
-    limit = follower_limit_m(0.0, sound.safety, sound.tracking)
+    limit = follower_limit_m(0.0, sound)
     assert limit == pytest.approx(-TRACKING.position_m + sound.safety.vehicle_length_m) == pytest.approx(3.0)
     rules = SoundRules(sound, Lane.LEFT, (10,), (), PAPER_GRID, (), left_m=((dx_m, dx_m),))
     found = rules.start_violation(SoundState(Lane.LEFT, 0, 0, 0, 0, None, None))
     assert (found is None) is follows
-    if not follows:
-        assert found is not None and found.conflict is Conflict.AHEAD and found.gap_m < 0
+    if not follows:  # the gap it can have, nothing touching the AV: none at all, far short of the 2 m required
+        assert found is not None and found.conflict is Conflict.AHEAD
+        assert found.gap_m == pytest.approx(0.0) and found.required_m >= 2.0
+
+
+@pytest.mark.parametrize("dx_m,follows", [(-6.0 - 2 * EPS_M, True), (-6.0 + 0.01, False)])
+def test_where_followers_keep_their_speed_one_follows_only_with_bumpers_clear_of_every_position_of_the_av(
+        dx_m: float, follows: bool) -> None:
+    """The car may drift back within its envelope, and a follower that keeps its speed does not brake for it: a vehicle
+    nearer than bumpers clear behind the AV's rearmost position (4.5 + 1.5 m behind its centre, measured at
+    ``dx_m`` with 1.5 m of sensing error) breaks the start."""
+    sound = Sound(replace(_bounds(error=1.5, phantoms=False), followers_react=False))
+    assert follower_limit_m(0.0, sound) == pytest.approx(-6.0)
+    rules = SoundRules(sound, Lane.LEFT, (9,), (), PAPER_GRID, (), left_m=((dx_m - 1.5, dx_m - 1.5),))
+    assert (rules.start_violation(SoundState(Lane.LEFT, 0, 0, 0, 0, None, None)) is None) is follows
 
 
 @pytest.mark.parametrize("bounds,key", [
