@@ -10,7 +10,7 @@ a sensor's view in each lane (its range; in the oncoming lane, nearer where a le
 hides the lane), moving within that lane's bounds, so that a vehicle arriving from beyond what the
 sensors see is inside the assumptions. Nothing touches the AV at a snapshot (a vehicle that does has
 already collided with it, an event of its own), so a vehicle in the AV's lane that cannot be clear
-ahead of it is behind it (``spec.sound.follower_limit_m``).
+ahead of it is behind it (where followers react, that makes it a follower: ``spec.sound.follower_limit_m``).
 """
 
 from __future__ import annotations
