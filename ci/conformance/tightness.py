@@ -280,13 +280,22 @@ def _follow_limit_m(scenario: Scenario, path: Path, entry_s: float) -> float:
     return path.position(entry_s) - tr.position_m - length
 
 
-def _touches(start_m: float, av_m: float | None, x0_m: float, length_m: float, error_m: float) -> bool:
-    """Whether a same-lane vehicle starting at ``start_m`` touches the AV at the snapshot: the AV at ``av_m`` when
-    the instant judged is the snapshot's, else anywhere its envelope allows around ``x0_m`` (touching wherever it
-    is)."""
-    if av_m is not None:
-        return abs(start_m - av_m) < length_m
-    return abs(start_m - x0_m) < length_m - error_m
+def _touch_reach_m(sound: Sound) -> float:
+    """How near the AV's reference at the snapshot a same-lane vehicle's start touches the AV wherever its envelope
+    puts it: bumper to bumper with the AV's nearest position."""
+    return sound.safety.vehicle_length_m - sound.tracking.position_m
+
+
+def _touches(scenario: Scenario, path: Path, start_m: float, av_offset_m: float, t_s: float) -> bool:
+    """Whether a left-lane vehicle starting at ``start_m`` touches the AV, in the left lane too, at the snapshot: the
+    AV ``av_offset_m`` off its reference when the instant judged is the snapshot's, else wherever its envelope puts
+    it (``_touch_reach_m``)."""
+    assert scenario.sound is not None
+    if scenario.lane is not Lane.LEFT:
+        return False
+    if t_s == 0.0:
+        return abs(start_m - (path.position(0.0) + av_offset_m)) < scenario.sound.safety.vehicle_length_m
+    return abs(start_m - path.position(0.0)) < _touch_reach_m(scenario.sound)
 
 
 def judge(scenario: Scenario, path: Path, car: Vehicle, chunk: _Chunk, start_m: float, speed_mps: float,
@@ -307,8 +316,7 @@ def judge(scenario: Scenario, path: Path, car: Vehicle, chunk: _Chunk, start_m: 
         return Conflict.ONCOMING, y - x - length, spec.required_gap_m(v + speed_mps)
     if Lane.LEFT not in chunk.lanes:
         return None
-    if scenario.lane is Lane.LEFT and _touches(start_m, path.position(0.0) + av_offset_m if t_s == 0.0 else None,
-                                               path.position(0.0), length, scenario.sound.tracking.position_m):
+    if _touches(scenario, path, start_m, av_offset_m, t_s):
         return None  # outside the assumptions: nothing touches the AV at a snapshot
     y = start_m + speed_mps * t_s
     if chunk.entry_s is not None:
@@ -341,7 +349,7 @@ def _apart(scenario: Scenario, car: Vehicle) -> list[Vehicle]:
     assert scenario.sound is not None
     if scenario.lane is not Lane.LEFT or car.lane is not Lane.LEFT:
         return [car]
-    reach_m = scenario.sound.safety.vehicle_length_m - scenario.sound.tracking.position_m
+    reach_m = _touch_reach_m(scenario.sound)  # the AV's reference is at 0 at the snapshot (``oracle.reach.Path``)
     parts = [replace(car, hi_m=min(car.hi_m, -reach_m)), replace(car, lo_m=max(car.lo_m, reach_m))]
     return [p for p in parts if p.lo_m <= p.hi_m]
 

@@ -147,8 +147,8 @@ def test_a_vehicle_that_cannot_be_clear_ahead_follows_and_one_that_can_breaks_th
 def test_where_followers_keep_their_speed_one_follows_only_with_bumpers_clear_of_every_position_of_the_av(
         dx_m: float, follows: bool) -> None:
     """The car may drift back within its envelope, and a follower that keeps its speed does not brake for it: a vehicle
-    nearer than bumpers clear behind the AV's rearmost position (4.5 + 1.5 m behind its centre, measured at
-    ``dx_m`` with 1.5 m of sensing error) breaks the start."""
+    nearer than bumpers clear behind the AV's rearmost position (4.5 + 1.5 m behind its centre; the vehicle's interval,
+    its reading widened by 1.5 m of sensing error, reaching to ``dx_m``) breaks the start."""
     sound = Sound(replace(_bounds(error=1.5, phantoms=False), followers_react=False))
     assert follower_limit_m(0.0, sound) == pytest.approx(-6.0)
     rules = SoundRules(sound, Lane.LEFT, (9,), (), PAPER_GRID, (), left_m=((dx_m - 1.5, dx_m - 1.5),))
