@@ -167,6 +167,11 @@ class Own:
             out.append(z3.And(ahead, behind))
         return out
 
+    def start_broken(self, window: Window, follows: Sequence[Cond]) -> list[z3.BoolRef]:
+        """At the start in the left lane, then as in it (``spec.sound.SoundRules.start_violation``): the start
+        stretch's in-lane conditions, ``follows`` its followers."""
+        return [c for s in window.stretches if s.left and s.at_start for c in self._in_lane(s, follows)]
+
     def _in_lane(self, s: Stretch, follows: Sequence[Cond]) -> list[z3.BoolRef]:
         out = []
         for b in s.pieces:

@@ -276,8 +276,9 @@ class SoundEncoding:
         window = table.start[scenario.lane]
         if (window.boundary.t_s, window.boundary.x_m) != (0.0, 0.0):
             raise EngineError("z3: the start window's boundary is not the plan's start")
-        self.start_safe = _term(_and(*self._safe(window, ABSOLUTE, [False] * len(self.same))))
         start_follows = [_not(self._held(v, window.boundary, ABSOLUTE)) for v in self.same]
+        self.start_safe = _term(_and(*self._safe(window, ABSOLUTE, [False] * len(self.same)),
+                                     *self._start_in_lane(window, start_follows)))
         self.initial = z3.And(start.right == (scenario.lane is Lane.RIGHT), start.lc == 0, start.t == 0,
                               start.d == 0, start.first == NO_SPEED, start.last == NO_SPEED, start.moved == 0,
                               *[f == _term(v) for f, v in zip(start.follows, start_follows, strict=True)],
@@ -365,6 +366,11 @@ class SoundEncoding:
             if s.right:
                 out += self._oncoming(s, frame, skip)
         return out
+
+    def _start_in_lane(self, window: Window, follows: Sequence[Cond], skip: Skip = NO_SKIP) -> list[Cond]:
+        """At the start in the left lane, then as in it (``SoundRules.start_violation``): the start stretch's
+        ``_ahead`` conditions, its followers those not held ahead there (``follows``)."""
+        return [c for s in window.stretches if s.left and s.at_start for c in self._ahead(s, ABSOLUTE, follows, skip)]
 
     def _lane_same(self, follows: Sequence[Cond], skip: Skip) -> list[tuple[Interval, Cond]]:
         """The same-direction vehicles held to their lane's speeds, each with whether it follows the AV."""
@@ -595,9 +601,12 @@ class SoundEncoding:
             return z3.is_false(self._at(scenario, self.start_safe))
         skip = Skip(own.skip_same, own.skip_oncoming)
         window = self.table.start[scenario.lane]
-        lane_bound = self._safe(window, ABSOLUTE, [False] * len(self.same), skip)
+        follows = self._follows(window.boundary, own)
+        lane_bound = self._safe(window, ABSOLUTE, [False] * len(self.same), skip) + \
+            self._start_in_lane(window, follows, skip)
         return not (z3.is_true(self._at(scenario, _term(_and(*lane_bound))))
-                    and unbroken(own.broken(window, [z3.BoolVal(False)] * len(self.same)), timeout_s))
+                    and unbroken(own.broken(window, [z3.BoolVal(False)] * len(self.same))
+                                 + own.start_broken(window, follows), timeout_s))
 
     def _at(self, scenario: Scenario, term: z3.BoolRef) -> z3.BoolRef:
         """``term`` at ``scenario``'s interval ends, simplified (to a constant: they are its only unknowns)."""

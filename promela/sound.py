@@ -709,6 +709,7 @@ static int sound_done(void)
 /* the start, an instant: refused or not; those not held ahead there follow the AV */
 static void sound_start(void)
 {	const SoundWindow *w = &WINDOWS[START_WINDOW[now.lane]];
+	SoundStretch in_lane;
 	unsigned none[FW];
 	int i, k;
 	for (k = 0; k < FW; k++) { none[k] = 0; now.fol[k] = 0; }
@@ -718,7 +719,11 @@ static void sound_start(void)
 	now.refused = 0;
 	for (k = 0; k < w->n; k++)
 	{	if (sound_stretch_refused(&w->s[k], 0.0, 0.0, none, -1.0)) { now.refused = 1; }
-	}
+		if (w->s[k].left && w->s[k].at_start)  /* then as in the lane, with its followers (start_violation) */
+		{	in_lane = w->s[k];
+			in_lane.entering = 0;
+			if (sound_stretch_refused(&in_lane, 0.0, 0.0, (const unsigned *) now.fol, -1.0)) { now.refused = 1; }
+	}	}
 }
 
 /* the display state: lane lc steps | left cells c + t - d | right cells c - t - d */

@@ -928,21 +928,43 @@ class SoundRules:
                          behind_piece.t0_s)
             if v.lo_m >= need[0] + EPS_M or v.hi_m <= allow[0] - EPS_M:
                 continue
-            if not margin:  # at the start: ahead, its gap at least 0 (nothing touches the AV at a snapshot)
-                touching_m = ahead_piece.x0_m + self.sound.tracking.position_m + self.sound.safety.vehicle_length_m
-                return self._violation(Conflict.AHEAD, v, ahead_piece, need, True, max(v.lo_m, touching_m))
+            if not margin:
+                return self._start_conflict(v, ahead_piece, need)
             if v.lo_m - need[0] > allow[0] - v.hi_m:  # nearer to being ahead: that conflict
                 return self._violation(Conflict.AHEAD, v, ahead_piece, need, True)
             return self._violation(Conflict.CUT_IN, v, behind_piece, allow, False)
         return None
 
+    def _start_conflict(self, v: Vehicle, p: Piece, need: tuple[float, float]) -> Violation:
+        """The conflict of a same-lane vehicle that neither follows the AV nor is clear ahead of it at the start (the
+        AV at ``p``'s start), named by where it can be. One that cannot be clear ahead of any position of the AV (its
+        envelope's position error taken) is behind it, a lane keeping its order (``follower_limit_m``'s rule, which
+        only where followers keep their speed leaves such a vehicle short of a follower): ``BEHIND``, its gap from the
+        AV's rearmost position, which it may reach into (negative), the cut-in's gap required where ``rear_binds`` at
+        the start speed, else bumpers clear. Any other: ``AHEAD``, its gap at least 0 (nothing touches the AV at a
+        snapshot, ``spec.assumptions``)."""
+        length, error_m = self.sound.safety.vehicle_length_m, self.sound.tracking.position_m
+        x0 = p.x0_m
+        if v.hi_m < x0 - error_m + length:
+            binds = rear_binds(self.sound.bounds, p.v0_mps, v)
+            required = self._required(Conflict.BEHIND, p, p.t0_s, v) if binds else 0.0
+            return Violation(Conflict.BEHIND, v, p.t0_s, x0 - error_m - length - v.hi_m, required)
+        return self._violation(Conflict.AHEAD, v, p, need, True, max(v.lo_m, x0 + error_m + length))
+
     # -- the model's questions -------------------------------------------------------------------------------
     def start_violation(self, state: SoundState) -> Violation | None:
         """The start, an instant: the AV in its lane, every vehicle in conflict keeping its gap (one in the AV's
-        lane certainly ahead, or certainly behind it)."""
+        lane certainly ahead, or certainly behind it); in the left lane, then as in it (``_check_ahead``): a
+        follower that keeps its speed, while the AV is slower than it may be, behind as a cut-in must be (the first
+        instant of every step and of the continuation asks the same: a start that breaks it has no plan because it
+        is unsafe already, an answer of its own)."""
         ref = self.reference(state, None)
         seg = Segment(0.0, 0.0, frozenset({state.lane}), state.lane is Lane.LEFT, at_start=True)
-        return self.check_segment(seg, [self._bounded(p) for p in ref.pieces(0.0, 0.0)])
+        pieces = [self._bounded(p) for p in ref.pieces(0.0, 0.0)]
+        found = self.check_segment(seg, pieces)
+        if found is None and state.lane is Lane.LEFT:
+            found = self._check_ahead(pieces, self.followers(state, None))
+        return found
 
     def step_violation(self, state: SoundState, action: Action, following: Action | None = None) -> Violation | None:
         """Whether ``action`` from ``state`` keeps the specification at every instant of its window (each question

@@ -192,10 +192,11 @@ def plan_path(scenario: Scenario, refusal: Refusal) -> Path:
 
 def window_s(refusal: Refusal, path: Path) -> tuple[float, float]:
     """The refused window on the plan's clock: a step's from the start of the ramp into it (centred on its boundary;
-    the first action's starts at once) to its end; a start's, the instant 0; an end's, from the plan's end on for
-    ``FOREVER_S``."""
+    the first action's starts at once) to its end; a start's, the instant 0, and for a vehicle behind the AV
+    (``BEHIND``) the first sample after it too (``MAX_DT_S``: the envelope may put the AV anywhere within it at any
+    instant, so its drift back reaches such a vehicle at once); an end's, from the plan's end on for ``FOREVER_S``."""
     if refusal.where is Where.START:
-        return 0.0, 0.0
+        return 0.0, MAX_DT_S if refusal.violation.conflict is Conflict.BEHIND else 0.0
     if refusal.where is Where.END:
         return path.end_s, path.end_s + FOREVER_S
     k = len(refusal.prefix)
@@ -302,7 +303,9 @@ def judge(scenario: Scenario, path: Path, car: Vehicle, chunk: _Chunk, start_m: 
           av_offset_m: float, av_speed_offset_mps: float, t_s: float) -> tuple[Conflict, float, float] | None:
     """The specification at one instant for one concrete motion (the vehicle from ``start_m`` at a constant
     ``speed_mps``; the AV off its reference by the offsets): the conflict, the gap and the required gap, or None when
-    the vehicle is in no conflict then."""
+    the vehicle is in no conflict then. A vehicle behind the AV that follows no rule of followers (short of none,
+    yet unable to be clear ahead of the AV at the start) is ``BEHIND``, its required gap 0 where the specification
+    names no conflict: a collision then is still a breach."""
     assert scenario.sound is not None
     spec = scenario.sound.safety
     length = spec.vehicle_length_m
@@ -325,6 +328,12 @@ def judge(scenario: Scenario, path: Path, car: Vehicle, chunk: _Chunk, start_m: 
             if rear_binds(scenario.sound.bounds, path.speed(t_s)):
                 return Conflict.BEHIND, x - y - length, spec.required_gap_m(speed_mps - v)
             return None
+        if chunk.entry_s == 0.0 and scenario.lane is Lane.LEFT and \
+                start_m < path.position(0.0) - scenario.sound.tracking.position_m + length:
+            # short of no follower, yet it cannot be clear ahead of any position of the AV at the start: behind it (a
+            # lane keeps its order), held to the cut-in's gap while the AV is slower than it may be, else bumpers clear
+            binds = rear_binds(scenario.sound.bounds, path.speed(t_s))
+            return Conflict.BEHIND, x - y - length, spec.required_gap_m(speed_mps - v) if binds else 0.0
         return Conflict.AHEAD, y - x - length, spec.required_gap_m(v - speed_mps)
     if y >= x:
         return Conflict.AHEAD, y - x - length, spec.required_gap_m(v - speed_mps)

@@ -168,11 +168,17 @@ def test_z3_holds_what_the_interpreter_holds_before_a_vehicle_standing_ahead(cel
 
 
 def test_z3_holds_a_follower_faster_than_its_lanes_top_to_its_own_top() -> None:
-    """A follower measured at 10 m/s, 12 m behind, above the paper profile's top: it closes in on the AV at the
+    """A follower measured at 10 m/s, 20 m behind, above the paper profile's top: it closes in on the AV at the
     common speed for ever, so no sequence that ends in the left lane at that speed is safe for ever (its own top
-    binds, ``spec.sound.rear_binds``; at its lane's top the follower would never close in)."""
-    base = measured_speeds(sensed(make_scenario("left", [9], [], 0), [(-12.0, -12.0)]), [(10.0, 10.0)])
-    scenario = replace(base, sound=sound_from(None, "paper", phantoms=False, semantics="commit"))
+    binds, ``spec.sound.rear_binds``; at its lane's top the follower would never close in). 12 m behind, it is
+    nearer than the cut-in's gap at its own top already (6 + 1.5 s x 4.5 m/s): the start breaks the specification."""
+    sound = sound_from(None, "paper", phantoms=False, semantics="commit")
+    near = measured_speeds(sensed(make_scenario("left", [9], [], 0), [(-12.0, -12.0)]), [(10.0, 10.0)])
+    near_problem = problem_for(replace(near, sound=sound), ModelKind.FINAL)
+    assert Z3(near_problem).start_violation() is not None
+    assert commit.proofs(near_problem).start_violation() is not None
+    base = measured_speeds(sensed(make_scenario("left", [9], [], 0), [(-20.0, -20.0)]), [(10.0, 10.0)])
+    scenario = replace(base, sound=sound)
     problem = problem_for(scenario, ModelKind.FINAL)
     assert Z3(problem).start_violation() is None
     _same_proofs(scenario)

@@ -22,7 +22,7 @@ from spec.commitment import guarded
 from spec.escapes import COMMIT, Commitment, EscapeKind
 from spec.library import builtin
 from spec.models import ModelKind
-from spec.scenario import make_scenario, problem_for
+from spec.scenario import make_scenario, problem_for, sensed
 from spec.sound import Sound
 from tests.conftest import COMMITTED_BUILT_INS, committed_answers, paper_start_collision
 
@@ -155,3 +155,23 @@ def test_the_prediction_starts_where_the_paper_rules_see_a_collision() -> None:
         ours, theirs = solve(scenario, strategy), solve(scenario, strategy, engine="spin")
         assert (theirs.model, theirs.commit) == (ours.model, ours.commit)
         assert ours.commit is not None and ours.commit.committed == (Action.LEFT_LANE_CHANGE,)
+
+
+@pytest.mark.parametrize("start_mps,unsafe", [(5.0, True), (None, False)])
+@pytest.mark.parametrize("measured", [None, ((6.5, 7.0),)])
+def test_a_start_too_near_a_follower_that_keeps_its_speed_is_unsafe_in_every_engine(
+        start_mps: float | None, unsafe: bool, measured: tuple[tuple[float, float], ...] | None) -> None:
+    """Where followers keep their speed (``paper``), a follower 7 m behind the AV (centre to centre: bumpers clear of
+    every position of the AV) closes in on an AV measured at 5 m/s, slower than it may be (7 m/s): already nearer
+    than the cut-in's gap, the start itself breaks the specification, in every engine (not "no plan", which every
+    step refused at its first instant would give), held to its lane's speeds or to its own measured ones. At the
+    common speed it does not close in: a plan."""
+    scenario = sensed(make_scenario("left", [9], [], 0), left_m=[[-7.0, -7.0]])
+    scenario = replace(scenario, left_mps=measured,
+                       sound=Sound(profile("paper"), start_mps=start_mps, commitment=COMMIT))
+    for engine in ("interpreter", "spin", "z3"):
+        answer = plan(scenario, Strategy.SHORTEST, engine=engine)
+        assert (answer.status is Status.UNSAFE_START) is unsafe, (engine, answer.status, answer.detail)
+    if unsafe:
+        found = plan(scenario, Strategy.SENSIBLE)
+        assert "behind" in (found.detail or "")

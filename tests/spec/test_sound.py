@@ -155,6 +155,27 @@ def test_where_followers_keep_their_speed_one_follows_only_with_bumpers_clear_of
     assert (rules.start_violation(SoundState(Lane.LEFT, 0, 0, 0, 0, None, None)) is None) is follows
 
 
+@pytest.mark.parametrize("hi_m,start_mps,conflict,gap_m,required_m", [
+    (-5.99, None, Conflict.BEHIND, -0.01, 0.0),  # at the common speed no follower closes in: bumpers clear
+    (3.0 - 2 * EPS_M, None, Conflict.BEHIND, -9.0, 0.0),  # the last position that cannot be clear ahead
+    (-5.99, 5.0, Conflict.BEHIND, -0.01, 5.25),  # slower than a follower may be: the cut-in's gap, 1.5 s x 3.5 m/s
+    (3.0, None, Conflict.AHEAD, 0.0, 2.25),  # it can be clear ahead of some position of the AV: ahead
+])
+def test_a_start_conflict_is_named_by_where_the_vehicle_can_be(hi_m: float, start_mps: float | None,
+                                                             conflict: Conflict, gap_m: float,
+                                                             required_m: float) -> None:
+    """Where followers keep their speed, a vehicle short of bumpers clear behind the AV's rearmost position breaks the
+    start. One that cannot be clear ahead of any position of the AV (its interval's front short of 3 m: 4.5 m cars,
+    1.5 m envelope) is behind it, a lane keeping its order: ``behind``, its gap from the AV's rearmost position (the
+    AV's envelope may reach into it), the cut-in's gap required when the AV is slower than a follower may be. One
+    that can be clear ahead is ``ahead``, its gap at least 0."""
+    sound = Sound(replace(_bounds(error=1.5, phantoms=False), followers_react=False), start_mps=start_mps)
+    rules = SoundRules(sound, Lane.LEFT, (9,), (), PAPER_GRID, (), left_m=((hi_m - 1.5 - 1.0, hi_m - 1.5),))
+    found = rules.start_violation(SoundState(Lane.LEFT, 0, 0, 0, 0, None, None))
+    assert found is not None and found.conflict is conflict
+    assert found.gap_m == pytest.approx(gap_m, abs=1e-6) and found.required_m == pytest.approx(required_m)
+
+
 @pytest.mark.parametrize("bounds,key", [
     (_bounds(same=(-1.0, 7.0)), "--same-mps"),
     (_bounds(oncoming=(7.0, math.nan)), "--oncoming-mps"),

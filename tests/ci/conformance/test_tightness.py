@@ -221,3 +221,18 @@ def test_an_unsafe_start_of_a_vehicle_that_may_be_just_ahead_is_exhibited() -> N
     follows; at its far end it is clear ahead with its gap)."""
     counts = tightness.measure_commit(_with("default", "left", [11], [], 1))
     assert counts.by_where[Where.START] == {Tightness.EXHIBITED: 2, Tightness.ROUNDING: 0, Tightness.NEITHER: 0}
+
+
+def test_an_unsafe_start_of_a_vehicle_that_can_only_be_behind_is_exhibited_as_behind() -> None:
+    """Where followers keep their speed (``paper``), the vehicle in the cell behind the AV's reaches its centre: it
+    cannot be clear ahead of the AV, nor is it bumpers clear behind the AV's rearmost position. The start is refused
+    as ``behind``, and the witness is a motion behind the AV that the AV's envelope reaches, not one taken as ahead."""
+    scenario = _with("paper", "left", [9], [], 0)
+    for kind in models_for(scenario.model):
+        problem = problem_for(scenario, kind)
+        first = start(problem)
+        hit = tightness.sound_rules(problem).start_violation(first)
+        assert hit is not None and hit.conflict is Conflict.BEHIND
+        shown = tightness.witness(scenario, Refusal(Where.START, first, (), None, hit))
+        assert shown is not None and shown.conflict is Conflict.BEHIND and shown.gap_m < shown.required_m
+        assert shown.start_m < 0.0
