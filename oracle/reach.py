@@ -6,8 +6,9 @@ never from ``spec.sound``'s thresholds:
 
 - ``exact_check``: every vehicle's reachable interval (its start interval, widened by its speed
   interval times the time) against the AV's envelope, at samples at most ``MAX_DT_S`` apart, each
-  sample's margin reduced by how much it could change before the next (the largest relative speed
-  plus the time gap times the largest change of the AV's speed, times the step);
+  vehicle's margin between two samples bounded below by how fast it can change there (the larger of
+  the two speeds, plus the time gap times how fast the closing speed can change), the interval cut
+  in two while that bound is unsure;
 - ``sampled_motions``: motions that keep to the bounds: each vehicle's true start anywhere the
   discretiser would have put into its cell, its reading off by at most the sensing error, its
   speed anywhere in its interval and changing at random instants; the AV off its reference by at
@@ -133,6 +134,15 @@ class Path:
     def speed(self, t_s: float) -> float:
         return self.start_mps + sum(r.at(t_s) for r in self.ramps)
 
+    def rates(self, t0_s: float, t1_s: float) -> tuple[float, float]:
+        """The fastest the reference goes over ``[t0_s, t1_s]`` (its speed is linear between the ramps' ends) and the
+        most it accelerates or brakes there (the ramps under way then, together)."""
+        ends = [t for r in self.ramps for t in (r.start_s, r.start_s + r.duration_s) if t0_s < t < t1_s]
+        fastest = max(self.speed(t) for t in (t0_s, t1_s, *ends))
+        accel = sum(abs(r.dv_mps) / r.duration_s for r in self.ramps
+                    if r.duration_s > 0 and r.start_s < t1_s and r.start_s + r.duration_s > t0_s)
+        return fastest, accel
+
     def position(self, t_s: float) -> float:
         return self.start_mps * t_s + sum(r.integral_m(t_s) - r.integral_m(0.0) for r in self.ramps)
 
@@ -173,8 +183,9 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
     held to the cut-in's gap while the reference is slower than it may be); an oncoming vehicle not yet past while
     the AV occupies the right lane; while the AV moves into the left lane, every same-direction vehicle certainly
     ahead, or certainly behind with the cut-in gap. Between two samples the margin (gap less required gap) changes
-    at most at the largest relative speed plus the time gap times the AV's largest acceleration: an interval whose
-    samples leave less margin than that could lose is cut in two, down to a microsecond."""
+    at most at the largest relative speed plus the time gap times the largest accelerations, and each vehicle's at
+    its own rate there (``Path.rates``' bounds on the AV, the vehicle's speed bounds: ``_rate``): an interval where
+    some vehicle's samples leave less margin than that could lose is cut in two, down to a microsecond."""
     sound = _sound(scenario)
     path = scenario_path(scenario, actions)
     tr, b, length = sound.tracking, sound.bounds, sound.safety.vehicle_length_m
@@ -184,8 +195,7 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
     measured = [c.dynamics for c in cars if c.dynamics is not None]
     fastest_vehicle = max([b.same_mps.high_mps, b.oncoming_mps.high_mps] + [d.highest_mps for d in measured])
     vehicle_accel = max([0.0] + [max(d.change.accel_mps2, d.change.brake_mps2) for d in measured])
-    rate = path.max_speed + tr.speed_mps + fastest_vehicle + sound.safety.time_gap_s * (path.max_accel
-                                                                                       + vehicle_accel)
+    rate = path.max_speed + fastest_vehicle + sound.safety.time_gap_s * (path.max_accel + vehicle_accel)
 
     def speeds(c: Vehicle, t: float) -> tuple[float, float]:
         if c.dynamics is not None:
@@ -193,10 +203,13 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
         sp = b.same_mps if c.lane is Lane.LEFT else b.oncoming_mps
         return sp.low_mps, sp.high_mps
 
-    def worst(t: float, lanes: frozenset[Lane], entering: bool, behind: set[int]) -> tuple[float, Breach | None]:
-        """The least margin over the conflicts at ``t`` and the breach it would be."""
+    def worst(t: float, lanes: frozenset[Lane], entering: bool, behind: set[int]) -> tuple[float, Breach | None,
+                                                                                         list[float]]:
+        """The least margin over the conflicts at ``t``, the breach it would be, and each vehicle's margin (infinite:
+        in no conflict)."""
         x, v = path.position(t), path.speed(t)
         least: tuple[float, Breach | None] = (math.inf, None)
+        each = [math.inf] * len(cars)
         for i, c in enumerate(cars):
             options = []
             low, high = reach_m(c, b, t)
@@ -218,27 +231,36 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
             margins = [(gap - sound.safety.required_gap_m(closing), conflict, gap, closing)
                        for conflict, gap, closing in options]
             best = max(margins, key=lambda m: m[0])  # one safe way out (ahead, or behind) is enough
+            each[i] = best[0]
             if best[0] < least[0]:
                 required = sound.safety.required_gap_m(best[3])
                 least = (best[0], Breach(best[1], c.name, t, best[2], required, "exact"))
-        return least
+        return least[0], least[1], each
 
-    def interval_ok(t0: float, t1: float, m0: float, m1: float, lanes: frozenset[Lane], entering: bool,
+    def interval_ok(t0: float, t1: float, m0: list[float], m1: list[float], lanes: frozenset[Lane], entering: bool,
                     behind: set[int]) -> Breach | None:
-        """Whether the margin stays non-negative over ``[t0, t1]``, cutting the interval while the bound is unsure."""
-        if (m0 + m1) / 2 - rate * (t1 - t0) / 2 >= -TOLERANCE_M or t1 - t0 < 1e-6:
+        """Whether every vehicle's margin stays non-negative over ``[t0, t1]`` (each bounded below from its samples
+        and its rate there), cutting the interval while a bound is unsure."""
+        span = t1 - t0
+        if span < 1e-6 or _least_between(min(m0, default=math.inf), min(m1, default=math.inf), span * rate) \
+                >= -TOLERANCE_M:  # every margin, at the fastest any changes anywhere
+            return None
+        v_max_mps, a_max_mps2 = path.rates(t0, t1)
+        if all(_least_between(a, z, span * _rate(sound, c, i in behind, lanes, entering, speeds(c, t0), speeds(c, t1),
+                                                 v_max_mps, a_max_mps2))
+               >= -TOLERANCE_M for i, (c, a, z) in enumerate(zip(cars, m0, m1, strict=True))):
             return None
         mid = (t0 + t1) / 2
-        m_mid, found = worst(mid, lanes, entering, behind)
+        m_mid, found, each = worst(mid, lanes, entering, behind)
         if m_mid < -TOLERANCE_M:
             return found
-        return interval_ok(t0, mid, m0, m_mid, lanes, entering, behind) or \
-            interval_ok(mid, t1, m_mid, m1, lanes, entering, behind)
+        return interval_ok(t0, mid, m0, each, lanes, entering, behind) or \
+            interval_ok(mid, t1, each, m1, lanes, entering, behind)
 
     # at the start in the left lane, one short of ``spec.sound.follower_limit_m`` follows
     behind = {i for i, c in enumerate(cars) if scenario.lane is Lane.LEFT and c.lane is Lane.LEFT
               and c.hi_m <= follower_limit_m(0.0, sound) - TOLERANCE_M}
-    previous: tuple[float, float] | None = None
+    previous: tuple[float, list[float]] | None = None
     for t in path.times(dt_s):
         lanes, entering = path.occupancy(t)
         if Lane.LEFT not in lanes or entering:
@@ -247,16 +269,50 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
             x = path.position(t)
             behind |= {i for i, c in enumerate(cars) if c.lane is Lane.LEFT
                        and reach_m(held_vehicle(c, windows, t), b, t)[1] + length <= x - tr.position_m}
-        margin, found = worst(t, lanes, entering, behind)
+        margin, found, each = worst(t, lanes, entering, behind)
         if margin < -TOLERANCE_M:
             return found
         if previous is not None:
             mid_lanes, mid_entering = path.occupancy((previous[0] + t) / 2)
-            found = interval_ok(previous[0], t, previous[1], margin, mid_lanes, mid_entering, behind)
+            found = interval_ok(previous[0], t, previous[1], each, mid_lanes, mid_entering, behind)
             if found is not None:
                 return found
-        previous = (t, margin)
+        previous = (t, each)
     return None
+
+
+def _least_between(m0: float, m1: float, reach_m: float) -> float:
+    """The least a margin can be between two samples ``m0`` and ``m1`` when it changes by at most ``reach_m`` over
+    the interval (infinite at an end: in no conflict there; the other end's less the whole reach)."""
+    if math.isinf(m0) and math.isinf(m1):
+        return math.inf
+    if math.isinf(m0) or math.isinf(m1):
+        return min(m0, m1) - reach_m
+    return (m0 + m1) / 2 - reach_m / 2
+
+
+def _rate(sound: Sound, c: Vehicle, follows: bool, lanes: frozenset[Lane], entering: bool,
+          speeds0: tuple[float, float], speeds1: tuple[float, float], v_max_mps: float, a_max_mps2: float) -> float:
+    """The most ``c``'s margin changes per second over an interval of one occupancy (``lanes``, ``entering``), from
+    its speed bounds at the interval's ends (each monotone: the lowest never rises, the highest never falls) and the
+    AV's fastest speed and largest acceleration there. A gap changes at the difference of two speeds, at most the
+    larger (both at least 0; an oncoming vehicle's, their sum); the required gap at the time gap times how fast the
+    closing speed changes (the AV's acceleration and the vehicle's speed bound's). Only the conflicts ``c`` can be in
+    count: ahead (and cut in while entering) or, following where followers keep their speed, behind; oncoming."""
+    tau = sound.safety.time_gap_s
+    change = c.dynamics.change if c.dynamics is not None else None
+    slow_hi, fast_hi = max(speeds0[0], speeds1[0]), max(speeds0[1], speeds1[1])
+    slow_rate = 0.0 if change is None or speeds0[0] == speeds1[0] else change.brake_mps2
+    fast_rate = 0.0 if change is None or speeds0[1] == speeds1[1] else change.accel_mps2
+    ahead = max(v_max_mps, slow_hi) + tau * (a_max_mps2 + slow_rate)
+    behind = max(v_max_mps, fast_hi) + tau * (a_max_mps2 + fast_rate)
+    if c.lane is Lane.LEFT and Lane.LEFT in lanes:
+        if follows:
+            return 0.0 if sound.bounds.followers_react else behind
+        return max(ahead, behind) if entering else ahead
+    if c.lane is Lane.RIGHT and Lane.RIGHT in lanes:
+        return v_max_mps + fast_hi + tau * (a_max_mps2 + fast_rate)
+    return 0.0
 
 
 def scenario_path(scenario: Scenario, actions: Sequence[Action]) -> Path:
