@@ -8,9 +8,12 @@ from pathlib import Path
 
 import pytest
 
-from ci.audit.campaign import AUDIT_FILE, AuditPlan, Tradeoff, plot_tradeoffs, rows, run_audit, tradeoffs
+from ci.audit.campaign import AUDIT_FILE, AuditPlan, Tradeoff, _shape, plot_tradeoffs, rows, run_audit, tradeoffs
 from ci.shared.executors import ExecutorChoice
 from sim.parts import DriveConfig
+from spec.assumptions import profile
+from spec.scenario import make_scenario, measured_speeds
+from spec.sound import Sound
 from tests.conftest import run_cli as run
 
 
@@ -224,3 +227,13 @@ def test_the_headline_puts_each_models_overtakes_beside_its_collisions_per_world
     assert points[1].collisions_per_1000_km == pytest.approx(20.0)
     figure = plot_tradeoffs(points)
     assert len(figure.axes[0].collections) >= len(points)
+
+
+def test_the_cost_pass_warms_one_verifier_per_shape_not_one_per_measured_speed() -> None:
+    """A served verifier reads the AV's measured speed as data: snapshots that differ only in it share one untimed
+    warm-up run; another lane, another count of vehicles or measured vehicle speeds is another shape."""
+    base = replace(make_scenario("left", [12], [20], 1), sound=Sound(profile("default"), start_mps=6.5))
+    assert _shape(base) == _shape(replace(base, sound=replace(base.sound, start_mps=7.25)))
+    assert _shape(base) != _shape(replace(base, sound=replace(base.sound, bounds=profile("paper"))))
+    assert _shape(base) != _shape(replace(make_scenario("left", [12, 15], [20], 1), sound=base.sound))
+    assert _shape(base) != _shape(measured_speeds(base, [(6.0, 7.0)]))
