@@ -127,7 +127,12 @@ class Path:
         if current is Lane.RIGHT:
             closing = sound.bounds.oncoming_mps.high_mps + hold
             self.continuation_s += oncoming_far_m / closing if closing > 0 else 0.0
-        self.max_accel = max((abs(r.dv_mps) / r.duration_s for r in self.ramps if r.duration_s > 0), default=0.0)
+        #: The most the reference ever accelerates or brakes: ramps under way together add up (a measured start speed's
+        #: ramp may still run when the ramp into the second action starts), so for each ramp, all that overlap it.
+        spans = [(r.start_s, r.start_s + r.duration_s, abs(r.dv_mps) / r.duration_s) for r in self.ramps
+                 if r.duration_s > 0]
+        self.max_accel = max((sum(a for s0, s1, a in spans if s0 < end and s1 > start) for start, end, _ in spans),
+                             default=0.0)
         #: The fastest the reference ever goes: ramps only move it between the speeds they join, so one of those.
         self.max_speed = max([start_mps, *speeds])
 
@@ -284,9 +289,9 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
 def _least_between(m0: float, m1: float, reach_m: float) -> float:
     """The least a margin can be between two samples ``m0`` and ``m1`` when it changes by at most ``reach_m`` over
     the interval (infinite at an end: in no conflict there; the other end's less the whole reach)."""
-    if math.isinf(m0) and math.isinf(m1):
+    if m0 == math.inf and m1 == math.inf:
         return math.inf
-    if math.isinf(m0) or math.isinf(m1):
+    if m0 == math.inf or m1 == math.inf:
         return min(m0, m1) - reach_m
     return (m0 + m1) / 2 - reach_m / 2
 

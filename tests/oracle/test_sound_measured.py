@@ -178,3 +178,14 @@ def test_the_no_acceleration_profile_returns_ahead_of_a_vehicle_that_could_speed
     fastest = next(m for m in corners if "fastest, readings high" in m.name)
     assert reach.run_motion(physics, actions, fastest) is not None
 
+
+
+def test_the_exact_checks_bound_on_the_avs_acceleration_adds_up_ramps_under_way_together() -> None:
+    """Measured at 22 m/s, the AV brakes to the common 7 m/s over 2.78 s, and the ramp into ``brake`` starts at 2.68 s:
+    for 0.1 s both brake at 5.4 m/s^2, 10.8 together; the check's bound between samples takes their sum (found by
+    review: it took the steepest single ramp)."""
+    path = reach.Path((Action.DRIVE, Action.BRAKE), replace(sound_from(None, "default"), start_mps=22.0), PAPER_GRID,
+                      Lane.LEFT)
+    assert path.max_accel == pytest.approx(10.8)
+    assert path.rates(2.7, 2.75)[1] == pytest.approx(10.8)
+    assert path.rates(1.0, 1.1)[1] == pytest.approx(5.4)
