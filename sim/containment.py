@@ -329,14 +329,18 @@ class Containment:
         return self._breach(Breach(self.decision, km, t_s, f"the AV ({what})", -1, BreachKind.AV_ENVELOPE, by,
                                    doing, speed=what == "speed"))
 
-    def sense(self, t_s: float, km: float, av_x_m: float, readings: Iterable[Reading], doing: str) -> Breach | None:
+    def sense(self, t_s: float, km: float, av_x_m: float, readings: Iterable[Reading], doing: str,
+              followed: bool = False) -> Breach | None:
         """The AV's own monitor, on one sweep's readings as its planner gets them (no identities, no truth): the first
         reading whose interval (a kept track's spread, widened by the sensing error bound: the reading's own error)
         meets no interval of its lane at ``t_s``, neither a vehicle's the decision knew nor a phantom's, if new. An
         oncoming reading the AV has passed is no vehicle any condition speaks of. Its kind is read from the nearest
         interval: behind a known vehicle's (``too slow`` in the left lane), beyond it (``too fast``; ``accelerated
         while overtaken`` where only a passing window's held speed puts it there), or none known near
-        (``appeared``)."""
+        (``appeared``). With ``followed`` (the AV in the left lane, or moving out of it) a left-lane reading behind the
+        AV's centre is a vehicle that follows it, which cannot pass it in its lane, so every condition a decision
+        proved bounds it from ahead: one behind its interval (``too slow``) breaks none of them and is not acted on
+        (the truth's bookkeeping, ``check``, still counts it)."""
         if self.sensed is not None:
             return None
         elapsed, shift_m = t_s - self.t0_s, av_x_m - self.x0_m
@@ -356,6 +360,8 @@ class Containment:
                 held = self.assumed(nearest, elapsed) is not nearest
                 kind = BreachKind.ACCELERATED if held and _miss_m(r, nearest, self.bounds, shift_m, elapsed) == 0.0 \
                     else BreachKind.TOO_FAST
+            if followed and kind is BreachKind.TOO_SLOW and r.lane is Lane.LEFT and r.dx_m < 0:
+                continue  # a follower farther behind than its bounds allow
             self.sensed = Breach(self.decision, km, t_s, f"a sensed {r.lane.value}-lane reading at {r.dx_m:+.1f} m",
                                  SENSED_BODY, kind, abs(miss) if math.isfinite(miss) else 0.0, doing, sensed=True)
             return self.sensed

@@ -274,9 +274,16 @@ class Simulator:
         c = self.containment
         if c is None or self.sound is None:
             return
-        if c.sense(self.summary.sim_time_s, self.summary.km, pose.x_m, self._sense(), self.doing) is not None:
+        if c.sense(self.summary.sim_time_s, self.summary.km, pose.x_m, self._sense(), self.doing,
+                   self._followed()) is not None:
             self.summary.sensed_breaches += 1
             self.interrupt = self.interrupt or self.takeover is None
+
+    def _followed(self) -> bool:
+        """Whether a left-lane vehicle behind the AV's centre can only be one that follows it (``Containment.sense``):
+        the action under way started in the left lane and has not put the AV wholly into the right one (an action in
+        lane, or the move out); from the right lane a vehicle it passed, or is returning behind, can be there."""
+        return self.executor.lane is Lane.LEFT and self.executor.lane_due is not Lane.RIGHT
 
     def _sensed(self, car: KinematicCar) -> bool:
         """Whether ``car`` is sensed now (exact rays, whatever the drive's sensor model: a vehicle the sensors could
@@ -677,7 +684,8 @@ class Simulator:
 
         def proved_holds() -> bool:
             return self.proved is not None and self.proved.sensed is None and self.proved.sense(
-                self.summary.sim_time_s, self.summary.km, pose.x_m, readings, self.doing) is None
+                self.summary.sim_time_s, self.summary.km, pose.x_m, readings, self.doing,
+                self._followed()) is None
 
         choice = decide.choose(answer.status, bool(answer.actions),
                                refused=lambda: self._refused(answer.actions, self.pending),

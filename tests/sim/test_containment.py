@@ -450,3 +450,18 @@ def test_a_measured_vehicle_speeding_up_while_overtaken_breaks_the_no_accelerati
     assert sensed is not None and sensed.kind is BreachKind.ACCELERATED and sensed.by_m == pytest.approx(0.1)
     assert watched(Overtaken.NO_ACCELERATION).sense(t_s, 0.0, 0.0, (Reading(Lane.LEFT, 1, held_x),), "drive") is None
     assert watched(Overtaken.PHYSICS).sense(t_s, 0.0, 0.0, (Reading(Lane.LEFT, 1, held_x + 0.1),), "drive") is None
+
+
+@pytest.mark.parametrize(("followed", "at_m", "acts"), [(True, -8.0, False), (False, -8.0, True), (True, 80.0, True)])
+def test_a_follower_found_behind_its_interval_is_not_acted_on_while_the_av_is_in_its_lane(
+        followed: bool, at_m: float, acts: bool) -> None:
+    """A vehicle behind the AV in the left lane, read 5 s on (the AV 30 m on) where only 3 m/s, below its lane's
+    least speed, puts it: too slow. With the AV in the left lane (``followed``) it follows the AV and cannot pass it,
+    so every condition of the decision bounds it from ahead: farther behind breaks none, and the AV does not re-plan
+    on it (at every sweep behind a slow platoon, that made 78% of a drive's decisions re-plans). Out of the lane it
+    is acted on, and so is a vehicle ahead found too slow, whatever the lane."""
+    c = watch_noisy({1: at_m}, {})
+    found = c.sense(5.0, 0.0, 30.0, (Reading(Lane.LEFT, 1, at_m + 3.0 * 5 - 30.0),), "drive", followed)
+    assert (found is not None) is acts
+    if acts:
+        assert found is not None and found.kind is BreachKind.TOO_SLOW
