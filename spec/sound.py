@@ -426,6 +426,13 @@ def top_mps(bounds: Bounds, v: Vehicle) -> float:
     return top if v.dynamics is None else max(top, v.dynamics.highest_mps)
 
 
+def clear_ahead_from_m(x0_m: float, sound: Sound) -> float:
+    """The AV in the left lane at ``x0_m``: the least centre position from which a same-lane vehicle can be clear ahead
+    of some position of the AV (bumper to bumper with its rearmost, its envelope's position error taken). Short of it,
+    a vehicle is behind the AV or touching every position of it."""
+    return x0_m - sound.tracking.position_m + sound.safety.vehicle_length_m
+
+
 def follower_limit_m(x0_m: float, sound: Sound) -> float:
     """At a plan's start, the AV in the left lane at ``x0_m``: a same-direction vehicle whose every position is short
     of this follows the AV (a lane keeps its order), and the start has no conflict with it.
@@ -440,8 +447,9 @@ def follower_limit_m(x0_m: float, sound: Sound) -> float:
     A vehicle short of neither this nor clear ahead with its gap breaks the specification at the start
     (``start_violation``), an answer of its own, never a plan (``spec.answers.Status.UNSAFE_START``). So where
     followers react, the vehicle in the cell behind the AV's, or one measured at the least gap behind it, follows."""
-    length, error_m = sound.safety.vehicle_length_m, sound.tracking.position_m
-    return x0_m - error_m + (length if sound.bounds.followers_react else -length)
+    if sound.bounds.followers_react:
+        return clear_ahead_from_m(x0_m, sound)
+    return x0_m - sound.tracking.position_m - sound.safety.vehicle_length_m
 
 
 Extent = tuple[float, float]  # where a vehicle's centre can be, metres ahead of the AV's (negative: behind)
@@ -945,7 +953,7 @@ class SoundRules:
         snapshot, ``spec.assumptions``)."""
         length, error_m = self.sound.safety.vehicle_length_m, self.sound.tracking.position_m
         x0 = p.x0_m
-        if v.hi_m < x0 - error_m + length:
+        if v.hi_m < clear_ahead_from_m(x0, self.sound):
             binds = rear_binds(self.sound.bounds, p.v0_mps, v)
             required = self._required(Conflict.BEHIND, p, p.t0_s, v) if binds else 0.0
             return Violation(Conflict.BEHIND, v, p.t0_s, x0 - error_m - length - v.hi_m, required)

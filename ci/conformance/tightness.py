@@ -66,7 +66,17 @@ from spec.models import ModelKind, models_for
 from spec.rules import disabled_guard
 from spec.safety import Conflict
 from spec.scenario import Problem, Scenario, problem_for, refined
-from spec.sound import Sound, SoundRules, SoundState, Vehicle, Violation, follower_limit_m, rear_binds, vehicles
+from spec.sound import (
+    Sound,
+    SoundRules,
+    SoundState,
+    Vehicle,
+    Violation,
+    clear_ahead_from_m,
+    follower_limit_m,
+    rear_binds,
+    vehicles,
+)
 
 DEFAULT_SPACE = "left=2@8..20,right=1@12..30,lanes=both"
 #: The profiles measured: the paper's world stated as bounds, and the default one (``spec.assumptions``).
@@ -283,8 +293,9 @@ def _follow_limit_m(scenario: Scenario, path: Path, entry_s: float) -> float:
 
 def _touch_reach_m(sound: Sound) -> float:
     """How near the AV's reference at the snapshot a same-lane vehicle's start touches the AV wherever its envelope
-    puts it: bumper to bumper with the AV's nearest position."""
-    return sound.safety.vehicle_length_m - sound.tracking.position_m
+    puts it: bumper to bumper with the AV's nearest position, short of where it can be clear ahead of one
+    (``spec.sound.clear_ahead_from_m``)."""
+    return clear_ahead_from_m(0.0, sound)
 
 
 def _touches(scenario: Scenario, path: Path, start_m: float, av_offset_m: float, t_s: float) -> bool:
@@ -329,7 +340,7 @@ def judge(scenario: Scenario, path: Path, car: Vehicle, chunk: _Chunk, start_m: 
                 return Conflict.BEHIND, x - y - length, spec.required_gap_m(speed_mps - v)
             return None
         if chunk.entry_s == 0.0 and scenario.lane is Lane.LEFT and \
-                start_m < path.position(0.0) - scenario.sound.tracking.position_m + length:
+                start_m < clear_ahead_from_m(path.position(0.0), scenario.sound):
             # short of no follower, yet it cannot be clear ahead of any position of the AV at the start: behind it (a
             # lane keeps its order), held to the cut-in's gap while the AV is slower than it may be, else bumpers clear
             binds = rear_binds(scenario.sound.bounds, path.speed(t_s))
