@@ -26,15 +26,18 @@ import random
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
+
 from spec.actions import ACTION_RULES, Action
+from spec.assumptions import Bounds
 from spec.cells import left_cell, oncoming_cell, oncoming_extent_m
-from spec.dynamics import Dynamics
+from spec.dynamics import Dynamics, Phase
 from spec.grid import Grid
 from spec.lanes import Lane
 from spec.models import GoalRule
 from spec.motion import Ramp, action_speed_mps, ramp_s
 from spec.physical import LOOP
-from spec.safety import Conflict
+from spec.safety import Conflict, SafetySpec
 from spec.scenario import Scenario
 from spec.sound import (
     Sound,
@@ -190,32 +193,67 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
     ahead, or certainly behind with the cut-in gap. Between two samples the margin (gap less required gap) changes
     at most at the largest relative speed plus the time gap times the largest accelerations, and each vehicle's at
     its own rate there (``Path.rates``' bounds on the AV, the vehicle's speed bounds: ``_rate``): an interval where
-    some vehicle's samples leave less margin than that could lose is cut in two, down to a microsecond."""
-    sound = _sound(scenario)
-    path = scenario_path(scenario, actions)
-    tr, b, length = sound.tracking, sound.bounds, sound.safety.vehicle_length_m
-    windows = held_windows_s(sound, scenario.lane, actions)
-    cars = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid, sound, scenario.left_m,
-                    scenario.right_m, scenario.left_mps, scenario.right_mps)
-    measured = [c.dynamics for c in cars if c.dynamics is not None]
-    fastest_vehicle = max([b.same_mps.high_mps, b.oncoming_mps.high_mps] + [d.highest_mps for d in measured])
-    vehicle_accel = max([0.0] + [max(d.change.accel_mps2, d.change.brake_mps2) for d in measured])
-    rate = path.max_speed + fastest_vehicle + sound.safety.time_gap_s * (path.max_accel + vehicle_accel)
+    some vehicle's samples leave less margin than that could lose is cut in two, down to a microsecond.
 
-    def speeds(c: Vehicle, t: float) -> tuple[float, float]:
+    Every sample's margins are computed at once (``_Sweep``); the instants and intervals the sweep cannot clear by far
+    more than rounding are decided one at a time (``_Walk``), so an answer and its breach are the walk's."""
+    walk = _Walk(scenario, actions)
+    times = walk.path.times(dt_s)
+    swept = _Sweep(walk, np.asarray(times))
+    # every instant and interval the sweep cannot clear, in order (an instant before the interval that ends there)
+    for k, is_instant in swept.unsure(walk.rate):
+        t = times[k]
+        if is_instant:
+            margin, found, _ = walk.worst(t, *walk.path.occupancy(t), swept.behind(k))
+            if margin < -TOLERANCE_M:
+                return found
+            continue
+        m0 = walk.worst(times[k - 1], *walk.path.occupancy(times[k - 1]), swept.behind(k - 1))[2]
+        m1 = walk.worst(t, *walk.path.occupancy(t), swept.behind(k))[2]
+        found = walk.interval_ok(times[k - 1], t, m0, m1, *walk.path.occupancy((times[k - 1] + t) / 2),
+                                 swept.behind(k))
+        if found is not None:
+            return found
+    return None
+
+
+class _Walk:
+    """``exact_check`` one instant, or one interval, at a time: the reference the vectorised sweep (``_Sweep``) is
+    held to, and what decides every instant and interval the sweep cannot clear."""
+
+    def __init__(self, scenario: Scenario, actions: Sequence[Action]) -> None:
+        self.sound = sound = _sound(scenario)
+        self.path = scenario_path(scenario, actions)
+        self.windows = held_windows_s(sound, scenario.lane, actions)
+        self.cars = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, scenario.grid, sound,
+                             scenario.left_m, scenario.right_m, scenario.left_mps, scenario.right_mps)
+        b = sound.bounds
+        measured = [c.dynamics for c in self.cars if c.dynamics is not None]
+        fastest_vehicle = max([b.same_mps.high_mps, b.oncoming_mps.high_mps] + [d.highest_mps for d in measured])
+        vehicle_accel = max([0.0] + [max(d.change.accel_mps2, d.change.brake_mps2) for d in measured])
+        #: the fastest any margin changes anywhere in the plan
+        self.rate = self.path.max_speed + fastest_vehicle + sound.safety.time_gap_s * (self.path.max_accel
+                                                                                      + vehicle_accel)
+        #: at the start in the left lane, one short of ``spec.sound.follower_limit_m`` follows
+        self.first = {i for i, c in enumerate(self.cars) if scenario.lane is Lane.LEFT and c.lane is Lane.LEFT
+                      and c.hi_m <= follower_limit_m(0.0, sound) - TOLERANCE_M}
+
+    def speeds(self, c: Vehicle, t: float) -> tuple[float, float]:
         if c.dynamics is not None:
             return c.dynamics.speeds_mps(t)
-        sp = b.same_mps if c.lane is Lane.LEFT else b.oncoming_mps
+        sp = self.sound.bounds.same_mps if c.lane is Lane.LEFT else self.sound.bounds.oncoming_mps
         return sp.low_mps, sp.high_mps
 
-    def worst(t: float, lanes: frozenset[Lane], entering: bool, behind: set[int]) -> tuple[float, Breach | None,
-                                                                                         list[float]]:
+    def worst(self, t: float, lanes: frozenset[Lane], entering: bool, behind: set[int]) -> tuple[
+            float, Breach | None, list[float]]:
         """The least margin over the conflicts at ``t``, the breach it would be, and each vehicle's margin (infinite:
         in no conflict)."""
+        sound, path, speeds = self.sound, self.path, self.speeds
+        tr, b, length = sound.tracking, sound.bounds, sound.safety.vehicle_length_m
         x, v = path.position(t), path.speed(t)
         least: tuple[float, Breach | None] = (math.inf, None)
-        each = [math.inf] * len(cars)
-        for i, c in enumerate(cars):
+        each = [math.inf] * len(self.cars)
+        for i, c in enumerate(self.cars):
             options = []
             low, high = reach_m(c, b, t)
             slow, fast = speeds(c, t)
@@ -225,7 +263,7 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
             if c.lane is Lane.LEFT and Lane.LEFT in lanes and i not in behind:
                 options.append((Conflict.AHEAD, low - (x + tr.position_m) - length, v + tr.speed_mps - slow))
                 if entering:
-                    held = held_vehicle(c, windows, t)
+                    held = held_vehicle(c, self.windows, t)
                     cut_high, cut_fast = reach_m(held, b, t)[1], speeds(held, t)[1]
                     options.append((Conflict.CUT_IN, (x - tr.position_m) - cut_high - length,
                                     cut_fast - v + tr.speed_mps))
@@ -242,48 +280,192 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
                 least = (best[0], Breach(best[1], c.name, t, best[2], required, "exact"))
         return least[0], least[1], each
 
-    def interval_ok(t0: float, t1: float, m0: list[float], m1: list[float], lanes: frozenset[Lane], entering: bool,
-                    behind: set[int]) -> Breach | None:
+    def interval_ok(self, t0: float, t1: float, m0: list[float], m1: list[float], lanes: frozenset[Lane],
+                    entering: bool, behind: set[int]) -> Breach | None:
         """Whether every vehicle's margin stays non-negative over ``[t0, t1]`` (each bounded below from its samples
         and its rate there), cutting the interval while a bound is unsure."""
         span = t1 - t0
-        if span < 1e-6 or _least_between(min(m0, default=math.inf), min(m1, default=math.inf), span * rate) \
+        if span < 1e-6 or _least_between(min(m0, default=math.inf), min(m1, default=math.inf), span * self.rate) \
                 >= -TOLERANCE_M:  # every margin, at the fastest any changes anywhere
             return None
-        v_max_mps, a_max_mps2 = path.rates(t0, t1)
-        if all(_least_between(a, z, span * _rate(sound, c, i in behind, lanes, entering, speeds(c, t0), speeds(c, t1),
-                                                 v_max_mps, a_max_mps2))
-               >= -TOLERANCE_M for i, (c, a, z) in enumerate(zip(cars, m0, m1, strict=True))):
+        v_max_mps, a_max_mps2 = self.path.rates(t0, t1)
+        if all(_least_between(a, z, span * _rate(self.sound, c, i in behind, lanes, entering, self.speeds(c, t0),
+                                                 self.speeds(c, t1), v_max_mps, a_max_mps2))
+               >= -TOLERANCE_M for i, (c, a, z) in enumerate(zip(self.cars, m0, m1, strict=True))):
             return None
         mid = (t0 + t1) / 2
-        m_mid, found, each = worst(mid, lanes, entering, behind)
+        m_mid, found, each = self.worst(mid, lanes, entering, behind)
         if m_mid < -TOLERANCE_M:
             return found
-        return interval_ok(t0, mid, m0, each, lanes, entering, behind) or \
-            interval_ok(mid, t1, each, m1, lanes, entering, behind)
+        return self.interval_ok(t0, mid, m0, each, lanes, entering, behind) or \
+            self.interval_ok(mid, t1, each, m1, lanes, entering, behind)
 
-    # at the start in the left lane, one short of ``spec.sound.follower_limit_m`` follows
-    behind = {i for i, c in enumerate(cars) if scenario.lane is Lane.LEFT and c.lane is Lane.LEFT
-              and c.hi_m <= follower_limit_m(0.0, sound) - TOLERANCE_M}
-    previous: tuple[float, list[float]] | None = None
-    for t in path.times(dt_s):
-        lanes, entering = path.occupancy(t)
-        if Lane.LEFT not in lanes or entering:
-            behind = set()  # out of the lane, or moving into it: every vehicle is held to one gap or the other
-        else:  # in the lane: a vehicle certainly behind follows the AV from now on
-            x = path.position(t)
-            behind |= {i for i, c in enumerate(cars) if c.lane is Lane.LEFT
-                       and reach_m(held_vehicle(c, windows, t), b, t)[1] + length <= x - tr.position_m}
-        margin, found, each = worst(t, lanes, entering, behind)
-        if margin < -TOLERANCE_M:
-            return found
-        if previous is not None:
-            mid_lanes, mid_entering = path.occupancy((previous[0] + t) / 2)
-            found = interval_ok(previous[0], t, previous[1], each, mid_lanes, mid_entering, behind)
-            if found is not None:
-                return found
-        previous = (t, each)
-    return None
+
+#: How far above the tolerance a margin the sweep computed must be to be cleared without the scalar walk: far more
+#: than the two computations' rounding can differ by (the same operations in the same order, on array elements).
+CLEAR_M = 1e-9
+
+
+class _Sweep:
+    """``exact_check``'s samples all at once: at each instant the AV's reference, its occupancy, which vehicles follow
+    it, and each vehicle's margin over the conflicts it is in, as ``exact_check``'s ``worst`` takes them one instant at
+    a time (each expression the same, in the same order). ``unsure`` names the instants and intervals it cannot clear;
+    the scalar walk decides those, so an answer and its breach are the walk's own."""
+
+    def __init__(self, walk: _Walk, t: np.ndarray) -> None:
+        sound, path, cars, windows, first = walk.sound, walk.path, walk.cars, walk.windows, walk.first
+        tr, b, length, safety = sound.tracking, sound.bounds, sound.safety.vehicle_length_m, sound.safety
+        self.t = t
+        x, v = _positions(path, t), _speeds(path, t)
+        has_left, has_right, entering = _occupancies(path, t)
+        in_lane = has_left & ~entering
+        # the last instant at or before each where the AV was out of the left lane or moving into it: followers reset
+        index = np.arange(len(t))
+        last_reset = np.maximum.accumulate(np.where(in_lane, -1, index))
+        self.follows = np.zeros((len(cars), len(t)), dtype=bool)
+        self.margins = np.full((len(cars), len(t)), math.inf)
+        for i, c in enumerate(cars):
+            low, high, slow, fast = _reach(c, b, t)
+            held = _held(c, b, t, windows)
+            if c.lane is Lane.LEFT:
+                joins = in_lane & (held[1] + length <= x - tr.position_m)
+                count = np.cumsum(joins)
+                before = np.where(last_reset >= 0, count[np.maximum(last_reset, 0)], 0)
+                self.follows[i] = in_lane & ((count - before > 0) | ((last_reset < 0) & (i in first)))
+            follows = self.follows[i]
+            options: list[tuple[np.ndarray, np.ndarray]] = []  # (where the conflict applies, its margin there)
+            if c.lane is Lane.LEFT:
+                if not b.followers_react:
+                    rear = v < top_mps(b, c) - TOLERANCE_M
+                    options.append((rear & has_left & follows,
+                                    _margin(safety, (x - tr.position_m) - high - length, fast - v + tr.speed_mps)))
+                ahead = has_left & ~follows
+                options.append((ahead, _margin(safety, low - (x + tr.position_m) - length, v + tr.speed_mps - slow)))
+                options.append((ahead & entering,
+                                _margin(safety, (x - tr.position_m) - held[1] - length, held[3] - v + tr.speed_mps)))
+            else:
+                options.append((has_right & (high + length > x - tr.position_m),
+                                _margin(safety, low - (x + tr.position_m) - length, v + tr.speed_mps + fast)))
+            best = np.full(len(t), -math.inf)
+            any_option = np.zeros(len(t), dtype=bool)
+            for applies, margin in options:
+                best = np.where(applies, np.maximum(best, margin), best)
+                any_option |= applies
+            self.margins[i] = np.where(any_option, best, math.inf)
+
+    def behind(self, k: int) -> set[int]:
+        """The vehicles that follow the AV at sample ``k``."""
+        return {int(i) for i in np.flatnonzero(self.follows[:, k])}
+
+    def unsure(self, rate: float) -> list[tuple[int, bool]]:
+        """The samples whose least margin, and the intervals (named by their later sample) whose bound at ``rate``
+        over every vehicle's margin, come within ``CLEAR_M`` of breaking the tolerance; in the walk's order."""
+        least = self.margins.min(axis=0) if len(self.margins) else np.full(len(self.t), math.inf)
+        instants = least < -TOLERANCE_M + CLEAR_M
+        m0, m1 = least[:-1], least[1:]
+        span = np.diff(self.t)
+        reach = span * rate
+        with np.errstate(invalid="ignore"):  # inf - inf where neither end is in a conflict: no bound needed
+            bound = np.where(np.isinf(m0) | np.isinf(m1), np.minimum(m0, m1) - reach, (m0 + m1) / 2 - reach / 2)
+        bound = np.where(np.isinf(m0) & np.isinf(m1), math.inf, bound)
+        intervals = np.concatenate(([False], (span >= 1e-6) & (bound < -TOLERANCE_M + CLEAR_M)))
+        return [(int(k), kind) for k in np.flatnonzero(instants | intervals)
+                for kind in (True, False) if (instants[k] if kind else intervals[k])]
+
+
+def _margin(safety: SafetySpec, gap_m: np.ndarray, closing_mps: np.ndarray) -> np.ndarray:
+    return gap_m - np.maximum(safety.min_gap_m, safety.time_gap_s * closing_mps)
+
+
+def _ramp_at(r: Ramp, t: np.ndarray) -> np.ndarray:
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inside = r.dv_mps * (t - r.start_s) / r.duration_s
+    return np.where(t <= r.start_s, 0.0, np.where(t >= r.start_s + r.duration_s, r.dv_mps, inside))
+
+
+def _ramp_integral(r: Ramp, t: np.ndarray) -> np.ndarray:
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inside = r.dv_mps * (t - r.start_s) ** 2 / (2 * r.duration_s)
+    after = r.dv_mps * (t - r.start_s - r.duration_s / 2)
+    return np.where(t <= r.start_s, 0.0, np.where(t >= r.start_s + r.duration_s, after, inside))
+
+
+def _speeds(path: Path, t: np.ndarray) -> np.ndarray:
+    """``Path.speed`` at every sample."""
+    total = np.zeros(len(t))
+    for r in path.ramps:
+        total = total + _ramp_at(r, t)
+    return path.start_mps + total
+
+
+def _positions(path: Path, t: np.ndarray) -> np.ndarray:
+    """``Path.position`` at every sample."""
+    total = np.zeros(len(t))
+    for r in path.ramps:
+        total = total + (_ramp_integral(r, t) - r.integral_m(0.0))
+    return path.start_mps * t + total
+
+
+def _occupancies(path: Path, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``Path.occupancy`` at every sample: whether the AV is in the left lane, in the right one, moving into the left
+    one (the first of the path's stretches that holds an instant, as ``occupancy`` takes it)."""
+    left = np.full(len(t), Lane.LEFT is path.final_lane)
+    right = np.full(len(t), Lane.RIGHT is path.final_lane)
+    entering = np.zeros(len(t), dtype=bool)
+    for t0, t1, lanes, moving in reversed(path.lanes):
+        here = (t >= t0) & (t <= t1)
+        left, right = np.where(here, Lane.LEFT in lanes, left), np.where(here, Lane.RIGHT in lanes, right)
+        entering = np.where(here, moving, entering)
+    return left, right, entering
+
+
+def _phases_at(phases: tuple[Phase, ...], t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The travel and the speed of a bound made of ``phases`` at every sample (``Phase.travel``, ``Phase.speed``)."""
+    travel, speed = np.zeros(len(t)), np.zeros(len(t))
+    taken = np.zeros(len(t), dtype=bool)
+    for k, p in enumerate(phases):
+        here = ~taken & ((t < p.t1_s) | (k == len(phases) - 1))
+        s = t - p.t0_s
+        travel = np.where(here, p.travel_m + p.speed_mps * s + p.accel_mps2 * s * s / 2, travel)
+        speed = np.where(here, p.speed_mps + p.accel_mps2 * s, speed)
+        taken |= here
+    return travel, speed
+
+
+def _reach(c: Vehicle, bounds: Bounds, t: np.ndarray, dynamics: Dynamics | None = None) -> tuple[
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``reach_m`` and ``exact_check``'s speed bounds of ``c`` (with ``dynamics`` for its own) at every sample: its
+    lowest and highest position, its lowest and highest speed."""
+    d = c.dynamics if dynamics is None else dynamics
+    if d is not None:
+        least, slow = _phases_at(d.slowest, t)
+        most, fast = _phases_at(d.fastest, t)
+        if c.lane is Lane.LEFT:
+            return c.lo_m + least, c.hi_m + most, slow, fast
+        return c.lo_m - most, c.hi_m - least, slow, fast
+    if c.lane is Lane.LEFT:
+        same = bounds.same_mps
+        return (c.lo_m + same.low_mps * t, c.hi_m + same.high_mps * t, np.full(len(t), same.low_mps),
+                np.full(len(t), same.high_mps))
+    onc = bounds.oncoming_mps
+    return (c.lo_m - onc.high_mps * t, c.hi_m - onc.low_mps * t, np.full(len(t), onc.low_mps),
+            np.full(len(t), onc.high_mps))
+
+
+def _held(c: Vehicle, bounds: Bounds, t: np.ndarray, windows: tuple[tuple[float, float], ...]) -> tuple[
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``_reach`` of ``held_vehicle(c, windows, t)`` at every sample: within a window (the first that holds it) a
+    measured same-direction vehicle does not speed up from the window's start."""
+    low, high, slow, fast = _reach(c, bounds, t)
+    if c.dynamics is None or c.lane is not Lane.LEFT:
+        return low, high, slow, fast
+    for t0, t1 in reversed(windows):
+        here = (t >= t0) & (t <= t1)
+        if here.any():
+            h_low, h_high, h_slow, h_fast = _reach(c, bounds, t, c.dynamics.held_from(t0))
+            low, high = np.where(here, h_low, low), np.where(here, h_high, high)
+            slow, fast = np.where(here, h_slow, slow), np.where(here, h_fast, fast)
+    return low, high, slow, fast
 
 
 def _least_between(m0: float, m1: float, reach_m: float) -> float:

@@ -1,0 +1,70 @@
+"""The exact continuous-motion check's vectorised sweep against its one-instant-at-a-time walk (``oracle.reach``)."""
+
+from __future__ import annotations
+
+import math
+from unittest import mock
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from ci.conformance.crossval import DRAWN
+from ci.conformance.hypo import scenarios
+from oracle import reach
+from spec.actions import Action
+from spec.grid import PAPER_GRID
+from spec.lanes import Lane
+from spec.scenario import Scenario
+from spec.sound import held_vehicle, reach_m
+from tests.conftest import CI_PROFILE
+
+#: Any scenario of the hypothesis source under drawn bounds (measured speeds, either profile, either semantics),
+#: with any short path: plans, and mostly sequences that break the specification somewhere.
+drawn = st.tuples(st.booleans().flatmap(lambda commit: scenarios(PAPER_GRID, None, DRAWN, measured=True,
+                                                                  profiles=True, commit=commit)),
+                  st.lists(st.sampled_from(list(Action)), max_size=6).map(tuple))
+
+
+def _followers(walk: reach._Walk, times: list[float]) -> list[set[int]]:
+    """The vehicles that follow the AV at each sample, accumulated one sample at a time: none while the AV is out of
+    the left lane or moving into it; in it, the first ones and every one found certainly behind since."""
+    tr, length = walk.sound.tracking, walk.sound.safety.vehicle_length_m
+    behind, out = set(walk.first), []
+    for t in times:
+        lanes, entering = walk.path.occupancy(t)
+        if Lane.LEFT not in lanes or entering:
+            behind = set()
+        else:
+            x = walk.path.position(t)
+            behind |= {i for i, c in enumerate(walk.cars) if c.lane is Lane.LEFT
+                       and reach_m(held_vehicle(c, walk.windows, t), walk.sound.bounds, t)[1] + length
+                       <= x - tr.position_m}
+        out.append(set(behind))
+    return out
+
+
+@settings(max_examples=300 if CI_PROFILE else 60, deadline=None)
+@given(drawn)
+def test_the_sweep_takes_every_instants_followers_and_margins_as_the_walk_does(case: tuple[Scenario,
+                                                                                        tuple[Action, ...]]) -> None:
+    scenario, actions = case
+    walk = reach._Walk(scenario, actions)
+    times = walk.path.times(reach.MAX_DT_S)
+    swept = reach._Sweep(walk, np.asarray(times))
+    for k, (t, behind) in enumerate(zip(times, _followers(walk, times), strict=True)):
+        assert swept.behind(k) == behind, f"followers at t = {t}"
+        each = walk.worst(t, *walk.path.occupancy(t), behind)[2]
+        assert np.allclose(swept.margins[:, k], each, rtol=0.0, atol=1e-9), f"margins at t = {t}"
+
+
+@settings(max_examples=300 if CI_PROFILE else 60, deadline=None)
+@given(drawn)
+def test_the_exact_check_answers_as_its_walk_over_every_instant_and_interval(case: tuple[Scenario,
+                                                                                      tuple[Action, ...]]) -> None:
+    scenario, actions = case
+    found = reach.exact_check(scenario, actions)
+    with mock.patch.object(reach, "CLEAR_M", math.inf):  # nothing cleared by the sweep: the walk decides everything
+        walked = reach.exact_check(scenario, actions)
+    assert (found is None) == (walked is None)
+    assert found is None or walked is None or found.describe() == walked.describe()
