@@ -162,13 +162,17 @@ class Path:
         return frozenset({self.final_lane}), False
 
     def times(self, dt_s: float) -> list[float]:
-        """Samples at most ``dt_s`` apart over the plan and the continuation, every boundary among them."""
+        """Samples at most ``dt_s`` apart over the plan and the continuation, every boundary among them: the actions',
+        the lanes', and the ends of every ramp, so that between two samples the reference speed is monotone (a
+        follower's conflict, which holds while the reference is slower than it may be, then holds at one end of any
+        interval it holds in)."""
         horizon = self.end_s + self.continuation_s
         n = max(1, math.ceil(horizon / dt_s))
         out = {horizon * k / n for k in range(n + 1)}
         out.update(self.bounds_s)
         for t0, t1, _, _ in self.lanes:
             out.update((t0, t1))
+        out.update(t for r in self.ramps for t in (r.start_s, r.start_s + r.duration_s) if 0.0 <= t <= horizon)
         return sorted(out)
 
 

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import itertools
 import math
+from dataclasses import replace
 from unittest import mock
 
 import numpy as np
@@ -68,3 +70,20 @@ def test_the_exact_check_answers_as_its_walk_over_every_instant_and_interval(cas
         walked = reach.exact_check(scenario, actions)
     assert (found is None) == (walked is None)
     assert found is None or walked is None or found.describe() == walked.describe()
+
+
+@settings(max_examples=300 if CI_PROFILE else 60, deadline=None)
+@given(drawn, st.none() | st.floats(0.0, 12.0))
+def test_the_reference_speed_is_monotone_between_two_samples(case: tuple[Scenario, tuple[Action, ...]],
+                                                             start_mps: float | None) -> None:
+    """So a conflict that holds while the reference is slower than a follower may be (``BEHIND``) holds at one end of
+    any interval it holds in, where the interval's bound sees it."""
+    scenario, actions = case
+    assert scenario.sound is not None
+    scenario = replace(scenario, sound=replace(scenario.sound, start_mps=start_mps))
+    path = reach.scenario_path(scenario, actions)
+    times = path.times(reach.MAX_DT_S)
+    for t0, t1 in itertools.pairwise(times):
+        v0, v1 = path.speed(t0), path.speed(t1)
+        for t in (t0 + (t1 - t0) / 3, t0 + 2 * (t1 - t0) / 3):
+            assert min(v0, v1) - 1e-9 <= path.speed(t) <= max(v0, v1) + 1e-9, f"between {t0} and {t1}"
