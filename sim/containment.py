@@ -236,7 +236,7 @@ class Containment:
                     continue
                 if lane is Lane.LEFT and av_in_left and car.x_m < av.x_m and self.bounds.followers_react:
                     gap_m = av.x_m - car.x_m - CAR.length_m
-                    closing_mps = car.velocity_mps - av.speed_mps
+                    closing_mps = car.velocity_mps - av.along_mps
                     if SAFETY.violated(gap_m, closing_mps):
                         out.append(self._breach(Breach(self.decision, km, t_s, f"follower ({car.body})", car.body,
                                                        BreachKind.FOLLOWER,
@@ -319,7 +319,7 @@ class Containment:
         if -1 in self.breached:
             return None
         t = self.tracking
-        errors = [(abs(av.x_m - x_ref_m) - t.position_m, "position"), (abs(av.speed_mps - v_ref_mps) - t.speed_mps,
+        errors = [(abs(av.x_m - x_ref_m) - t.position_m, "position"), (abs(av.along_mps - v_ref_mps) - t.speed_mps,
                                                                           "speed")]
         if lane_due is not None:
             errors.append((abs(av.y_m - Scene.lane_y(lane_due)) - (ROAD.lane_width_m - CAR.width_m) / 2, "sideways"))

@@ -2,8 +2,9 @@
 
 Longitudinal: a position reference advancing along a speed profile (``spec.motion``: the action's
 speed, speed factor x the common speed, with feasible ramps to its neighbours' speeds); the speed command
-adds a correction towards that reference, and the car's wheel motors limit acceleration and
-braking. Lateral: a reference that stays on the lane
+adds a correction towards that reference, divided by the cosine of the car's heading (the reference is a
+speed along the road, and a car turned sideways covers less of it), and the car's wheel motors limit
+acceleration and braking. Lateral: a reference that stays on the lane
 centre, or for a lane change moves one lane width (a smooth cosine profile) within the
 first ``LOOP.lane_change_lateral_s`` of the action's time, since the model puts the AV in its
 new lane before any oncoming vehicle moves; tracked by a PD law on the lateral position
@@ -27,6 +28,7 @@ from spec.physical import LOOP
 K_X = 0.8  # 1/s: speed correction per metre behind the position reference
 K_Y, K_VY = 3.0, 3.5  # lateral PD gains (1/s^2, 1/s)
 MAX_SPEED_FACTOR = 2.4
+MIN_HEADING_COS = 0.5  # the heading's correction of the speed command is at most 2x (a car turned by 60 degrees)
 
 
 class Executor:
@@ -85,7 +87,8 @@ class Executor:
         pose = self.car.pose()
         self.x_ref_m += speed_mps * self.dt_s
         self.v_ref_mps = speed_mps
-        command = speed_mps + K_X * (self.x_ref_m - pose.x_m)
+        # the reference is a speed along the road: turned sideways, the car drives faster along its heading to keep it
+        command = (speed_mps + K_X * (self.x_ref_m - pose.x_m)) / max(MIN_HEADING_COS, math.cos(pose.yaw_rad))
         command = max(0.0, min(MAX_SPEED_FACTOR * self.grid.speed, command))
         v = max(pose.speed_mps, 1.0)
         vy = v * math.sin(pose.yaw_rad)

@@ -158,7 +158,7 @@ class Replay:
         reference up to there does not depend on ``m``: the ramp back to the common speed starts within the
         last accelerate), and the checkpoint for ``m + 1`` is that one driven on through one more accelerate."""
         start = WorldSave(self.scene, self.car, self.traffic)
-        speed_mps = self.car.pose().speed_mps
+        speed_mps = self.car.pose().along_mps
         attempt = _Attempt(self, target)
         checkpoint: _Checkpoint | None = None
         outcome = Outcome.NOT_PASSED

@@ -104,7 +104,7 @@ def ahead_in_lane(pose: Pose, lane: Lane, left: Sequence[KinematicCar],
     if not ahead:
         return None, math.inf, 0.0
     car = min(ahead, key=lambda c: c.x_m)
-    return car, car.x_m - pose.x_m - CAR.length_m, pose.speed_mps - car.velocity_mps
+    return car, car.x_m - pose.x_m - CAR.length_m, pose.along_mps - car.velocity_mps
 
 
 class SafetyMonitor:

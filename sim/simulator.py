@@ -427,11 +427,11 @@ class Simulator:
         self.summary.sweeps += 1
         self.swept_at = (self.origin_km * 1000 + pose.x_m, self.summary.sim_time_s)
         raw = self.sensor.read(in_range(pose.x_m, pose.y_m, self.traffic.left, self.traffic.oncoming,
-                                        av_speed_mps=pose.speed_mps))
+                                        av_speed_mps=pose.along_mps))
         if self.tracker is None:
             self.sweep = raw
         else:
-            view = self.tracker.update(self.summary.sim_time_s, pose.x_m, pose.speed_mps,
+            view = self.tracker.update(self.summary.sim_time_s, pose.x_m, pose.along_mps,
                                        None if raw is None else [Detection(r.lane, r.dx_m, r.rate_mps) for r in raw],
                                        pose.y_m)
             for track in (*view.planned, *view.held):
@@ -451,9 +451,9 @@ class Simulator:
         self._sense_breach(pose)
         if self.takeover is not None:
             self._remember_faults()  # the fallback acts on every sweep, not only on a decision's
-        # the AV's own travel along the road, its speed along the road (the fit's) and along its heading (the speed
-        # the fallback's rules are asked at: what changes after the sweep)
-        own = (self.origin_km * 1000 + pose.x_m, pose.speed_mps, pose.speed_mps * math.cos(pose.yaw_rad))
+        # the AV's own travel along the road and its speed along the road: the fit's, and the one the fallback's rules
+        # are asked at (what changes after the sweep)
+        own = (self.origin_km * 1000 + pose.x_m, pose.along_mps, pose.along_mps)
         hz = SENSORS.sweep_hz
         self.lead = Nearest.after(self.lead, self.sweep, hz, Lane.LEFT, False, *own)
         self.follower = Nearest.after(self.follower, self.sweep, hz, Lane.LEFT, True, *own)
@@ -483,7 +483,7 @@ class Simulator:
             return False
         pose = self.car.pose()
         if any(ACTION_RULES[a].to_lane is not None for a in under_way) or Executor.lane_of(pose.y_m) is not Lane.LEFT \
-                or abs(pose.speed_mps - self.grid.speed) > TRACKING.speed_mps:
+                or abs(pose.along_mps - self.grid.speed) > TRACKING.speed_mps:
             return False
         self.summary.refusals += 1
         self.pending = ()
@@ -588,7 +588,7 @@ class Simulator:
             return self._sensing_stop(pending, err)
         self._watch(readings, pose.x_m, lane)
         try:
-            answer, seen, scenario, frame_mps = self._decide(readings, pose.speed_mps, lane)
+            answer, seen, scenario, frame_mps = self._decide(readings, pose.along_mps, lane)
         except ScenarioError as err:
             return self._sensing_stop(pending, err)
         self._planned(answer, scenario, lane)
@@ -601,13 +601,13 @@ class Simulator:
         if not answer.actions:  # nothing to overtake: drive on
             self.doing = "drive (nothing to overtake)"
             self.executor.reset_reference()
-            profile = plan_profiles((Action.DRIVE,), pose.speed_mps, self.grid)[0]
+            profile = plan_profiles((Action.DRIVE,), pose.along_mps, self.grid)[0]
             return self.executor.run(Action.DRIVE, self._tick, profile)
         if self._refused(answer.actions, pending):
             self.doing = "driving on in lane (an overtake refused: the tracker holds a contradiction)"
             return self._hold_a_sweep()
         self._sight(readings, pose.x_m)
-        return self._execute(answer.actions, answer.states, seen, pose.speed_mps, frame_mps)
+        return self._execute(answer.actions, answer.states, seen, pose.along_mps, frame_mps)
 
     def _while_planning(self) -> bool:
         """A sound decision's snapshot ages while the planner runs: the world moves on for ``LOOP.plan_budget_s``
@@ -660,7 +660,7 @@ class Simulator:
         if self.containment is not None:
             self._contain(pose, 0.0)  # the snapshot itself: sensed farther off than the error bound, or unknown
         try:
-            scenario = self.planner.scenario(readings, lane, pose.speed_mps, view_m)
+            scenario = self.planner.scenario(readings, lane, pose.along_mps, view_m)
         except ScenarioError as err:
             self._fail(FailureKind.SENSING, err.reason, str(err))
             return self._fallback(f"sensing: {err.reason}")
@@ -696,13 +696,13 @@ class Simulator:
             escape = answer.commit.escape if answer.commit is not None else None
             if escape is not None:
                 self.summary.committed_parts += 1
-            return functools.partial(self._sound_execute, answer.actions, pose.speed_mps,
+            return functools.partial(self._sound_execute, answer.actions, pose.along_mps,
                                      f"plan {self.summary.plans}", escape=escape.actions if escape else ())
         if choice.act is decide.Act.STEP:
             assert choice.step is not None
             self.summary.keep_lane_steps += 1
             self._sight(readings, pose.x_m)
-            return functools.partial(self._sound_execute, (choice.step,), pose.speed_mps,
+            return functools.partial(self._sound_execute, (choice.step,), pose.along_mps,
                                      f"keeping the lane ({choice.why})")
         if choice.act is decide.Act.KEEP:
             return functools.partial(self._keep_proved, choice.why)
@@ -818,7 +818,7 @@ class Simulator:
                     return False
                 self.executor.reset_reference()
                 if not self.executor.run(Action.LEFT_LANE_CHANGE, self._tick,
-                                         fallback.return_profile(self._around(), self.car.pose().speed_mps)):
+                                         fallback.return_profile(self._around(), self.car.pose().along_mps)):
                     return False
             self.pending, self.proved = (), None
             return self._brake_in_lane(emergency=True)
@@ -834,11 +834,11 @@ class Simulator:
         """The fallback in the right lane: hold the lane, at the speeds ``fallback.wait_command`` says, until it
         says return (the sensed left lane leaves room, or the wait ends). False on a collision."""
         y_ref = self.scene.lane_y(Lane.RIGHT)
-        command = self.car.pose().speed_mps
+        command = self.car.pose().along_mps
         held = 0
         while True:
             beside = fallback.alongside(self._sense())
-            after = fallback.wait_command(self._around(), self.car.pose().speed_mps, beside, command,
+            after = fallback.wait_command(self._around(), self.car.pose().along_mps, beside, command,
                                           (held + 1) * self.executor.dt_s, self.executor.dt_s)
             if after is None:
                 return True
@@ -857,13 +857,13 @@ class Simulator:
         low = self.watch.bounds.same_mps.low_mps
         if not emergency and self.containment is not None:  # the proved manoeuvre's own hold speed
             low = self.containment.hold_floor_mps
-        hold = fallback.in_lane_hold_mps(emergency, self.car.pose().speed_mps, low)
-        command = self.car.pose().speed_mps
+        hold = fallback.in_lane_hold_mps(emergency, self.car.pose().along_mps, low)
+        command = self.car.pose().along_mps
         y_ref = self.scene.lane_y(self.executor.lane)
         self.executor.lane_due = self.executor.lane
         dt_s = self.executor.dt_s
         for _ in range(max(1, round(MINIMAL_RISK.takeover_s / dt_s))):
-            command = fallback.brake_command(self._around(), self.car.pose().speed_mps, command, hold, emergency,
+            command = fallback.brake_command(self._around(), self.car.pose().along_mps, command, hold, emergency,
                                              self._room_needed, dt_s)
             if emergency:  # towards a standstill no position is to be kept; a proved continuation keeps its own
                 self.executor.reset_reference()
@@ -947,7 +947,7 @@ class Simulator:
         self.summary.kept_plans.append(self._event(kind, cause, detail))
         self.executor.reset_reference()
         kept = pending[: LOOP.replan_after_actions]
-        for k, (action, profile) in enumerate(zip(kept, plan_profiles(kept, self.car.pose().speed_mps, self.grid))):
+        for k, (action, profile) in enumerate(zip(kept, plan_profiles(kept, self.car.pose().along_mps, self.grid))):
             self.doing = f"{action.value} (kept plan after {kind.value}: {cause}, step {k + 1} of {len(kept)})"
             if not self.executor.run(action, self._tick, profile):
                 return False
@@ -1022,7 +1022,7 @@ class Simulator:
         measured = {lane: [c.x_m - pose.x_m for c in cars]
                     for lane, cars in (("left_lane", self.traffic.left), ("right_lane", self.traffic.oncoming))}
         t_s = self.summary.sim_time_s
-        event = StepEvent(t_s, self.summary.km, plan_id, step, action, pose.x_m, pose.y_m, pose.speed_mps, measured,
+        event = StepEvent(t_s, self.summary.km, plan_id, step, action, pose.x_m, pose.y_m, pose.along_mps, measured,
                           predicted, tuple(violations), self.doing, 0.0 if since_s is None else t_s - since_s)
         for observer in self.observers:
             observer.on_step(event)

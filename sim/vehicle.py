@@ -27,6 +27,12 @@ class Pose:
     yaw_rad: float
     speed_mps: float  # along the vehicle's heading
 
+    @property
+    def along_mps(self) -> float:
+        """Its speed along the road (the scene's x): what the model's speeds and gaps are measured along, less than
+        ``speed_mps`` by the cosine of the heading while the car moves sideways."""
+        return self.speed_mps * math.cos(self.yaw_rad)
+
 
 class WheeledCar:
     """The AV: chassis, two steering hinges, four wheels; velocity-controlled wheel motors."""

@@ -11,7 +11,7 @@ from sim.executor import Executor
 from sim.scene import Scene
 from sim.vehicle import KinematicCar, WheeledCar, first_contact
 from spec.actions import ACTION_RULES, Action
-from spec.envelope import MINIMAL_RISK
+from spec.envelope import MINIMAL_RISK, TRACKING
 from spec.errors import EngineError
 from spec.grid import PAPER_GRID
 from spec.lanes import Lane
@@ -176,6 +176,30 @@ def test_the_lateral_move_of_a_lane_change_is_done_early(world) -> None:
     past_centre = next(i for i, y in enumerate(ys) if y < 0) * executor.dt_s
     assert past_centre <= LOOP.lane_change_lateral_s * 0.75  # out of its old lane by 3/4 of the lateral time
     assert abs(ys[-1] - scene.lane_y(Lane.RIGHT)) < 0.3
+
+
+@pytest.mark.parametrize("start_mps", [3.5, 7.0, 10.5])
+@pytest.mark.parametrize("action", [Action.RIGHT_LANE_CHANGE, Action.LEFT_LANE_CHANGE])
+def test_a_lane_change_from_any_speed_keeps_the_car_within_its_envelope(world, start_mps: float,
+                                                                         action: Action) -> None:
+    """Turned sideways the car drives faster along its heading, so its speed along the road, which the reference
+    is, keeps to it: from a slow queue a lane change's 2 s sideways move turns the car by up to about 35 degrees."""
+    _, car, executor = world
+    if action is Action.LEFT_LANE_CHANGE:
+        executor.hold(1.0, COMMON_MPS, no_traffic)
+        assert executor.run(Action.RIGHT_LANE_CHANGE, no_traffic)
+    settle(executor, start_mps)
+    errors: list[tuple[float, float]] = []
+
+    def record(_dt: float) -> bool:
+        pose = car.pose()
+        errors.append((abs(pose.x_m - executor.x_ref_m), abs(pose.along_mps - executor.v_ref_mps)))
+        return True
+
+    profile = plan_profiles((action,), start_mps, PAPER_GRID, to_common=False)[0]
+    assert executor.run(action, record, profile)
+    assert max(e for e, _ in errors) <= TRACKING.position_m
+    assert max(e for _, e in errors) <= TRACKING.speed_mps
 
 
 @pytest.mark.parametrize(("speed_mps", "frame_mps", "plan"), [

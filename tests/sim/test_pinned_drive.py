@@ -1,7 +1,9 @@
 """A same-seed drive is the drive recorded before the simulator was assembled from parts (commit ce09fa1).
 
 The golden files were written by that code: ``run_drive(3, 2.0, out_dir=...)``'s summary (less its
-wall-clock fields) and its trace. The default assembly must reproduce both exactly: the same
+wall-clock fields) and its trace, and written again when the executor's speed command came to divide by the
+cosine of the car's heading (the same actions, plans and overtakes; the positions and deviations of the lane
+changes moved by centimetres). The default assembly must reproduce both exactly: the same
 kilometres, overtakes, plans, deviations and every traced number. Figures added to the summary since (safety,
 traffic collisions, restarts, opportunities, containment and the sound model's counts, its committed parts and
 escapes, the shadowed snapshots and sensed and unseen breaches among them, the sensors' sweeps and the faults
