@@ -21,6 +21,7 @@ checks find violations in plans of the paper's rules: they bite.
 
 from __future__ import annotations
 
+import functools
 import math
 import random
 from collections.abc import Sequence
@@ -204,17 +205,21 @@ def exact_check(scenario: Scenario, actions: Sequence[Action], dt_s: float = MAX
     walk = _Walk(scenario, actions)
     times = walk.path.times(dt_s)
     swept = _Sweep(walk, np.asarray(times))
+
+    @functools.cache
+    def at(k: int) -> tuple[float, Breach | None, list[float]]:
+        """The walk at sample ``k`` (an unsure instant is often the end of an unsure interval too)."""
+        return walk.worst(times[k], *walk.path.occupancy(times[k]), swept.behind(k))
+
     # every instant and interval the sweep cannot clear, in order (an instant before the interval that ends there)
     for k, is_instant in swept.unsure(walk.rate):
-        t = times[k]
         if is_instant:
-            margin, found, _ = walk.worst(t, *walk.path.occupancy(t), swept.behind(k))
+            margin, found, _ = at(k)
             if margin < -TOLERANCE_M:
                 return found
             continue
-        m0 = walk.worst(times[k - 1], *walk.path.occupancy(times[k - 1]), swept.behind(k - 1))[2]
-        m1 = walk.worst(t, *walk.path.occupancy(t), swept.behind(k))[2]
-        found = walk.interval_ok(times[k - 1], t, m0, m1, *walk.path.occupancy((times[k - 1] + t) / 2),
+        t0, t1 = times[k - 1], times[k]
+        found = walk.interval_ok(t0, t1, at(k - 1)[2], at(k)[2], *walk.path.occupancy((t0 + t1) / 2),
                                  swept.behind(k))
         if found is not None:
             return found
@@ -329,8 +334,8 @@ class _Sweep:
         self.follows = np.zeros((len(cars), len(t)), dtype=bool)
         self.margins = np.full((len(cars), len(t)), math.inf)
         for i, c in enumerate(cars):
-            low, high, slow, fast = _reach(c, b, t)
-            held = _held(c, b, t, windows)
+            low, high, slow, fast = unheld = _reach(c, b, t)
+            held = _held(c, b, t, windows, unheld)
             if c.lane is Lane.LEFT:
                 joins = in_lane & (held[1] + length <= x - tr.position_m)
                 count = np.cumsum(joins)
@@ -456,11 +461,12 @@ def _reach(c: Vehicle, bounds: Bounds, t: np.ndarray, dynamics: Dynamics | None 
             np.full(len(t), onc.high_mps))
 
 
-def _held(c: Vehicle, bounds: Bounds, t: np.ndarray, windows: tuple[tuple[float, float], ...]) -> tuple[
+def _held(c: Vehicle, bounds: Bounds, t: np.ndarray, windows: tuple[tuple[float, float], ...],
+          unheld: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]) -> tuple[
         np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``_reach`` of ``held_vehicle(c, windows, t)`` at every sample: within a window (the first that holds it) a
-    measured same-direction vehicle does not speed up from the window's start."""
-    low, high, slow, fast = _reach(c, bounds, t)
+    """``_reach`` of ``held_vehicle(c, windows, t)`` at every sample, from ``c``'s own (``unheld``): within a window
+    (the first that holds it) a measured same-direction vehicle does not speed up from the window's start."""
+    low, high, slow, fast = unheld
     if c.dynamics is None or c.lane is not Lane.LEFT:
         return low, high, slow, fast
     for t0, t1 in reversed(windows):

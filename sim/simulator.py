@@ -451,9 +451,7 @@ class Simulator:
         self._sense_breach(pose)
         if self.takeover is not None:
             self._remember_faults()  # the fallback acts on every sweep, not only on a decision's
-        # the AV's own travel along the road and its speed along the road: the fit's, and the one the fallback's rules
-        # are asked at (what changes after the sweep)
-        own = (self.origin_km * 1000 + pose.x_m, pose.along_mps, pose.along_mps)
+        own = (self.origin_km * 1000 + pose.x_m, pose.along_mps)  # the AV's own travel and speed along the road
         hz = SENSORS.sweep_hz
         self.lead = Nearest.after(self.lead, self.sweep, hz, Lane.LEFT, False, *own)
         self.follower = Nearest.after(self.follower, self.sweep, hz, Lane.LEFT, True, *own)
