@@ -130,7 +130,8 @@ class Path:
         self.continuation_s = CONTINUATION_S
         if current is Lane.RIGHT:
             closing = sound.bounds.oncoming_mps.high_mps + hold
-            self.continuation_s += oncoming_far_m / closing if closing > 0 else 0.0
+            # an oncoming vehicle that starts behind the AV (already past) adds no time: it cannot reach it
+            self.continuation_s += max(0.0, oncoming_far_m) / closing if closing > 0 else 0.0
         #: The most the reference ever accelerates or brakes: ramps under way together add up (a measured start speed's
         #: ramp may still run when the ramp into the second action starts), so for each ramp, all that overlap it.
         spans = [(r.start_s, r.start_s + r.duration_s, abs(r.dv_mps) / r.duration_s) for r in self.ramps

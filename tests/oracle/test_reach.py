@@ -18,7 +18,7 @@ from spec.actions import Action
 from spec.grid import PAPER_GRID
 from spec.lanes import Lane
 from spec.scenario import Scenario
-from spec.sound import held_vehicle, reach_m
+from spec.sound import held_vehicle, reach_m, sound_from
 from tests.conftest import CI_PROFILE
 
 #: Any scenario of the hypothesis source under drawn bounds (measured speeds, either profile, either semantics),
@@ -87,3 +87,21 @@ def test_the_reference_speed_is_monotone_between_two_samples(case: tuple[Scenari
         v0, v1 = path.speed(t0), path.speed(t1)
         for t in (t0 + (t1 - t0) / 3, t0 + 2 * (t1 - t0) / 3):
             assert min(v0, v1) - 1e-9 <= path.speed(t) <= max(v0, v1) + 1e-9, f"between {t0} and {t1}"
+
+
+@settings(max_examples=300 if CI_PROFILE else 60, deadline=None)
+@given(drawn)
+def test_the_samples_cover_the_plan_and_its_continuation_at_most_dt_apart(case: tuple[Scenario,
+                                                                                    tuple[Action, ...]]) -> None:
+    scenario, actions = case
+    path = reach.scenario_path(scenario, actions)
+    times = path.times(reach.MAX_DT_S)
+    assert times[0] == 0.0 and times[-1] >= path.end_s + reach.CONTINUATION_S
+    assert max(b - a for a, b in itertools.pairwise(times)) <= reach.MAX_DT_S + 1e-12
+
+
+def test_an_oncoming_vehicle_already_behind_adds_no_time_and_takes_none_away() -> None:
+    """Oncoming vehicles that have all passed the AV leave the right lane's continuation at its least, not less."""
+    sound = sound_from(None, "default")
+    path = reach.Path((Action.RIGHT_LANE_CHANGE,), sound, PAPER_GRID, Lane.LEFT, oncoming_far_m=-189.0)
+    assert path.continuation_s == reach.CONTINUATION_S
