@@ -47,12 +47,15 @@ class Executor:
         self.x_ref_m = self.car.pose().x_m + ahead_m
 
     def run(self, action: Action, tick: Callable[[float], bool], profile: SpeedProfile | None = None,
-            stop: Callable[[], bool] | None = None, skip_s: float = 0.0) -> bool:
+            stop: Callable[[], bool] | None = None, skip_s: float = 0.0,
+            reverse: Callable[[Lane, float, float], bool] | None = None) -> bool:
         """Execute ``action`` for its duration along ``profile`` (default: its speed throughout); False as soon
         as ``tick`` reports a collision. ``stop`` is asked after every control step once any sideways move is over
         (an action in lane has none: from its first step); when it says so the action ends there, the AV in the
-        action's lane. ``skip_s``: the action's first seconds have gone by already (its reference goes on from
-        there, on the action's clock)."""
+        action's lane. ``reverse(to_lane, done_s, left_s)`` is asked after every control step of a sideways move
+        (seconds of it done and left); when it says so the move goes back (``reverse_move``) and the action ends
+        there, the AV in the lane it started in. ``skip_s``: the action's first seconds have gone by already (its
+        reference goes on from there, on the action's clock)."""
         rule = ACTION_RULES[action]
         if rule.from_lane is not None and rule.from_lane is not self.lane:
             raise EngineError(f"simulator: {action.value} asked of an AV in the {self.lane.value} lane "
@@ -72,9 +75,30 @@ class Executor:
             self.lane_due = to_lane if phase >= 1 else None
             if not self.control(profile.at(k * self.dt_s), y_ref, vy_ref, tick):
                 return False
+            done_s = (k + 1) * self.dt_s
+            if reverse is not None and phase < 1 and to_lane is not self.lane and \
+                    reverse(to_lane, done_s, lateral_s - done_s):
+                return self.reverse_move(y_ref, y_from, done_s, profile, k + 1, tick)
             if stop is not None and (phase >= 1 or to_lane is self.lane) and stop():
                 break
         self.lane = to_lane
+        return True
+
+    def reverse_move(self, y_at: float, y_back: float, done_s: float, profile: SpeedProfile, k: int,
+                     tick: Callable[[float], bool]) -> bool:
+        """Take a sideways move back from the lateral reference ``y_at`` to the lane centre ``y_back`` it left, on a
+        cosine of the time the move had taken (``MinimalRisk``'s cut-short move), the speed reference going on along
+        the action's ``profile`` from its step ``k``; the AV stays in its lane. False on a collision."""
+        self.lane_due = None
+        steps = max(1, round(done_s / self.dt_s))
+        back_s = steps * self.dt_s
+        for j in range(steps):
+            phase = (j + 1) / steps
+            y_ref = y_at + (y_back - y_at) * (1 - math.cos(math.pi * phase)) / 2
+            vy_ref = (y_back - y_at) * math.pi * math.sin(math.pi * phase) / (2 * back_s)
+            if not self.control(profile.at((k + j) * self.dt_s), y_ref, vy_ref, tick):
+                return False
+        self.lane_due = self.lane
         return True
 
     def hold(self, seconds: float, speed_mps: float, tick: Callable[[float], bool]) -> bool:

@@ -777,7 +777,7 @@ class Simulator:
                 self.pending, self.pending_profiles = sequence[k + 1:], profiles[k + 1:]
                 since_s = self.summary.sim_time_s
                 ran = self.executor.run(action, self._tick, profiles[k], stop=lambda: self.interrupt and self.swept(),
-                                        skip_s=skip_s if k == 0 else 0.0)
+                                        skip_s=skip_s if k == 0 else 0.0, reverse=self._reverses)
                 self._observe(self.summary.plans, k + 1, action, None, [], since_s)
                 if not ran:
                     return False
@@ -793,6 +793,17 @@ class Simulator:
         if not self.interrupt:
             return True
         self.summary.breach_replans += 1
+        return True
+
+    def _reverses(self, to_lane: Lane, done_s: float, left_s: float) -> bool:
+        """Whether the sideways move under way goes back to the lane it left: only once a breach has ended the
+        decision, on a sweep, as ``fallback.reverses`` decides from it (``MinimalRisk``'s cut-short move); counted."""
+        if self.sound is None or not (self.interrupt and self.swept()):
+            return False
+        if not fallback.reverses(self._around(), self.sweep or (), self.car.pose().along_mps, to_lane, done_s, left_s):
+            return False
+        self.summary.reversed_moves += 1
+        self.doing = self.doing.replace(" (", " reversed (", 1)
         return True
 
     def _fallback(self, cause: str) -> bool:

@@ -69,6 +69,7 @@ class RunSummary:
     decisions: int = 0  # snapshots containment was measured from (every decision, both models)
     containment: ContainmentReport = field(default_factory=ContainmentReport)
     breach_replans: int = 0  # sound decisions ended by a breach
+    reversed_moves: int = 0  # sideways moves a sensed breach sent back (``MinimalRisk``'s cut-short move)
     sensed_breaches: int = 0  # sound decisions whose readings the AV's own monitor could not explain
     unseen_breaches: int = 0  # sound decisions that went on past a vehicle's breach the AV never sensed
     keep_lane_steps: int = 0  # sound decisions without an overtake: one safe step in lane
@@ -138,7 +139,8 @@ class RunSummary:
                 "safety": self.safety.to_json(), "traffic_collisions": self.traffic_collisions,
                 "snapshots": self.snapshots, "restarts": self.restarts, "opportunities": self.opportunities.to_json(),
                 "decisions": self.decisions, "containment": self.containment.to_json(),
-                "breach_replans": self.breach_replans, "sensed_breaches": self.sensed_breaches,
+                "breach_replans": self.breach_replans, "reversed_moves": self.reversed_moves,
+                "sensed_breaches": self.sensed_breaches,
                 "unseen_breaches": self.unseen_breaches, "keep_lane_steps": self.keep_lane_steps,
                 "minimal_risk_steps": self.minimal_risk_steps, "committed_parts": self.committed_parts,
                 "escapes": self.escapes, "unsafe_starts": self.unsafe_starts, "shadowed": self.shadowed,
@@ -159,6 +161,7 @@ class RunSummary:
                    else OpportunityReport(), decisions=data.get("decisions", 0),
                    containment=ContainmentReport.from_json(data["containment"]) if "containment" in data
                    else ContainmentReport(), breach_replans=data.get("breach_replans", 0),
+                   reversed_moves=data.get("reversed_moves", 0),
                    sensed_breaches=data.get("sensed_breaches", 0), unseen_breaches=data.get("unseen_breaches", 0),
                    keep_lane_steps=data.get("keep_lane_steps", 0), minimal_risk_steps=data.get("minimal_risk_steps", 0),
                    committed_parts=data.get("committed_parts", 0), escapes=data.get("escapes", 0),

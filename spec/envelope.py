@@ -137,6 +137,15 @@ class MinimalRisk:
       the two gaps in the lane, it drives ``open_mps`` below the vehicle ahead while the vehicle behind stays
       farther than the specification allows at that closing speed, towards the middle of its slot.
     - It holds for ``takeover_s``, then hands back to a new decision (which may take over again).
+
+    One rule acts before a take-over, when a sensed breach ends a sound decision during a lane change's sideways move
+    (the proof covers neither finishing the move nor undoing it once its sets are broken): **the move is cut short**
+    and goes back to the lane it left, on a cosine of the time it had taken, when finishing it looks the worse of the
+    two as sensed, within ``reverse_within_s`` of its start. Out into the right lane: when the oncoming lane would
+    not leave time for the rest of the move and a return (the oncoming lane is the greater danger). Back into the
+    left lane: when that lane would break the specification at the move's end (a vehicle alongside, the vehicle
+    ahead too near, a follower that blocks) and the oncoming lane leaves time to move back and return again. Each one
+    is counted (``reversed_moves``).
     """
 
     decel_mps2: float = RAMP_SHARE * CAR.max_brake_mps2
@@ -147,6 +156,11 @@ class MinimalRisk:
     #: the executor's stated speed error (``TRACKING.speed_mps``), so that the gap opens whatever the car's speed
     #: error within its envelope (measured: 0.17 m/s above a command of 7 m/s held a 2 m gap for 35 km, seed 12).
     open_mps: float = TRACKING.speed_mps
+    #: How long into a lane change's sideways move it may still be cut short: its first quarter, where the reference
+    #: has moved 15% of a lane width. Measured (``tests/sim/test_physics.py``, 3.5-14 m/s): going back from there the
+    #: car's centre never leaves the lane it started in and is within 0.2 m of its centre 3 s later; from half-way,
+    #: at 3.5 m/s, the car runs on into the other lane before it turns back.
+    reverse_within_s: float = LOOP.lane_change_lateral_s / 4
     #: Sweeps the closing speed on the vehicle ahead is fitted over (``closing_fit_sweeps``).
     fit_sweeps: int = closing_fit_sweeps()
     #: The longest the fallback waits in the right lane for room, however clear the oncoming lane looks: the time an

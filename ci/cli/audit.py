@@ -195,7 +195,8 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sem
         print_table(table, 4, "audit.md and audit.json")
         models = Table(title="the models side by side: safety inside / after the assumptions, containment, price")
         for col in ("cell m", "traffic", "sensing", "model", "overtakes /km", "collisions in / after /1000 km",
-                    "near misses in / after /1000 km", "breaches /1000 km", "re-plans on a breach", "keep-lane",
+                    "near misses in / after /1000 km", "breaches /1000 km", "re-plans on a breach",
+                    "moves sent back", "keep-lane",
                     "minimal-risk", "take-overs (after breach)", "waits without plan", "unsafe starts"):
             models.add_column(col, justify="right")
         for r in audit_rows:
@@ -203,7 +204,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sem
                            figure(r.per_1000_km(r.overtakes) / 1000, 2),
                            r.inside_after("contact"), r.inside_after("near_miss"),
                            figure(r.per_1000_km(sum(r.breaches.values()))), str(r.breach_replans),
-                           str(r.keep_lane_steps), str(r.minimal_risk_steps),
+                           str(r.reversed_moves), str(r.keep_lane_steps), str(r.minimal_risk_steps),
                            f"{r.takeovers} ({r.takeovers_after_breach})", str(r.waits_without_plan),
                            str(r.unsafe_starts))
         print_table(models, 4, "audit.md and audit.json")

@@ -138,6 +138,11 @@ MUTANTS: tuple[Mutant, ...] = (
            "        closing = lead.closing_mps(hold_mps)\n        if lead.too_near_after(closing, 0.0):",
            "the fallback's emergency brake reads the closing speed on the vehicle ahead at the hold speed, not at the "
            "car's own: behind a vehicle slower than the hold speed it brakes on below that vehicle's speed"),
+    Mutant("fallback-reverse-ignores-oncoming", "sim/driver/fallback.py",
+           "    return blocked and oncoming_leaves_time(a, speed_mps, done_s + RETURN_S)",
+           "    return blocked",
+           "a return to the left lane cut short whatever the oncoming lane leaves: the AV goes back into the "
+           "oncoming lane with a vehicle closing on it"),
     Mutant("decide-unsafe-start-kept-again", "sim/driver/decide.py",
            "unsafe_again = status is Status.UNSAFE_START and unsafe_before and not pending",
            "unsafe_again = status is Status.UNSAFE_START and unsafe_before and pending",

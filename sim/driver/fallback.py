@@ -75,6 +75,24 @@ def oncoming_leaves_time(a: Around, speed_mps: float, change_s: float = RETURN_S
     return not o.too_near_after(closing, change_s + 1 / SENSORS.sweep_hz)
 
 
+def reverses(a: Around, readings: tuple[Reading, ...], speed_mps: float, to_lane: Lane, done_s: float,
+             left_s: float) -> bool:
+    """Whether a sideways move under way when a breach is sensed goes back to the lane it left (``MinimalRisk``'s
+    cut-short move; ``done_s`` of it done, ``left_s`` left). Out into the right lane: when the oncoming lane would
+    not leave time for the rest of the move and a return (``oncoming_leaves_time``): the oncoming lane is the greater
+    danger. Back into the left lane: when that lane would break the specification at the move's end (a vehicle
+    alongside, the vehicle ahead too near at its closing speed, a follower that blocks) and the oncoming lane leaves
+    time to move back and return again. Past ``MinimalRisk.reverse_within_s`` the move goes on."""
+    if done_s > MINIMAL_RISK.reverse_within_s + 1e-9:
+        return False
+    if to_lane is Lane.RIGHT:
+        return not oncoming_leaves_time(a, speed_mps, left_s + RETURN_S)
+    lead = a.lead
+    blocked = (alongside(readings) or follower_blocks(a, speed_mps, left_s)
+               or (lead is not None and lead.too_near_after(lead.closing_mps(speed_mps), left_s)))
+    return blocked and oncoming_leaves_time(a, speed_mps, done_s + RETURN_S)
+
+
 def waiting_mps(a: Around, speed_mps: float, near: bool, beside: bool, blocks: bool) -> float | None:
     """The speed the fallback drives at while it waits in the right lane for room (None: the one it has), the lowest
     of the targets its neighbours set (``MinimalRisk``'s rules, from the fitted closing speeds; a vehicle ahead not

@@ -15,7 +15,7 @@ from spec.assumptions import PROFILES, SpeedBounds
 from spec.envelope import MINIMAL_RISK, TRACKING
 from spec.lanes import Lane
 from spec.motion import SpeedProfile
-from spec.physical import CAR
+from spec.physical import CAR, SENSORS
 from spec.safety import SAFETY
 
 
@@ -366,3 +366,51 @@ def test_the_fallback_returns_from_the_right_lane_once_the_left_lane_leaves_room
     assert not fallback.alongside((Reading(Lane.LEFT, 1, -MINIMAL_RISK.beside_m),))
     assert not fallback.alongside((Reading(Lane.LEFT, 1, 0.01),)) and not fallback.alongside(
         (Reading(Lane.RIGHT, 1, -1.0),))
+
+
+def oncoming_need_m(closing_mps: float, seconds: float) -> float:
+    """The least distance (centre to centre) at which an oncoming vehicle closing at ``closing_mps`` leaves the AV
+    ``seconds`` and one more sweep (``oncoming_leaves_time``)."""
+    return SAFETY.required_gap_m(closing_mps + TRACKING.speed_mps) + closing_mps * (seconds + 1 / SENSORS.sweep_hz) \
+        + TRACKING.position_m + CAR.length_m
+
+
+def test_a_move_out_is_cut_short_when_the_oncoming_lane_would_not_leave_time_for_its_rest_and_a_return() -> None:
+    done_s, left_s, closing = 0.4, 1.6, 14.0
+    need_m = oncoming_need_m(closing, left_s + fallback.RETURN_S)
+
+    def reverses(a: fallback.Around) -> bool:
+        return fallback.reverses(a, (), 7.0, Lane.RIGHT, done_s, left_s)
+
+    assert reverses(around(oncoming=Nearest(need_m - 1.0, closing)))
+    assert not reverses(around(oncoming=Nearest(need_m + 1.0, closing)))
+    assert not reverses(around())  # nothing oncoming within the sensor's range
+    # a vehicle ahead in the left lane, however near, keeps it from going back no more than the fallback from
+    # returning: the oncoming lane is the greater danger
+    assert reverses(around(lead=Nearest(CAR.length_m + 1.0, 5.0), oncoming=Nearest(need_m - 1.0, closing)))
+    # past the first quarter of the move it goes on
+    late_s = MINIMAL_RISK.reverse_within_s + 1 / 30
+    assert not fallback.reverses(around(oncoming=Nearest(need_m - 1.0, closing)), (), 7.0, Lane.RIGHT, late_s,
+                                 left_s)
+
+
+def test_a_return_is_cut_short_when_the_left_lane_would_break_the_spec_at_its_end_and_the_oncoming_lane_leaves_time(
+) -> None:
+    done_s, left_s, closing = 0.5, 1.5, 3.0
+    lead_need_m = SAFETY.required_gap_m(closing + TRACKING.speed_mps) + closing * left_s + TRACKING.position_m \
+        + CAR.length_m
+    near, far = Nearest(lead_need_m - 0.5, closing), Nearest(lead_need_m + 0.5, closing)
+
+    def reverses(a: fallback.Around, readings: tuple[Reading, ...] = ()) -> bool:
+        return fallback.reverses(a, readings, 7.0, Lane.LEFT, done_s, left_s)
+
+    assert reverses(around(lead=near)) and not reverses(around(lead=far))
+    assert not reverses(around())
+    assert reverses(around(), (Reading(Lane.LEFT, 1, -1.0),))  # a vehicle alongside
+    assert reverses(around(follower=Nearest(3.0 + CAR.length_m, 1.0, behind=True), react=False))  # one that blocks
+    # going back needs the oncoming lane to leave time to move back and return again
+    on_closing = 14.0
+    on_need_m = oncoming_need_m(on_closing, done_s + fallback.RETURN_S)
+    assert reverses(around(lead=near, oncoming=Nearest(on_need_m + 1.0, on_closing)))
+    assert not reverses(around(lead=near, oncoming=Nearest(on_need_m - 1.0, on_closing)))
+    assert not reverses(around(lead=near, swept=False))  # a dropped sweep shows nothing of it
