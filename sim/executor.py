@@ -70,8 +70,7 @@ class Executor:
         lateral_s = min(duration_s, LOOP.lane_change_lateral_s)
         for k in range(min(steps, round(skip_s / self.dt_s)), steps):
             phase = min(1.0, (k + 1) * self.dt_s / lateral_s)
-            y_ref = y_from + (y_to - y_from) * (1 - math.cos(math.pi * phase)) / 2
-            vy_ref = (y_to - y_from) * math.pi * math.sin(math.pi * phase) / (2 * lateral_s)
+            y_ref, vy_ref = _cosine_move(y_from, y_to, phase, lateral_s)
             self.lane_due = to_lane if phase >= 1 else None
             if not self.control(profile.at(k * self.dt_s), y_ref, vy_ref, tick):
                 return False
@@ -84,18 +83,15 @@ class Executor:
         self.lane = to_lane
         return True
 
-    def reverse_move(self, y_at: float, y_back: float, done_s: float, profile: SpeedProfile, k: int,
+    def reverse_move(self, y_at_m: float, y_back_m: float, done_s: float, profile: SpeedProfile, k: int,
                      tick: Callable[[float], bool]) -> bool:
-        """Take a sideways move back from the lateral reference ``y_at`` to the lane centre ``y_back`` it left, on a
-        cosine of the time the move had taken (``MinimalRisk``'s cut-short move), the speed reference going on along
-        the action's ``profile`` from its step ``k``; the AV stays in its lane. False on a collision."""
+        """Take a sideways move back from the lateral reference ``y_at_m`` to the lane centre ``y_back_m`` it left,
+        on a cosine of the time the move had taken (``MinimalRisk``'s cut-short move), the speed reference going on
+        along the action's ``profile`` from its step ``k``; the AV stays in its lane. False on a collision."""
         self.lane_due = None
         steps = max(1, round(done_s / self.dt_s))
-        back_s = steps * self.dt_s
         for j in range(steps):
-            phase = (j + 1) / steps
-            y_ref = y_at + (y_back - y_at) * (1 - math.cos(math.pi * phase)) / 2
-            vy_ref = (y_back - y_at) * math.pi * math.sin(math.pi * phase) / (2 * back_s)
+            y_ref, vy_ref = _cosine_move(y_at_m, y_back_m, (j + 1) / steps, steps * self.dt_s)
             if not self.control(profile.at((k + j) * self.dt_s), y_ref, vy_ref, tick):
                 return False
         self.lane_due = self.lane
@@ -129,3 +125,7 @@ class Executor:
         return Lane.LEFT if y_m >= 0 else Lane.RIGHT
 
 
+def _cosine_move(y_from_m: float, y_to_m: float, phase: float, seconds: float) -> tuple[float, float]:
+    """The lateral reference and its rate at ``phase`` (0 to 1) of a smooth cosine move over ``seconds``."""
+    return (y_from_m + (y_to_m - y_from_m) * (1 - math.cos(math.pi * phase)) / 2,
+            (y_to_m - y_from_m) * math.pi * math.sin(math.pi * phase) / (2 * seconds))

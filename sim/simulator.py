@@ -776,13 +776,15 @@ class Simulator:
                 self.doing = f"{action.value} ({what}, step {k + 1} of {steps})"
                 self.pending, self.pending_profiles = sequence[k + 1:], profiles[k + 1:]
                 since_s = self.summary.sim_time_s
+                reversed_before = self.summary.reversed_moves
                 ran = self.executor.run(action, self._tick, profiles[k], stop=lambda: self.interrupt and self.swept(),
                                         skip_s=skip_s if k == 0 else 0.0, reverse=self._reverses)
                 self._observe(self.summary.plans, k + 1, action, None, [], since_s)
                 if not ran:
                     return False
-                self.summary.actions += 1
-                self.boundary = (self.summary.sim_time_s, self.executor.x_ref_m)
+                if self.summary.reversed_moves == reversed_before:  # a move sent back is no action done
+                    self.summary.actions += 1
+                    self.boundary = (self.summary.sim_time_s, self.executor.x_ref_m)
                 if self.interrupt:
                     break
                 if self._sensed_anew():
@@ -796,14 +798,17 @@ class Simulator:
         return True
 
     def _reverses(self, to_lane: Lane, done_s: float, left_s: float) -> bool:
-        """Whether the sideways move under way goes back to the lane it left: only once a breach has ended the
-        decision, on a sweep, as ``fallback.reverses`` decides from it (``MinimalRisk``'s cut-short move); counted."""
+        """Whether the sideways move under way goes back to the lane it left: only once a breach (sensed, or of the
+        AV's own envelope) has ended the decision, on a sweep, as ``fallback.reverses`` decides from it
+        (``MinimalRisk``'s cut-short move); counted. Nothing of the decision's proof is kept after it: the proof
+        covers neither finishing the move nor undoing it, so the next decision has no plan to keep."""
         if self.sound is None or not (self.interrupt and self.swept()):
             return False
         if not fallback.reverses(self._around(), self.sweep or (), self.car.pose().along_mps, to_lane, done_s, left_s):
             return False
         self.summary.reversed_moves += 1
         self.doing = self.doing.replace(" (", " reversed (", 1)
+        self.pending, self.pending_profiles, self.proved, self.escape_pending = (), [], None, False
         return True
 
     def _fallback(self, cause: str) -> bool:

@@ -138,14 +138,15 @@ class MinimalRisk:
       farther than the specification allows at that closing speed, towards the middle of its slot.
     - It holds for ``takeover_s``, then hands back to a new decision (which may take over again).
 
-    One rule acts before a take-over, when a sensed breach ends a sound decision during a lane change's sideways move
-    (the proof covers neither finishing the move nor undoing it once its sets are broken): **the move is cut short**
-    and goes back to the lane it left, on a cosine of the time it had taken, when finishing it looks the worse of the
-    two as sensed, within ``reverse_within_s`` of its start. Out into the right lane: when the oncoming lane would
-    not leave time for the rest of the move and a return (the oncoming lane is the greater danger). Back into the
-    left lane: when that lane would break the specification at the move's end (a vehicle alongside, the vehicle
-    ahead too near, a follower that blocks) and the oncoming lane leaves time to move back and return again. Each one
-    is counted (``reversed_moves``).
+    One rule acts before a take-over, when a breach (sensed, or of the AV's own envelope) ends a sound decision
+    during a lane change's sideways move (the proof covers neither finishing the move nor undoing it once its sets
+    are broken): **the move is cut short** and goes back to the lane it left, on a cosine of the time it had taken,
+    when finishing it looks the worse of the two as sensed, within ``reverse_within_s`` of its start. Out into the
+    right lane: when the oncoming lane would not leave time for the rest of the move and a return (the oncoming lane
+    is the greater danger; a dropped sweep shows nothing of it). Back into the left lane: when that lane would break
+    the specification at the move's end (a vehicle alongside, the vehicle ahead too near, a follower that blocks)
+    and the oncoming lane leaves time to move back and return again. Nothing of the decision's proof is kept after
+    it. Each one is counted (``reversed_moves``).
     """
 
     decel_mps2: float = RAMP_SHARE * CAR.max_brake_mps2
@@ -158,8 +159,8 @@ class MinimalRisk:
     open_mps: float = TRACKING.speed_mps
     #: How long into a lane change's sideways move it may still be cut short: its first quarter, where the reference
     #: has moved 15% of a lane width. Measured (``tests/sim/test_physics.py``, 3.5-14 m/s): going back from there the
-    #: car's centre never leaves the lane it started in and is within 0.2 m of its centre 3 s later; from half-way,
-    #: at 3.5 m/s, the car runs on into the other lane before it turns back.
+    #: car is wholly in the lane it started in once the move back ends, and within 0.2 m of its centre 3 s later; from
+    #: half-way, at 3.5 m/s, the car runs on into the other lane before it turns back.
     reverse_within_s: float = LOOP.lane_change_lateral_s / 4
     #: Sweeps the closing speed on the vehicle ahead is fitted over (``closing_fit_sweeps``).
     fit_sweeps: int = closing_fit_sweeps()

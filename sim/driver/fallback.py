@@ -77,12 +77,15 @@ def oncoming_leaves_time(a: Around, speed_mps: float, change_s: float = RETURN_S
 
 def reverses(a: Around, readings: tuple[Reading, ...], speed_mps: float, to_lane: Lane, done_s: float,
              left_s: float) -> bool:
-    """Whether a sideways move under way when a breach is sensed goes back to the lane it left (``MinimalRisk``'s
-    cut-short move; ``done_s`` of it done, ``left_s`` left). Out into the right lane: when the oncoming lane would
-    not leave time for the rest of the move and a return (``oncoming_leaves_time``): the oncoming lane is the greater
-    danger. Back into the left lane: when that lane would break the specification at the move's end (a vehicle
-    alongside, the vehicle ahead too near at its closing speed, a follower that blocks) and the oncoming lane leaves
-    time to move back and return again. Past ``MinimalRisk.reverse_within_s`` the move goes on."""
+    """Whether a sideways move under way when a breach ends the decision goes back to the lane it left
+    (``MinimalRisk``'s cut-short move; ``done_s`` of it done, ``left_s`` left). Out into the right lane: when the
+    oncoming lane would not leave time for the rest of the move and a return (``oncoming_leaves_time``; a dropped
+    sweep shows nothing of it, so the move goes back): the oncoming lane is the greater danger. Back into the left lane:
+    when that lane would break the specification once the AV is wholly in it, at the move's end (a vehicle alongside,
+    the vehicle ahead too near at its closing speed, a follower that blocks), and the oncoming lane leaves time to
+    move back and return again; judged at the move's end, not at the action's as the fallback's return is, so that
+    only what finishing the move would break sends the AV back towards the oncoming lane. Past
+    ``MinimalRisk.reverse_within_s`` the move goes on."""
     if done_s > MINIMAL_RISK.reverse_within_s + 1e-9:
         return False
     if to_lane is Lane.RIGHT:

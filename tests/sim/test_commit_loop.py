@@ -170,3 +170,40 @@ def test_an_encounter_while_a_decision_plans_is_attributed_under_the_decision_th
     assert found == "after an assumption broke: appeared by 28.4 m, 1.5 s before"
     sim.doing = "drive (plan 8, step 1 of 2)"
     assert Simulator._attribution(sim, 12) == "inside the assumptions"  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(("sound", "interrupt", "swept", "oncoming_m", "sent_back"), [
+    (True, True, True, 20.0, True),  # a breach ended the decision, on a sweep, an oncoming vehicle 20 m ahead
+    (True, True, True, None, False),  # nothing oncoming: the move goes on
+    (True, False, True, 20.0, False),  # no breach: the proof covers the move
+    (True, True, False, 20.0, False),  # between sweeps: only a sweep's readings decide
+    (False, True, True, 20.0, False),  # the paper model
+])
+def test_a_move_sent_back_keeps_nothing_of_its_decisions_proof(sound: bool, interrupt: bool, swept: bool,
+                                                               oncoming_m: float | None, sent_back: bool) -> None:
+    """``Simulator._reverses``: once a breach has ended a sound decision, on a sweep, as ``fallback.reverses`` says;
+    then nothing of the decision's plan, proof or escape is left for the next decision to keep (the proof covers
+    neither finishing the move nor undoing it), and the move is counted."""
+    from types import SimpleNamespace
+
+    from sim.driver import fallback
+    from sim.driver.nearest import Nearest
+    from sim.simulator import Simulator
+    from spec.assumptions import PROFILES
+    from spec.lanes import Lane
+
+    oncoming = None if oncoming_m is None else Nearest(oncoming_m, 14.0)
+    rest = (Action.DRIVE, Action.LEFT_LANE_CHANGE)
+    sim = SimpleNamespace(sound=object() if sound else None, interrupt=interrupt, swept=lambda: swept,
+                          _around=lambda: fallback.Around(None, None, oncoming, True, PROFILES["paper"]),
+                          sweep=(), car=SimpleNamespace(pose=lambda: SimpleNamespace(along_mps=7.0)),
+                          summary=RunSummary(seed=1), doing="right_lane_change (plan 7, step 1 of 3)",
+                          pending=rest, pending_profiles=[SpeedProfile(7.0, ())] * 2, proved=object(),
+                          escape_pending=True)
+    assert Simulator._reverses(sim, Lane.RIGHT, 0.3, 1.7) is sent_back  # type: ignore[arg-type]
+    assert sim.summary.reversed_moves == int(sent_back)
+    if sent_back:
+        assert sim.pending == () and sim.pending_profiles == [] and sim.proved is None and not sim.escape_pending
+        assert sim.doing == "right_lane_change reversed (plan 7, step 1 of 3)"
+    else:
+        assert sim.pending == rest and sim.proved is not None and sim.escape_pending

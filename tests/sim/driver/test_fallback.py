@@ -388,10 +388,18 @@ def test_a_move_out_is_cut_short_when_the_oncoming_lane_would_not_leave_time_for
     # a vehicle ahead in the left lane, however near, keeps it from going back no more than the fallback from
     # returning: the oncoming lane is the greater danger
     assert reverses(around(lead=Nearest(CAR.length_m + 1.0, 5.0), oncoming=Nearest(need_m - 1.0, closing)))
-    # past the first quarter of the move it goes on
-    late_s = MINIMAL_RISK.reverse_within_s + 1 / 30
-    assert not fallback.reverses(around(oncoming=Nearest(need_m - 1.0, closing)), (), 7.0, Lane.RIGHT, late_s,
-                                 left_s)
+    assert reverses(around(swept=False))  # a dropped sweep shows nothing of the oncoming lane
+
+
+@pytest.mark.parametrize("to_lane", [Lane.RIGHT, Lane.LEFT])
+def test_a_move_is_cut_short_only_within_its_first_quarter(to_lane: Lane) -> None:
+    """Up to ``MinimalRisk.reverse_within_s`` into the move, and not one control step after."""
+    danger = (around(oncoming=Nearest(CAR.length_m + 1.0, 14.0)) if to_lane is Lane.RIGHT
+              else around(lead=Nearest(CAR.length_m + 1.0, 3.0)))
+    within_s = MINIMAL_RISK.reverse_within_s
+    lateral_s = TRACKING.lateral_s
+    assert fallback.reverses(danger, (), 7.0, to_lane, within_s, lateral_s - within_s)
+    assert not fallback.reverses(danger, (), 7.0, to_lane, within_s + DT_S, lateral_s - within_s - DT_S)
 
 
 def test_a_return_is_cut_short_when_the_left_lane_would_break_the_spec_at_its_end_and_the_oncoming_lane_leaves_time(
