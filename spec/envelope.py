@@ -124,7 +124,10 @@ class MinimalRisk:
     - **The wait ends** (``ends_wait``) when the sensed left lane leaves room, when the nearest oncoming vehicle
       sensed would be nearer than the specification allows after one more sweep and the lane change (before its
       speed is fitted: the AV's speed plus the bounds' fastest oncoming speed), after ``takeover_s`` when sweeps
-      are dropped, and after ``return_wait_s`` whatever it sees: the oncoming lane is the greater danger.
+      are dropped, and after ``return_wait_s`` whatever it sees: the oncoming lane is the greater danger. Beside a
+      left-lane vehicle (centres within ``beside_m``), the oncoming vehicle ends it only once it would come within
+      the least gap, no time gap (``apart_after``): moving over beside a vehicle makes a side collision certain, and
+      the wait drops back or passes meanwhile.
     - **The return** runs at the speed it starts at, unless it would end nearer the vehicle ahead than the
       specification allows (only a return the oncoming lane forces): then it brakes at ``emergency_decel_mps2`` to
       that vehicle's fitted speed (not fitted yet: the slowest the bounds let it be), from its start or once clear
@@ -258,6 +261,13 @@ class MinimalRisk:
         if measured_mps is None:
             return max(0.0, speed_mps)
         return min(max(0.0, measured_mps), max(0.0, speed_mps))
+
+    @staticmethod
+    def apart_after(gap_m: float, closing_mps: float, seconds: float, tracking: Tracking = TRACKING) -> bool:
+        """Whether a gap of ``gap_m`` (bumper to bumper), closing at ``closing_mps`` for ``seconds`` of the AV's
+        reference, is then still the specification's least gap (``SafetySpec.min_gap_m``), the car's envelope taken:
+        the weaker test of ``too_near_after``, without the time gap."""
+        return gap_m - closing_mps * seconds - tracking.position_m >= SAFETY.min_gap_m
 
     @staticmethod
     def too_near_after(gap_m: float, closing_mps: float, seconds: float, tracking: Tracking = TRACKING) -> bool:

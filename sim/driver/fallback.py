@@ -54,12 +54,13 @@ def follower_blocks(a: Around, speed_mps: float, change_s: float = RETURN_S) -> 
     return f.too_near_after(max(0.0, f_closing_mps), change_s)
 
 
-def oncoming_leaves_time(a: Around, speed_mps: float, change_s: float = RETURN_S) -> bool:
+def oncoming_leaves_time(a: Around, speed_mps: float, change_s: float = RETURN_S, gap_only: bool = False) -> bool:
     """Whether the fallback may wait one more sweep in the right lane: the nearest oncoming vehicle sensed would
     still be farther than the specification allows at its fitted closing speed after that sweep and a return of
     ``change_s`` (none sensed within the front-right sensor's range: yes, each sweep looks again; a dropped sweep:
     no; its speed not measured yet, for the sweeps a fit needs: ``speed_mps`` plus the fastest oncoming speed the
-    drive's bounds state; no bounds stated: no)."""
+    drive's bounds state; no bounds stated: no). ``gap_only``: farther than the least gap alone, no time gap
+    (``MinimalRisk.apart_after``), the wait beside a vehicle in the left lane (``alongside_now``)."""
     if not a.swept:
         return False
     o = a.oncoming
@@ -72,7 +73,16 @@ def oncoming_leaves_time(a: Around, speed_mps: float, change_s: float = RETURN_S
         closing = speed_mps + a.bounds.oncoming_mps.high_mps
     else:
         return False
-    return not o.too_near_after(closing, change_s + 1 / SENSORS.sweep_hz)
+    seconds = change_s + 1 / SENSORS.sweep_hz
+    if gap_only:
+        return MINIMAL_RISK.apart_after(o.gap_m, closing, seconds)
+    return not o.too_near_after(closing, seconds)
+
+
+def alongside_now(a: Around, beside: bool) -> bool:
+    """Whether a left-lane vehicle is beside the AV now: one alongside behind (``beside``, from ``alongside``) or the
+    vehicle ahead with its centre less than ``MinimalRisk.beside_m`` ahead of the AV's."""
+    return beside or (a.lead is not None and a.lead.dx_m < MINIMAL_RISK.beside_m)
 
 
 def reverses(a: Around, readings: tuple[Reading, ...], speed_mps: float, to_lane: Lane, done_s: float,
@@ -165,14 +175,16 @@ def wait_command(a: Around, speed_mps: float, beside: bool, command_mps: float, 
     """The fallback in the right lane, one control step: None when it returns now (nothing alongside, the vehicle
     ahead not nearer than the specification allows at the fitted closing speed once a return at the speed it starts
     at is over, no follower that ``follower_blocks``; or ``MinimalRisk.ends_wait`` after ``waited_s``, the oncoming
-    lane the greater danger); else its next speed command, towards ``waiting_mps`` (down at the car's braking limit,
-    up at ``accel_mps2``)."""
+    lane the greater danger, unless beside a left-lane vehicle: then only once the oncoming vehicle would come within
+    the least gap, ``alongside_now``); else its next speed command, towards ``waiting_mps`` (down at the car's
+    braking limit, up at ``accel_mps2``)."""
     closing = 0.0 if a.lead is None else a.lead.closing_mps(speed_mps)
     near = a.lead is not None and a.lead.too_near_after(closing, RETURN_S)
     blocks = follower_blocks(a, speed_mps)
     if not beside and not near and not blocks:
         return None
-    if MINIMAL_RISK.ends_wait(waited_s, a.swept, oncoming_leaves_time(a, speed_mps)):
+    leaves = oncoming_leaves_time(a, speed_mps, gap_only=alongside_now(a, beside))
+    if MINIMAL_RISK.ends_wait(waited_s, a.swept, leaves):
         return None
     target = waiting_mps(a, speed_mps, near, beside, blocks)
     return ramp_mps(command_mps, target, MINIMAL_RISK.emergency_decel_mps2, dt_s)

@@ -422,3 +422,33 @@ def test_a_return_is_cut_short_when_the_left_lane_would_break_the_spec_at_its_en
     assert reverses(around(lead=near, oncoming=Nearest(on_need_m + 1.0, on_closing)))
     assert not reverses(around(lead=near, oncoming=Nearest(on_need_m - 1.0, on_closing)))
     assert not reverses(around(lead=near, swept=False))  # a dropped sweep shows nothing of it
+
+
+@pytest.mark.parametrize(("lead", "follower", "beside", "speed_mps"), [
+    (Nearest(2.9, 7.57), None, False, 14.57),  # passing the vehicle ahead, centres 2.9 m apart
+    (Nearest(17.9, 2.52), Nearest(3.1, -2.52, behind=True), True, 9.52),  # one alongside behind, 3.1 m
+])
+def test_an_oncoming_vehicle_ends_the_wait_beside_a_left_lane_vehicle_only_once_it_would_come_within_the_least_gap(
+        lead: Nearest, follower: Nearest | None, beside: bool, speed_mps: float) -> None:
+    """Seeds 86 and 91 of the reliability campaign at 340c9b6 (faults and tracking, 2026-12-06): forced back by an
+    oncoming vehicle the specification's time gap no longer left room for, the fallback moved over beside a left-lane
+    vehicle (braking to the speed of the one ahead) and hit it. Beside one, the wait now ends only once the oncoming
+    vehicle would come within the least gap; with nothing beside, as before."""
+    closing = 21.6
+    seconds = fallback.RETURN_S + 1 / SENSORS.sweep_hz
+    spec_m = SAFETY.required_gap_m(closing + TRACKING.speed_mps) + closing * seconds + TRACKING.position_m \
+        + CAR.length_m
+    gap_m = SAFETY.min_gap_m + closing * seconds + TRACKING.position_m + CAR.length_m
+    assert gap_m < spec_m
+
+    def waits(oncoming_m: float, lead: Nearest | None = lead, follower: Nearest | None = follower,
+              beside: bool = beside) -> bool:
+        a = around(lead, follower, Nearest(oncoming_m, closing))
+        return fallback.wait_command(a, speed_mps, beside, speed_mps, 1.0, DT_S) is not None
+
+    between_m = (gap_m + spec_m) / 2
+    assert waits(between_m) and not waits(gap_m - 0.5)
+    assert waits(spec_m + 0.5)
+    # with nothing beside (the vehicle ahead too near to return behind, but not alongside) the time gap ends it
+    far_lead = Nearest(MINIMAL_RISK.beside_m + 0.5, 7.57)
+    assert not waits(between_m, far_lead, None, False) and waits(spec_m + 0.5, far_lead, None, False)
