@@ -69,7 +69,7 @@ class RunSummary:
     decisions: int = 0  # snapshots containment was measured from (every decision, both models)
     containment: ContainmentReport = field(default_factory=ContainmentReport)
     breach_replans: int = 0  # sound decisions ended by a breach
-    reversed_moves: int = 0  # sideways moves a sensed breach sent back (``MinimalRisk``'s cut-short move)
+    reversed_moves: int = 0  # sideways moves a breach sent back (``MinimalRisk``'s cut-short move)
     sensed_breaches: int = 0  # sound decisions whose readings the AV's own monitor could not explain
     unseen_breaches: int = 0  # sound decisions that went on past a vehicle's breach the AV never sensed
     keep_lane_steps: int = 0  # sound decisions without an overtake: one safe step in lane

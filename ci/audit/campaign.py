@@ -198,7 +198,7 @@ class Row:
     late_plans: int = 0
     blocked: int = 0  # episodes given up because the AV stood (``sim.simulator.BLOCKED_S``; a stop, never a failure)
     semantics: str = Semantics.WHOLE.value  # how the sound model decided (``spec.escapes.Semantics``)
-    reversed_moves: int = 0  # sideways moves a sensed breach sent back (``MinimalRisk``'s cut-short move)
+    reversed_moves: int = 0  # sideways moves a breach sent back (``MinimalRisk``'s cut-short move)
     unsafe_starts: int = 0  # sound decisions whose snapshot already broke the safety specification (no failure)
 
     def per_1000_km(self, count: float) -> float:

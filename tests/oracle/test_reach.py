@@ -26,6 +26,8 @@ from tests.conftest import CI_PROFILE
 drawn = st.tuples(st.booleans().flatmap(lambda commit: scenarios(PAPER_GRID, None, DRAWN, measured=True,
                                                                   profiles=True, commit=commit)),
                   st.lists(st.sampled_from(list(Action)), max_size=6).map(tuple))
+#: Every property over drawn cases: more of them in CI.
+DRAWN_SETTINGS = settings(max_examples=300 if CI_PROFILE else 60, deadline=None)
 
 
 def _followers(walk: reach._Walk, times: list[float]) -> list[set[int]]:
@@ -46,7 +48,7 @@ def _followers(walk: reach._Walk, times: list[float]) -> list[set[int]]:
     return out
 
 
-@settings(max_examples=300 if CI_PROFILE else 60, deadline=None)
+@DRAWN_SETTINGS
 @given(drawn)
 def test_the_sweep_takes_every_instants_followers_and_margins_as_the_walk_does(case: tuple[Scenario,
                                                                                         tuple[Action, ...]]) -> None:
@@ -60,7 +62,7 @@ def test_the_sweep_takes_every_instants_followers_and_margins_as_the_walk_does(c
         assert np.allclose(swept.margins[:, k], each, rtol=0.0, atol=1e-9), f"margins at t = {t}"
 
 
-@settings(max_examples=300 if CI_PROFILE else 60, deadline=None)
+@DRAWN_SETTINGS
 @given(drawn)
 def test_the_exact_check_answers_as_its_walk_over_every_instant_and_interval(case: tuple[Scenario,
                                                                                       tuple[Action, ...]]) -> None:
@@ -72,7 +74,7 @@ def test_the_exact_check_answers_as_its_walk_over_every_instant_and_interval(cas
     assert found is None or walked is None or found.describe() == walked.describe()
 
 
-@settings(max_examples=300 if CI_PROFILE else 60, deadline=None)
+@DRAWN_SETTINGS
 @given(drawn, st.none() | st.floats(0.0, 12.0))
 def test_the_reference_speed_is_monotone_between_two_samples(case: tuple[Scenario, tuple[Action, ...]],
                                                              start_mps: float | None) -> None:
@@ -89,7 +91,7 @@ def test_the_reference_speed_is_monotone_between_two_samples(case: tuple[Scenari
             assert min(v0, v1) - 1e-9 <= path.speed(t) <= max(v0, v1) + 1e-9, f"between {t0} and {t1}"
 
 
-@settings(max_examples=300 if CI_PROFILE else 60, deadline=None)
+@DRAWN_SETTINGS
 @given(drawn)
 def test_the_samples_cover_the_plan_and_its_continuation_at_most_dt_apart(case: tuple[Scenario,
                                                                                     tuple[Action, ...]]) -> None:
