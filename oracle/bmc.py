@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import time
 from collections import OrderedDict
-from collections.abc import Callable, Hashable, Iterator, Sequence
+from collections.abc import Callable, Hashable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TypeVar
@@ -346,6 +346,43 @@ def isolated() -> Iterator[None]:
         _isolated = before
 
 
+@dataclass(frozen=True, slots=True)
+class Expected:
+    """What another engine answered on one problem (a cross-check's reference): its shortest plan's length, the
+    least cost. Z3 guesses them first, as it guesses its last problem's answers: a guess orders the checks, never
+    decides the answer (each is proved the same way, and a wrong one costs a check)."""
+
+    length: int | None = None
+    cost: tuple[int, ...] | None = None
+
+
+_expected: dict[Problem, Expected] = {}
+
+
+@contextmanager
+def expecting(expected: Mapping[Problem, Expected]) -> Iterator[None]:
+    """Within this block Z3's ``shortest`` and ``optimal`` (paper model and sound model) start on ``expected``'s
+    answers for its problems instead of the last problem's."""
+    _expected.update(expected)
+    try:
+        yield
+    finally:
+        for problem in expected:
+            _expected.pop(problem, None)
+
+
+def expected_length(problem: Problem, last: int | None) -> int | None:
+    """The bound a warm start guesses first: the length expected on ``problem``, or the last problem's bound."""
+    found = _expected.get(problem)
+    return last if found is None or found.length is None else found.length
+
+
+def expected_cost(problem: Problem, last: tuple[int, ...] | None) -> tuple[int, ...] | None:
+    """The cost a warm start guesses first: the one expected on ``problem``, or the last problem's least cost."""
+    found = _expected.get(problem)
+    return last if found is None or found.cost is None else found.cost
+
+
 @contextmanager
 def _solver_for(kind: type[K], problem: Problem) -> Iterator[K]:
     """The kept solver of ``problem``'s shape (made if new). One that gave up, was interrupted or raised is
@@ -383,7 +420,8 @@ def shortest(problem: Problem, limits: Limits | None = None, firsts: Sequence[Ac
             kept.goal(1)
             fixed.append(kept.literal(_first_in(kept.enc.actions[0], firsts)))
             start = 1
-        guess = None if kept.last_bound is None or firsts is not None else min(kept.last_bound, horizon + 1)
+        last = expected_length(problem, kept.last_bound)
+        guess = None if last is None or firsts is not None else min(last, horizon + 1)
         if guess is not None and guess > 1:
             verdict = kept.check(limits, started, *fixed, kept.goal_before(guess))
             if verdict == z3.unknown:
@@ -467,7 +505,7 @@ def optimal(problem: Problem, limits: Limits | None = None, firsts: Sequence[Act
                 return SearchResult(Status.NO_PLAN_WITHIN_HORIZON, (), 0, "proved: no plan of at least one action "
                                     "within a horizon of 0")
             assumed.append(kept.literal(z3.And(kept.length >= 1, _first_in(kept.enc.actions[0], firsts))))
-        guess, model, checks = kept.last_cost, None, 0
+        guess, model, checks = expected_cost(problem, kept.last_cost), None, 0
         if guess is not None:
             verdict, checks = kept.check(limits, started, *assumed, *kept.costing(guess)), 1
             if verdict == z3.unknown:

@@ -910,6 +910,9 @@ def _shortest(problem: Problem, limits: Limits | None) -> SearchResult:
             return SearchResult(Status.NO_PLAN, (), m, f"proved: no plan of any length (no path of {m} action(s) "
                                 "avoids the goal before its end, and no bound below is satisfiable)")
 
+        expected = bmc.expected_length(problem, None)
+        if expected is not None:  # another engine's answer: a plan's bound, guessed as after a plan
+            kept.last_bound, kept.last_proved = expected, False
         guess = None if kept.last_bound is None else min(kept.last_bound, horizon + 1)
         if guess is not None and guess > 1:
             verdict = kept.check(limits, started, *fixed, *kept.steps(guess - 1), kept.goal_before(guess))
@@ -974,7 +977,7 @@ def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
     with _solver_for(Optimal, problem) as kept:
         solver, terms = kept.solver, kept.terms
         assumed = kept.fixing(scenario)
-        guess, model, checks = kept.last_cost, None, 0
+        guess, model, checks = bmc.expected_cost(problem, kept.last_cost), None, 0
         if guess is not None:  # the last problem's least cost (often this one's too)
             verdict, checks = kept.check(limits, started, *assumed, *kept.costing(guess)), 1
             if verdict == z3.unknown:

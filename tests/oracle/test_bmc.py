@@ -161,6 +161,20 @@ def test_answers_on_kept_solvers_equal_answers_on_fresh_ones(scenarios: list[Sce
                 assert validate(p, r.actions).states == r.states
 
 
+@given(scenarios(), MODELS, st.integers(0, 12), st.lists(st.integers(0, 6), min_size=len(COST_TERMS),
+                                                          max_size=len(COST_TERMS)))
+def test_an_expected_answer_orders_the_checks_never_decides_them(scenario: Scenario, model: ModelKind, length: int,
+                                                                  cost: list[int]) -> None:
+    """Whatever length and cost another engine is expected to have found (``bmc.expecting``), right or wrong, Z3
+    answers what it answers without them."""
+    problem = problem_for(scenario, model)
+    with bmc.isolated():
+        plain = [answer(solve(problem)) for solve in (bmc.shortest, bmc.optimal)]
+        with bmc.expecting({problem: bmc.Expected(length, tuple(cost))}):
+            guessed = [answer(solve(problem)) for solve in (bmc.shortest, bmc.optimal)]
+    assert guessed == plain
+
+
 def test_a_solver_that_gave_up_is_not_kept() -> None:
     problem = problem_for(next(b for b in BUILTINS if b.name == "paper_example").load(), ModelKind.FINAL)
     expected = answer(bmc.optimal(problem))

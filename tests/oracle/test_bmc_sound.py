@@ -22,7 +22,7 @@ import pytest
 
 from ci.conformance.hypo import VIEWS_M
 from oracle import bmc, bmc_sound, planner, sound, z3_engine
-from spec.answers import Limits, Status, Strategy
+from spec.answers import Limits, SearchResult, Status, Strategy
 from spec.assumptions import Bounds, SpeedBounds, profile
 from spec.cost import COST_TERMS, total_cost
 from spec.errors import EngineError
@@ -199,6 +199,43 @@ def test_answers_on_kept_solvers_equal_answers_on_fresh_ones() -> None:
             assert (k.status, len(k.actions), k.extra.get("cost")) == (f.status, len(f.actions), f.extra.get("cost"))
             if k.status is Status.PLAN:
                 assert sound.validate(p, k.actions).states == k.states, strategy
+
+
+def _answer(found: object) -> tuple[object, ...]:
+    assert isinstance(found, SearchResult)
+    return found.status, len(found.actions), found.extra.get("cost")
+
+
+def test_a_wrong_expectation_never_changes_the_answer() -> None:
+    """Z3 guesses an expected length and cost first (``bmc.expecting``, a cross-check's reference): each guess, right
+    or wrong, too short or too long, cheaper or dearer, gives the answer it gives without one; the right one asks
+    no more checks."""
+    sound_ = Sound(profile("default"))
+    scenarios = [replace(make_scenario(lane, left, right, targets, horizon=30), sound=sound_)
+                 for lane, left, right, targets in (("right", [13], [25], 1), ("right", [12, 16], [24], 2),
+                                                    ("left", [14], [20], 1), ("right", [], [], 0))]
+    for scenario in scenarios:
+        problem = problem_for(scenario, ModelKind.FINAL)
+        with bmc.isolated():
+            plain = {strategy: solve(problem, None) for strategy, solve in bmc_sound.SOLVERS.items()}
+        least = plain[Strategy.OPTIMAL].extra.get("cost")
+        cost = tuple(least.values()) if isinstance(least, dict) else (1, 2, 0, 6)
+        length = len(plain[Strategy.SHORTEST].actions)
+        guesses = [bmc.Expected(n, tuple(max(0, c + d) for c in cost))
+                   for n in (0, 1, length - 1, length, length + 1, 30) for d in (-1, 0, 1)]
+        guesses += [bmc.Expected(length, tuple(c + (i == j) for j, c in enumerate(cost))) for i in range(len(cost))]
+        for guess in guesses:
+            with bmc.isolated(), bmc.expecting({problem: guess}):
+                for strategy, solve in bmc_sound.SOLVERS.items():
+                    found = solve(problem, None)
+                    assert _answer(found) == _answer(plain[strategy]), (scenario, guess, strategy)
+                    if found.status is Status.PLAN:
+                        assert sound.validate(problem, found.actions).states == found.states, (scenario, guess)
+        if plain[Strategy.OPTIMAL].status is Status.PLAN:
+            with bmc.isolated(), bmc.expecting({problem: bmc.Expected(length, cost)}):
+                bmc_sound.shortest(problem, None)
+                right = bmc_sound.optimal(problem, None)
+            assert right.states_explored <= plain[Strategy.OPTIMAL].states_explored, scenario  # its checks
 
 
 #: Two scenarios whose answer the paper profile's followers (who keep their speed: ``Conflict.BEHIND``) change

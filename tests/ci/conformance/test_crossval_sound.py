@@ -24,9 +24,10 @@ from spec.engines import ENGINES, Engine, register
 from spec.errors import OptionError
 from spec.files import load_scenario
 from spec.grid import PAPER_GRID
+from spec.lanes import Lane
 from spec.library import builtin
 from spec.physical import LOOP
-from spec.scenario import Scenario, problem_for
+from spec.scenario import Scenario, make_scenario, problem_for
 from spec.sound import Sound
 from tests.conftest import run_cli
 
@@ -148,3 +149,33 @@ def test_a_commitment_campaigns_summary_names_the_semantics_it_held_the_engines_
     assert data is not None and data["campaign"]["semantics"] == "commit"
     header = (tmp_path / "summary.md").read_text().splitlines()[2]
     assert header.endswith("semantics commit.") and "'semantics'" not in header
+
+
+def test_z3_is_expected_to_find_the_interpreters_shortest_length_and_least_cost() -> None:
+    """A scenario's runs hand Z3 what is known before it runs (``Runs._expected``): a shortest plan's length, for
+    ``optimal`` the least cost the optimality property's own search finds; nothing under the commitment semantics,
+    nothing before a shortest plan is made. Z3's answers are the ones it gives on a solver of its own."""
+    from ci.conformance.properties import RunKey, Runs, optimum
+    from oracle import bmc
+    from spec.escapes import COMMIT
+
+    scenario = replace(make_scenario(Lane.RIGHT, [13], [25], 1), sound=Sound(profile("default")))
+    runs = Runs(scenario)
+    z3_shortest, z3_optimal = RunKey("z3", Strategy.SHORTEST), RunKey("z3", Strategy.OPTIMAL)
+    assert runs._expected(z3_optimal) == {}
+    reference = runs.get(RunKey("interpreter", Strategy.SHORTEST)).answer
+    assert reference is not None and reference.status is Status.PLAN and reference.model is not None
+    problem = problem_for(scenario, reference.model)
+    cost = optimum(problem).cost
+    assert cost is not None
+    assert runs._expected(z3_shortest) == {problem: bmc.Expected(len(reference.actions), None)}
+    assert runs._expected(z3_optimal) == {problem: bmc.Expected(len(reference.actions), tuple(cost))}
+    assert Runs(replace(scenario, sound=replace(scenario.sound, commitment=COMMIT)))._expected(z3_optimal) == {}
+    with bmc.isolated():
+        alone = {k: Runs(scenario).get(k).answer for k in (z3_shortest, z3_optimal)}
+        told = {k: runs.get(k).answer for k in (z3_shortest, z3_optimal)}
+    for key, answer in told.items():
+        other = alone[key]
+        assert answer is not None and other is not None
+        assert (answer.status, len(answer.actions), answer.extra.get("cost")) == \
+            (other.status, len(other.actions), other.extra.get("cost")), key
