@@ -8,7 +8,9 @@ acceleration and braking. Lateral: a reference that stays on the lane
 centre, or for a lane change moves one lane width (a smooth cosine profile) within the
 first ``LOOP.lane_change_lateral_s`` of the action's time, since the model puts the AV in its
 new lane before any oncoming vehicle moves; tracked by a PD law on the lateral position
-turned into a steering angle.
+turned into a steering angle, less the sideways part of the car's own speeding up or braking (a lane change
+from a slow queue ramps to its action's speed while the car is turned by 30 degrees and more: without it the
+car ran on past the new lane's centre to the road's edge).
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ class Executor:
         self.lane_due: Lane | None = lane  # the lane the car must be wholly in now (None: a sideways move under way)
         self.dt_s = scene.dt_s * LOOP.control_every_steps
         self.steer_offset_rad = 0.0  # a steering fault's offset on every command (``sim.faults.SteeringFault``)
+        self._speed_before_mps = car.pose().speed_mps
 
     def reset_reference(self, ahead_m: float = 0.0) -> None:
         """Start the position reference ``ahead_m`` in front of the car: where the new plan's frame puts it."""
@@ -112,7 +115,10 @@ class Executor:
         command = max(0.0, min(MAX_SPEED_FACTOR * self.grid.speed, command))
         v = max(pose.speed_mps, 1.0)
         vy = v * math.sin(pose.yaw_rad)
-        lateral_accel = K_Y * (y_ref - pose.y_m) + K_VY * (vy_ref - vy)
+        # a car turned sideways that speeds up moves sideways faster without turning: the turn asked for is the rest
+        speeding_up = (pose.speed_mps - self._speed_before_mps) / self.dt_s  # over the last control step
+        self._speed_before_mps = pose.speed_mps
+        lateral_accel = K_Y * (y_ref - pose.y_m) + K_VY * (vy_ref - vy) - speeding_up * math.sin(pose.yaw_rad)
         steer = math.atan(self.car.spec.wheelbase_m * lateral_accel / (v * v)) + self.steer_offset_rad
         for _ in range(LOOP.control_every_steps):
             self.car.command(command, steer, self.scene.dt_s)

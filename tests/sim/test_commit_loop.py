@@ -19,7 +19,7 @@ from spec.motion import SpeedProfile, action_speed_mps, plan_profiles
 
 #: The paper's world with noisy sensing, seed 4: within its first 3 km a committed part is followed by a decision
 #: that proves nothing, and the rest of the committed part and its escape are kept.
-SEED = 4
+SEED = 35
 KEPT = DriveConfig(3.0, model="sound", sensor="noisy", semantics=Semantics.COMMIT, restart_after_collision=True)
 
 
@@ -92,9 +92,10 @@ def test_a_kept_escape_runs_on_the_proved_reference_of_its_decision_not_one_rest
         j = len(seq) - len(pending)
         assert profiles == prof[j:]  # the tail of the decision's own reference
         # the first kept action ends where and when that reference ends it: on its place and clock, the control step
-        # the decision that kept it spent planning included (the executor's reference sums speeds step by step)
+        # the decision that kept it spent planning included (the executor's reference sums speeds control step by
+        # control step, from each step's start: a ramp of 7 m/s puts it 7 x dt / 2 = 0.12 m off the integral)
         duration_s = float(ACTION_RULES[seq[j]].duration_s)
-        assert x_ref_m == pytest.approx(x0_m + prof[j].distance_m(duration_s), abs=0.1)
+        assert x_ref_m == pytest.approx(x0_m + prof[j].distance_m(duration_s), abs=0.2)
         assert t_s == pytest.approx(t0_s + prof[j].offset_s + duration_s, abs=1e-6)
 
 
@@ -139,13 +140,13 @@ def test_the_loops_semantics_is_part_of_a_drives_configuration_and_bad_input_nam
 
 
 def test_a_start_that_breaks_the_specification_is_left_not_held() -> None:
-    """The paper's world, exact sensing, seed 7: a start that breaks the specification is rare (2 in 7 km) and
+    """The paper's world, exact sensing, seed 28: a start that breaks the specification is rare (2 in 7 km) and
     never held: the decision leaves it (``decide.choose``: where the last start broke it too and nothing of the last
     plan is left, the fallback opens the gap instead of the minimal-risk manoeuvre keeping it; tests/sim/driver), the
     AV overtakes on, and nothing is hit inside the assumptions."""
     from sim.simulator import run_drive
 
-    summary = run_drive(7, DriveConfig(7.0, model="sound"))
+    summary = run_drive(28, DriveConfig(7.0, model="sound"))
     assert 1 <= summary.unsafe_starts <= 3 and not summary.failures
     assert summary.takeovers and summary.overtakes > 20
     assert summary.safety.count("contact", True) == 0 and summary.safety.count("near_miss", True) == 0

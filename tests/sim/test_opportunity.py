@@ -166,8 +166,8 @@ def test_each_answer_that_starts_no_overtake_says_why(answer: Answer, refusal: R
 
 def test_a_collision_restarts_the_drive_when_asked_and_ends_it_otherwise() -> None:
     config = DriveConfig(1.8, traffic="following", cell_m=10.5)
-    ended = run_drive(1, config)
+    ended = run_drive(2, config)
     assert len(ended.collisions) == 1 and ended.km < 1.8 and ended.restarts == 0
-    going = run_drive(1, DriveConfig(1.8, traffic="following", cell_m=10.5, restart_after_collision=True))
+    going = run_drive(2, DriveConfig(1.8, traffic="following", cell_m=10.5, restart_after_collision=True))
     assert going.km >= 1.8 and going.restarts == len(going.collisions) >= 1
     assert going.collisions[0] == ended.collisions[0]  # the same drive up to its first collision

@@ -2,8 +2,9 @@
 
 The golden files were written by that code: ``run_drive(3, 2.0, out_dir=...)``'s summary (less its
 wall-clock fields) and its trace, and written again when the executor's speed command came to divide by the
-cosine of the car's heading (the same actions, plans and overtakes; the positions and deviations of the lane
-changes moved by centimetres). The default assembly must reproduce both exactly: the same
+cosine of the car's heading, and again when its steering came to take off the sideways part of the car's own
+speeding up (each time the same actions, plans and overtakes; the positions and deviations of the lane changes
+moved by centimetres). The default assembly must reproduce both exactly: the same
 kilometres, overtakes, plans, deviations and every traced number. Figures added to the summary since (safety,
 traffic collisions, restarts, opportunities, containment and the sound model's counts, its committed parts and
 escapes, the shadowed snapshots, sensed and unseen breaches and moves sent back among them, the sensors' sweeps
