@@ -910,17 +910,16 @@ def _shortest(problem: Problem, limits: Limits | None) -> SearchResult:
             return SearchResult(Status.NO_PLAN, (), m, f"proved: no plan of any length (no path of {m} action(s) "
                                 "avoids the goal before its end, and no bound below is satisfiable)")
 
-        expected = bmc.expected_length(problem, None)
-        if expected is not None:  # another engine's answer: a plan's bound, guessed as after a plan
-            kept.last_bound, kept.last_proved = expected, False
-        guess = None if kept.last_bound is None else min(kept.last_bound, horizon + 1)
+        expected = bmc.expected_length(problem, None)  # another engine's: a plan's bound, guessed as after a plan
+        last, after_no_plan = (kept.last_bound, kept.last_proved) if expected is None else (expected, False)
+        guess = None if last is None else min(last, horizon + 1)
         if guess is not None and guess > 1:
             verdict = kept.check(limits, started, *fixed, *kept.steps(guess - 1), kept.goal_before(guess))
             if verdict == z3.unknown:
                 return SearchResult(Status.INCOMPLETE, (), 0, f"z3: {kept.solver.reason_unknown()} below bound {guess}")
             if verdict == z3.unsat:
                 start, not_before = guess, [z3.Not(kept.goal(k)) for k in range(guess)]
-                proved = no_path(guess) if kept.last_proved else None  # after a plan, its bound comes first
+                proved = no_path(guess) if after_no_plan else None  # after a plan, its bound comes first
                 if proved is not None:
                     return proved
         for k in range(start, horizon + 1):
