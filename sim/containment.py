@@ -15,7 +15,8 @@ at its closing speed breaks that assumption; where they keep their speed, the mo
 (``Conflict.BEHIND``) and they are held to their intervals like any other vehicle. The AV must be inside its envelope
 (``spec.envelope.TRACKING``) around the executor's reference, its sideways move finished in the stated time. A
 departure is a ``Breach``, recorded once per decision and vehicle with the bound it broke and by how much; an AV
-envelope breach is an executor fault, which counts as inside the assumptions.
+envelope breach is an executor fault, which counts as inside the assumptions (an injected steering fault under way
+does not: the simulator's attribution).
 
 That check reads the truth: it is the simulator's bookkeeping (what broke, when, and whose a collision is), and it
 never steers the AV. The AV's own monitor (``Containment.sense``) sees what its planner sees, each sweep's readings

@@ -297,7 +297,15 @@ class Simulator:
     def _attribution(self, body: int) -> str | None:
         """Whether an encounter with ``body`` happened inside the assumptions (no breach by it under the decision
         under way, or while a decision plans under the one before it; the AV's own envelope breach counts as inside)
-        or after one broke; None without bounds."""
+        or after one broke (by it, or an injected steering fault under way); None without bounds.
+
+        The envelope is what the proofs assume of the AV's own motion. Its executor leaving it is the AV's own error,
+        part of what the proofs speak for, so an encounter then counts as inside; an injected steering fault is the
+        world's, as a sensing fault is, and an encounter while one turns the AV's steering is after it broke."""
+        steering = self.steering.active
+        if steering is not None and self.watch is not None:
+            return (f"after an assumption broke: steering fault ({math.degrees(steering.offset_rad):+.0f} degrees) "
+                    f"under way")
         if self.takeover is not None:
             return (f"{'after an assumption broke' if self.takeover.after_breach else 'inside the assumptions'}: "
                     f"fallback since {self.takeover.t_s:.1f} s ({self.takeover.cause})")

@@ -167,7 +167,8 @@ def test_an_encounter_while_a_decision_plans_is_attributed_under_the_decision_th
 
     appeared = Breach(7, 9.3, 1161.0, "unknown right-lane vehicle", 12, BreachKind.APPEARED, 28.4, "right_lane_change")
     executing, planning = SimpleNamespace(breached={12: appeared}), SimpleNamespace(breached={})
-    sim = SimpleNamespace(takeover=None, containment=planning, previous=executing, watch=object(),
+    sim = SimpleNamespace(steering=SimpleNamespace(active=None), takeover=None, containment=planning,
+                          previous=executing, watch=object(),
                           doing="planning (right_lane_change (plan 7, step 1 of 1))",
                           summary=SimpleNamespace(sim_time_s=1162.5), _hidden=lambda c, body: None)
     found = Simulator._attribution(sim, 12)  # type: ignore[arg-type]

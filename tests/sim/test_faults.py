@@ -268,6 +268,35 @@ def test_a_steering_fault_that_spins_the_car_is_a_loss_of_control() -> None:
     assert "steering offset" in summary.failure.detail and summary.failure.fault == "steering"
 
 
+def test_an_encounter_under_an_injected_steering_fault_is_after_an_assumption_broke() -> None:
+    """The envelope is what the proofs assume of the AV's own motion: an injected steering fault under way breaks it
+    (the world's fault, as a sensing fault is), whatever the vehicle or the fallback did; once it has ended, the
+    rules before judge again (the executor's own envelope error counts as inside)."""
+    from types import SimpleNamespace
+
+    from sim.faults import FaultEvent
+    from sim.simulator import Simulator
+
+    fault = FaultEvent(FaultKind.STEERING, 40, (), 70, offset_rad=-math.radians(60))
+    steering = SimpleNamespace(active=fault)
+    sim = SimpleNamespace(steering=steering, takeover=None, containment=SimpleNamespace(breached={}), previous=None,
+                          watch=object(), doing="drive (plan 8, step 1 of 2)", summary=SimpleNamespace(sim_time_s=9.0),
+                          _hidden=lambda c, body: None)
+
+    def judged() -> str | None:
+        return Simulator._attribution(sim, 12)  # type: ignore[arg-type]
+
+    assert judged() == "after an assumption broke: steering fault (-60 degrees) under way"
+    sim.takeover = SimpleNamespace(after_breach=False, t_s=8.0, cause="no plan")
+    assert judged() == "after an assumption broke: steering fault (-60 degrees) under way"
+    steering.active = None
+    assert judged() == "inside the assumptions: fallback since 8.0 s (no plan)"
+    sim.takeover = None
+    assert judged() == "inside the assumptions"
+    sim.watch, sim.containment, steering.active = None, None, fault  # without bounds nothing is attributed
+    assert judged() is None
+
+
 def test_a_failure_is_attributed_by_the_stated_rule() -> None:
     from sim.faults import FaultEvent, attribute
 
