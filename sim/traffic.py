@@ -1,9 +1,10 @@
 """Traffic models, one part of a simulator (``sim.parts``): the simulator only calls ``TrafficModel``'s methods.
 
 ``PaperTraffic`` is the paper's: constant vehicle counts, left-lane vehicles respawned 1-4
-cells (equal odds) ahead of the front-most one, never more than three consecutive without an
-empty cell; oncoming vehicles 8/12/16/20 cells (odds 1/8, 1/4, 1/4, 3/8) beyond the last one;
-removed 5 cells behind the AV; all at the common speed, whole cells (of the paper's grid)
+cells (equal odds) ahead of the front-most one (of the end of the AV's left sensor's range when
+no vehicle is wholly ahead of the AV), never more than three consecutive without an empty cell;
+oncoming vehicles 8/12/16/20 cells (odds 1/8, 1/4, 1/4, 3/8) beyond the last one; removed 5
+cells behind the AV; all at the common speed, whole cells (of the paper's grid)
 apart, as the paper's scene spawns them: a world built to agree with the grid.
 
 Two models that do not keep to it (``spec.physical``: ``SpeedSpec``, ``IdmSpec``,
@@ -31,7 +32,7 @@ from sim.idm import idm_accel_mps2
 from sim.scene import Scene
 from sim.vehicle import KinematicCar, Pose
 from spec.lanes import Lane
-from spec.physical import CAR, EVENTS, IDM, SPEEDS, TRAFFIC, EventSpec, IdmSpec, SpeedSpec, TrafficSpec
+from spec.physical import CAR, EVENTS, IDM, SENSORS, SPEEDS, TRAFFIC, EventSpec, IdmSpec, SpeedSpec, TrafficSpec
 
 
 def left_gap_cells(rng: np.random.Generator, run: int, spec: TrafficSpec = TRAFFIC) -> int:
@@ -101,12 +102,17 @@ class PaperTraffic:
             car.advance(dt_s)
 
     def respawn_behind(self, av_x_m: float) -> int:
-        """Move every vehicle more than ``remove_behind_cells`` behind the AV to its respawn place; count them."""
+        """Move every vehicle more than ``remove_behind_cells`` behind the AV to its respawn place; count them. A
+        left-lane vehicle is placed a paper gap ahead of the front-most one, or, when none is wholly ahead of the AV,
+        of the end of the AV's left sensor's range: the lane the AV sees ahead is empty, and a vehicle enters it from
+        the road beyond (placed from a front-most one beside or behind the AV, it would appear beside or inside it)."""
         limit = av_x_m - self.spec.remove_behind_cells * self.spec.cell_m
         moved = 0
         for car in self.left:
             if car.x_m < limit:
                 front = max(c.x_m for c in self.left)
+                if front - av_x_m < CAR.length_m:  # no vehicle wholly ahead of the AV: the lane it sees ahead is empty
+                    front = av_x_m + SENSORS.left_range_m
                 gap = left_gap_cells(self.rng, self.run, self.spec)
                 self.run = self.run + 1 if gap == 1 else 1
                 car.place(front + self._spacing_m(gap))
