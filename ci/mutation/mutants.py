@@ -167,6 +167,10 @@ MUTANTS: tuple[Mutant, ...] = (
            "(Fraction(1, 4), Fraction(1, 8), Fraction(1, 4), Fraction(3, 8))",
            "the paper's oncoming odds stated wrongly in spec/ (the sampler and the old tests read the same numbers)",
            ("tests/sim/test_spawn_odds.py",)),
+    Mutant("traffic-respawn-ahead-of-a-vehicle-beside-the-av", "sim/traffic.py",
+           "if front - av_x_m < CAR.length_m:", "if front < av_x_m:",
+           "a left-lane vehicle respawned a gap ahead of a front-most one beside the AV (not wholly ahead of it), "
+           "where it can appear beside or inside the AV", ("tests/sim/test_models_by_hand.py",)),
     Mutant("traffic-initial-run-one-short", "sim/traffic.py",
            "            self.run = self.run + 1 if gap == 1 else 1  # the vehicle just placed",
            "            self.run = self.run + 1 if gap == 1 else 0  # the vehicle just placed",
