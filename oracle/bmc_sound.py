@@ -817,16 +817,6 @@ class Optimal(Kept, bmc.Optimal):
         self.add(*constraints)
         self.last_cost: tuple[int, ...] | None = None
 
-    def cheaper(self, cost: tuple[int, ...], floors: dict[str, int]) -> z3.BoolRef:
-        """A literal that implies a plan lexicographically cheaper than ``cost`` (COST_TERMS order); a term at its
-        proved ``floors`` cannot be lower."""
-        ways, same = [], list[z3.BoolRef]()
-        for name, value in zip(COST_TERMS, cost, strict=True):
-            if value > floors.get(name, 0):
-                ways.append(z3.And(*same, self.below(name, value)))
-            same.append(self.equal(name, value))
-        return self.literal(z3.Or(*ways))
-
 
 def bounded(unrolling: Unrolling) -> tuple[z3.ArithRef, list[z3.BoolRef], dict[str, z3.ArithRef],
                                          dict[str, list[z3.BoolRef]]]:
@@ -1004,14 +994,6 @@ def optimal(problem: Problem, limits: Limits | None = None) -> SearchResult:
                                   "bounded unrolling (the two unrollings of the sound model disagree)")
             model = kept.checked_model()
         floors = {"length": len(least.actions)}  # no plan is shorter than the shortest: proved, not asked again
-        if guess is not None and model is not None:  # the guess holds: one proof that no plan is cheaper
-            verdict, checks = kept.check(limits, started, *assumed, kept.cheaper(guess, floors)), checks + 1
-            if verdict == z3.unknown:
-                return bmc._gave_up(solver, checks)
-            if verdict == z3.unsat:
-                floors.update(zip(COST_TERMS, guess))
-            else:
-                model = kept.checked_model()
         for index, name in enumerate(COST_TERMS):
             floor, best = floors.get(name, 0), _value(model, terms[name])
             tries = [] if guess is None else [guess[index], guess[index] - 1]

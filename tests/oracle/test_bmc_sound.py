@@ -19,7 +19,6 @@ import time
 from dataclasses import replace
 
 import pytest
-import z3
 
 from ci.conformance.hypo import VIEWS_M
 from oracle import bmc, bmc_sound, planner, sound, z3_engine
@@ -237,26 +236,6 @@ def test_a_wrong_expectation_never_changes_the_answer() -> None:
                 bmc_sound.shortest(problem, None)
                 right = bmc_sound.optimal(problem, None)
             assert right.states_explored <= plain[Strategy.OPTIMAL].states_explored, scenario  # its checks
-
-
-def test_a_plan_is_cheaper_than_every_cost_above_the_least_and_none_is_cheaper_than_the_least() -> None:
-    """``optimal`` proves a guessed cost least by one check (``Optimal.cheaper``): no plan lexicographically cheaper.
-    Above the least cost by one in any term, the least plan itself is cheaper; below it, none is."""
-    sound_ = Sound(profile("paper"))  # least costs (1, 0, 0, 1), (1, 4, 0, 5), (2, 4, 0, 5)
-    for lane, left, right, targets in (("right", [], [], 0), ("right", [12], [], 1), ("left", [12], [], 1)):
-        problem = problem_for(replace(make_scenario(lane, left, right, targets, horizon=30), sound=sound_),
-                              ModelKind.FINAL)
-        with bmc.isolated():
-            least = bmc_sound.optimal(problem, None)
-            assert least.status is Status.PLAN, (lane, left, right)
-            cost = tuple(least.extra["cost"].values())
-            kept = bmc_sound.Optimal(problem)
-            fixed = kept.fixing(problem.scenario)
-            floors = {"length": len(least.actions)}
-            assert kept.solver.check(*fixed, kept.cheaper(cost, floors)) == z3.unsat, (lane, left, right)
-            for term in range(len(cost)):
-                above = tuple(c + (i == term) for i, c in enumerate(cost))
-                assert kept.solver.check(*fixed, kept.cheaper(above, floors)) == z3.sat, (lane, left, right, term)
 
 
 #: Two scenarios whose answer the paper profile's followers (who keep their speed: ``Conflict.BEHIND``) change
