@@ -208,11 +208,13 @@ class Containment:
         same-direction vehicle that has not sped up since the window began (``passing``)."""
         return held_vehicle(v, self.windows_s, elapsed_s)
 
-    def _sets(self, lane: Lane, car: KinematicCar) -> tuple[str, Vehicle | None, list[Vehicle]]:
-        """The vehicle the decision knew ``car`` as (None: unknown), and the intervals it must be inside."""
-        known = self.tracked.get(car.body) if car.respawns == self.generation.get(car.body) else None
-        return (known.name if known else f"unknown {lane.value}-lane vehicle"), known, \
-            [known] if known else self.phantoms[lane]
+    def _known(self, car: KinematicCar) -> Vehicle | None:
+        """The vehicle the decision knew ``car`` as (None: unknown)."""
+        return self.tracked.get(car.body) if car.respawns == self.generation.get(car.body) else None
+
+    @staticmethod
+    def _name(lane: Lane, known: Vehicle | None) -> str:
+        return known.name if known else f"unknown {lane.value}-lane vehicle"
 
     def check(self, t_s: float, km: float, av: Pose, left: Iterable[KinematicCar], oncoming: Iterable[KinematicCar],
               doing: str, sensed: Callable[[KinematicCar], bool]) -> list[Breach]:
@@ -231,6 +233,7 @@ class Containment:
                                                f"{r.lane.value} lane, {r.dx_m:+.1f} m)", r.body, BreachKind.SENSING,
                                                miss, doing)))
         av_in_left = av.y_m >= 0
+        reach: dict[int, tuple[float, float]] = {}  # each interval's reach at ``elapsed``, once per check
         for lane, cars in ((Lane.LEFT, left), (Lane.RIGHT, oncoming)):
             for car in cars:
                 if car.body in self.breached:
@@ -243,10 +246,11 @@ class Containment:
                                                        BreachKind.FOLLOWER,
                                                        SAFETY.required_gap_m(closing_mps) - gap_m, doing)))
                         continue
-                name, known, miss = self._miss(lane, car, av, elapsed)
+                known = self._known(car)
+                miss = self._miss(lane, car, known, av, elapsed, reach)
                 if miss == 0.0:
-                    if known is not None and (speeding := self._speed(lane, car, known, elapsed, name, t_s, km,
-                                                                      doing)):
+                    if known is not None and (speeding := self._speed(lane, car, known, elapsed, known.name, t_s,
+                                                                      km, doing)):
                         out.append(speeding)
                     continue
                 if known is None and not sensed(car):
@@ -258,19 +262,26 @@ class Containment:
                 else:  # behind the interval's slow end: too slow in the left lane, too fast in the oncoming one
                     slow = (miss < 0) == (lane is Lane.LEFT)
                     kind = BreachKind.TOO_SLOW if slow else self._fast_kind(known, elapsed, car.x_m - self.x0_m)
-                out.append(self._breach(Breach(self.decision, km, t_s, name, car.body, kind, abs(miss), doing)))
+                out.append(self._breach(Breach(self.decision, km, t_s, self._name(lane, known), car.body, kind,
+                                               abs(miss), doing)))
         return out
 
-    def _miss(self, lane: Lane, car: KinematicCar, av: Pose, elapsed_s: float) -> tuple[str, Vehicle | None, float]:
-        """The vehicle the decision knew ``car`` as (None: unknown), and how far ``car`` is outside every interval it
-        must be inside ``elapsed_s`` after the snapshot (0: inside one, or an oncoming vehicle the AV has passed, of
-        which no condition speaks)."""
-        name, known, sets = self._sets(lane, car)
+    def _miss(self, lane: Lane, car: KinematicCar, known: Vehicle | None, av: Pose, elapsed_s: float,
+              reach: dict[int, tuple[float, float]]) -> float:
+        """How far ``car``, known to the decision as ``known`` (None: unknown, any of its lane's phantoms), is outside
+        every interval it must be inside ``elapsed_s`` after the snapshot (0: inside one, or an oncoming vehicle the AV
+        has passed, of which no condition speaks). ``reach`` holds the intervals' reaches at ``elapsed_s`` already
+        computed (by ``id``: the decision's vehicles live as long as it does)."""
         if known is None and lane is Lane.RIGHT and car.x_m < av.x_m - CAR.length_m:
-            return name, known, 0.0
+            return 0.0
         dx = car.x_m - self.x0_m
-        misses = [_outside(dx, *reach_m(self.assumed(v, elapsed_s), self.bounds, elapsed_s)) for v in sets]
-        return name, known, min(misses, key=abs, default=0.0)
+        misses = []
+        for v in [known] if known else self.phantoms[lane]:
+            ends = reach.get(id(v))
+            if ends is None:
+                ends = reach[id(v)] = reach_m(self.assumed(v, elapsed_s), self.bounds, elapsed_s)
+            misses.append(_outside(dx, *ends))
+        return min(misses, key=abs, default=0.0)
 
     def _fast_kind(self, known: Vehicle, elapsed_s: float, dx_m: float) -> BreachKind:
         """A known vehicle beyond its interval's fast end: ``accelerated while overtaken`` where only the held
@@ -284,11 +295,13 @@ class Containment:
         for the attribution of an encounter only, never recorded (``check`` counts an unknown vehicle once sensed: one
         hidden behind another is no vehicle a decision could have known). A vehicle the sensing assumption says the
         AV would have sensed broke it all the same, and one touching the AV is one no ray reaches."""
-        name, known, miss = self._miss(lane, car, av, t_s - self.t0_s)
-        if known is not None or miss == 0.0:
+        if self._known(car) is not None:
             return None
-        return Breach(self.decision, km, t_s, f"{name} the sensors did not show", car.body, BreachKind.APPEARED,
-                      abs(miss), doing)
+        miss = self._miss(lane, car, None, av, t_s - self.t0_s, {})
+        if miss == 0.0:
+            return None
+        return Breach(self.decision, km, t_s, f"{self._name(lane, None)} the sensors did not show", car.body,
+                      BreachKind.APPEARED, abs(miss), doing)
 
     def _speed(self, lane: Lane, car: KinematicCar, known: Vehicle, elapsed_s: float, name: str, t_s: float,
                km: float, doing: str) -> Breach | None:
