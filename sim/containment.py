@@ -249,8 +249,7 @@ class Containment:
                 known = self._known(car)
                 miss = self._miss(lane, car, known, av, elapsed, reach)
                 if miss == 0.0:
-                    if known is not None and (speeding := self._speed(lane, car, known, elapsed, known.name, t_s,
-                                                                      km, doing)):
+                    if known is not None and (speeding := self._speed(lane, car, known, elapsed, t_s, km, doing)):
                         out.append(speeding)
                     continue
                 if known is None and not sensed(car):
@@ -303,8 +302,8 @@ class Containment:
         return Breach(self.decision, km, t_s, f"{self._name(lane, None)} the sensors did not show", car.body,
                       BreachKind.APPEARED, abs(miss), doing)
 
-    def _speed(self, lane: Lane, car: KinematicCar, known: Vehicle, elapsed_s: float, name: str, t_s: float,
-               km: float, doing: str) -> Breach | None:
+    def _speed(self, lane: Lane, car: KinematicCar, known: Vehicle, elapsed_s: float, t_s: float, km: float,
+               doing: str) -> Breach | None:
         """``car``'s breach of its speed bounds, if it drives outside them (its true speed along the lane): its lane's,
         or, for a vehicle whose speed was measured, what its own dynamics allow ``elapsed_s`` after the snapshot."""
         bounds = self.bounds.speeds(lane)
@@ -324,7 +323,7 @@ class Containment:
             physical = known.dynamics.speeds_mps(elapsed_s)[1] if known.dynamics is not None else high
             kind = BreachKind.ACCELERATED if assumed is not known and along_mps <= physical + ROUNDING_MPS else \
                 BreachKind.TOO_FAST
-        return self._breach(Breach(self.decision, km, t_s, name, car.body, kind, abs(miss), doing, speed=True))
+        return self._breach(Breach(self.decision, km, t_s, known.name, car.body, kind, abs(miss), doing, speed=True))
 
     def check_av(self, t_s: float, km: float, av: Pose, x_ref_m: float, v_ref_mps: float, lane_due: Lane | None,
                  doing: str) -> Breach | None:
