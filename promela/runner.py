@@ -91,7 +91,15 @@ class Verifier:
 
 
 def check_tools() -> None:
-    """Raise ToolMissing, with the install command, when spin or gcc is not on PATH."""
+    """Raise ToolMissing, with the install command, when spin or gcc is not on PATH (looked up once per PATH: every
+    search asks, and a lookup walks the whole PATH)."""
+    tools_on(os.environ.get("PATH"))
+
+
+@lru_cache(maxsize=8)
+def tools_on(path: str | None) -> None:
+    """``check_tools`` on the PATH ``path``; only a lookup that found both is remembered (a test that changes how tools
+    are looked up clears it: ``tools_on.cache_clear()``)."""
     for tool in ("spin", "gcc"):
         if shutil.which(tool) is None:
             raise ToolMissing(f"{tool} not found on PATH: install it with `{INSTALL_HINT[tool]}` "
@@ -123,19 +131,14 @@ def verifier(shape: Shape | sound_model.SoundShape, strategy: Strategy) -> Verif
     module's source; for the sound model also its shape in full (``SoundShape.key_text``: rules, goal, grid, the
     phantoms' lanes, the followers' words). The sound model's numbers are not compiled in: each search names its
     table (``table_file``)."""
-    source = sound_model.render(shape) if isinstance(shape, sound_model.SoundShape) else render(shape)
-    flags = _flags(strategy)
-    key_text = [source, f"cell_m={shape.grid.cell_m}", " ".join(flags), tool_versions(), _server_source(),
-                _own_source()]
-    if isinstance(shape, sound_model.SoundShape):
-        key_text.append(shape.key_text())
-    key = hashlib.sha256("\n".join(key_text).encode()).hexdigest()[:24]
-    target = cache_dir() / f"pan-{shape.name}-{strategy.value}-{key}"
+    target = cache_dir() / _cached_name(shape, strategy, tool_versions())
     if _healthy(target):
         return Verifier(target / "pan", True)
     if target.exists():
         discard(target)  # damaged (truncated, altered, not executable, no checksum): built again below
     target.parent.mkdir(parents=True, exist_ok=True)
+    source = sound_model.render(shape) if isinstance(shape, sound_model.SoundShape) else render(shape)
+    flags = _flags(strategy)
     with tempfile.TemporaryDirectory(dir=target.parent, prefix=".build-") as build:
         _compile(Path(build), source, flags, serve=True)
         (Path(build) / CHECKSUM_FILE).write_text(_sha256(Path(build) / "pan"))
@@ -146,6 +149,20 @@ def verifier(shape: Shape | sound_model.SoundShape, strategy: Strategy) -> Verif
             if not (target / "pan").exists():
                 raise
     return Verifier(target / "pan", False)
+
+
+@lru_cache(maxsize=256)
+def _cached_name(shape: Shape | sound_model.SoundShape, strategy: Strategy, versions: str) -> str:
+    """The cache folder's name of ``shape``'s verifier for ``strategy`` under the tools ``versions`` (``verifier``'s
+    key), made once per process: hashing the rendered model on every search cost more than a served search's own
+    start."""
+    source = sound_model.render(shape) if isinstance(shape, sound_model.SoundShape) else render(shape)
+    key_text = [source, f"cell_m={shape.grid.cell_m}", " ".join(_flags(strategy)), versions, _server_source(),
+                _own_source()]
+    if isinstance(shape, sound_model.SoundShape):
+        key_text.append(shape.key_text())
+    key = hashlib.sha256("\n".join(key_text).encode()).hexdigest()[:24]
+    return f"pan-{shape.name}-{strategy.value}-{key}"
 
 
 _VERIFIED: dict[Path, tuple[int, int]] = {}  # pan -> (size, mtime) when its checksum last matched

@@ -119,8 +119,12 @@ def test_failing_spin_is_an_engine_error(tmp_path: Path, monkeypatch: pytest.Mon
 def test_missing_gcc_is_tool_missing_with_the_install_hint(monkeypatch: pytest.MonkeyPatch) -> None:
     real = runner.shutil.which
     monkeypatch.setattr(runner.shutil, "which", lambda tool: None if tool == "gcc" else real(tool))
-    with pytest.raises(ToolMissing, match=r"gcc not found.*apt-get install gcc"):
-        runner.search(problem_for(make_scenario("left", [12], [], 1), ModelKind.FINAL), Strategy.SENSIBLE)
+    runner.tools_on.cache_clear()  # the tools this process found on its PATH before the lookup was changed
+    try:
+        with pytest.raises(ToolMissing, match=r"gcc not found.*apt-get install gcc"):
+            runner.search(problem_for(make_scenario("left", [12], [], 1), ModelKind.FINAL), Strategy.SENSIBLE)
+    finally:
+        runner.tools_on.cache_clear()
 
 
 def test_missing_spin_through_the_cli_is_one_line_exit_four(tmp_path: Path) -> None:
