@@ -141,11 +141,11 @@ def shape_of(problem: Problem) -> SoundShape:
 
 # -- C literals ------------------------------------------------------------------------------------------------
 def _f(x: float) -> str:
-    """A double exactly as Python holds it (``repr`` round-trips; gcc rounds decimal literals correctly)."""
+    """A double exactly as Python holds it (``repr`` round-trips, and a finite float's always holds a "." or an
+    exponent: a C double literal; gcc and ``strtod`` round decimal literals correctly)."""
     if not math.isfinite(x):
         raise ValueError(f"promela: a table number is not finite: {x}")
-    text = repr(float(x))
-    return text if any(c in text for c in ".en") else f"{text}.0"
+    return repr(float(x))
 
 
 def _at(inst: Instant, gap_m: float) -> str:
