@@ -217,13 +217,13 @@ def sound_table(sound: Sound, grid: Grid, hold_floor_mps: float | None = None) -
             if early(ref):
                 key = (state.lane, state.t_units, state.d_cells, _index(index, state.first_mps),
                        _index(index, state.last_mps), state.moved, action)
-                early_windows[key] = declared(rules.window(state, action), _at_boundary(ref))
+                window, boundary = rules.window(state, action), _at_boundary(ref)
+                early_windows[key] = declared(window, boundary)
                 if cuts and action is not None:
                     for v, following in _other_speeds(rules, action).items():
                         cut_s = rules.cut_s(state.t_units, action, following)
                         assert cut_s is not None  # another speed: a ramp
-                        early_cut[key, index[v]] = declared(rules.cut_window(rules.window(state, action), cut_s),
-                                                            _at_boundary(ref))
+                        early_cut[key, index[v]] = declared(rules.cut_window(window, cut_s), boundary)
             if action is not None:
                 todo.append(advance(state, action, grid, action_speeds[action]))
     start = {}
