@@ -8,7 +8,9 @@
  * and for each one forks a copy of itself that sets OVERTAKE_SCENARIO, changes into the work dir,
  * sends stdout and stderr to <work dir>/out.txt and runs pan's main with those arguments. The copy
  * starts from the server's pristine globals, so every search is pan's own from a fresh start,
- * without the exec, the dynamic linking and the interpreter's process set-up. The server answers
+ * without the exec, the dynamic linking and the interpreter's process set-up. A model may name a
+ * hook, SERVE_PREPARE(scenario), that the server calls before each fork to read data the runs share
+ * (the sound model's table, once per table: promela.sound); a run finds it read, or reads it itself. The server answers
  * each request with one line once the copy has ended: "exit N", "signal N" or "timeout" (the copy
  * was killed at the time limit), or "error <reason>". Both die with their parent (PR_SET_PDEATHSIG).
  */
@@ -45,6 +47,9 @@ static int serve_run(char *dir, long limit_ms, char *scenario, int argc, char **
 	int status, out;
 	pid_t pid;
 
+#ifdef SERVE_PREPARE
+	SERVE_PREPARE(scenario);
+#endif
 	fflush(NULL);
 	pid = fork();
 	if (pid < 0) { return -1; }

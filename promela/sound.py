@@ -379,6 +379,7 @@ def _goal(goal: GoalRule) -> str:
 
 
 _FUNCTIONS = r"""c_code {
+\#include <setjmp.h>  /* "\#": passed to pan.c, not read by spin's preprocessor */
 static int sound_follows(const unsigned *fol, int i) { return (fol[i / 32] >> (i % 32)) & 1u; }
 
 /* a measured vehicle's motion (spec.dynamics): the phase of a travel bound at t, its travel and speed then */
@@ -743,9 +744,20 @@ static void sound_malformed(const char *why)
 
 static const char *table_path;
 static char *table_at;
+static char *table_loaded = NULL;  /* the path of the table the globals hold, once read whole */
+static void **table_blocks = NULL;  /* the blocks its reading allocated: freed when another table is read */
+static int n_table_blocks = 0, max_table_blocks = 0;
+static jmp_buf *table_trap = NULL;  /* set while a served verifier reads a table before its fork (sound_prepare) */
 
 static void sound_bad_table(const char *why)
-{	fprintf(stderr, "overtake: the sound model's table %s is not this verifier's (%s)\n", table_path, why);
+{	if (table_trap) { longjmp(*table_trap, 1); }
+	fprintf(stderr, "overtake: the sound model's table %s is not this verifier's (%s)\n", table_path, why);
+	exit(2);
+}
+
+static void table_no_memory(void)
+{	if (table_trap) { longjmp(*table_trap, 1); }
+	fprintf(stderr, "overtake: out of memory reading the sound model's table\n");
 	exit(2);
 }
 
@@ -764,8 +776,15 @@ static int table_int(int lo, int hi, const char *what)
 }
 
 static void *table_alloc(int n, size_t size)
-{	void *p = calloc(n > 0 ? (size_t) n : 1, size);
-	if (!p) { fprintf(stderr, "overtake: out of memory reading the sound model's table\n"); exit(2); }
+{	void *p = calloc(n > 0 ? (size_t) n : 1, size), **more;
+	if (!p) { table_no_memory(); }
+	if (n_table_blocks == max_table_blocks)
+	{	more = realloc(table_blocks, (size_t) (max_table_blocks ? 2 * max_table_blocks : 64) * sizeof(void *));
+		if (!more) { free(p); table_no_memory(); }
+		table_blocks = more;
+		max_table_blocks = max_table_blocks ? 2 * max_table_blocks : 64;
+	}
+	table_blocks[n_table_blocks++] = p;
 	return p;
 }
 
@@ -784,13 +803,22 @@ static void sound_load_table(const char *path)
 	SoundStretch *st;
 	SoundPiece *p;
 	table_path = path;
+	if (table_loaded != NULL && strcmp(table_loaded, path) == 0) { return; }  /* read by the server before its fork */
+	free(table_loaded);
+	table_loaded = NULL;
+	while (n_table_blocks > 0) { free(table_blocks[--n_table_blocks]); }
 	f = fopen(path, "rb");
-	if (!f) { fprintf(stderr, "overtake: cannot read the sound model's table %s\n", path); exit(2); }
+	if (!f)
+	{	if (table_trap) { longjmp(*table_trap, 1); }
+		fprintf(stderr, "overtake: cannot read the sound model's table %s\n", path);
+		exit(2);
+	}
 	if (fseek(f, 0, SEEK_END) != 0 || (size = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0)
-	{	sound_bad_table("unreadable");
+	{	fclose(f);
+		sound_bad_table("unreadable");
 	}
 	text = table_alloc((int) size + 1, 1);
-	if (fread(text, 1, (size_t) size, f) != (size_t) size) { sound_bad_table("unreadable"); }
+	if (fread(text, 1, (size_t) size, f) != (size_t) size) { fclose(f); sound_bad_table("unreadable"); }
 	fclose(f);
 	text[size] = 0;
 	table_at = text;
@@ -867,7 +895,24 @@ static void sound_load_table(const char *path)
 	if (table_int(TABLE_END, TABLE_END, "its end") != TABLE_END) { sound_bad_table("its end"); }
 	while (*table_at == ' ' || *table_at == '\n' || *table_at == '\t' || *table_at == '\r') { table_at++; }
 	if (*table_at) { sound_bad_table("more after its end"); }
+	table_loaded = strdup(path);  /* none (out of memory): read again by the next run */
 }
+
+/* a served verifier's hook (serve.c: SERVE_PREPARE), before it forks a run: the request's table read once, by its
+   path (named by the hash of its text), so each run finds it read; a table that will not read is left to the run,
+   which reports it and exits 2 */
+static void sound_prepare(const char *scenario)
+{	const char *bar = strchr(scenario, '|');
+	jmp_buf trap;
+	if (!bar) { return; }
+	bar++;
+	while (*bar == ' ') { bar++; }
+	if (setjmp(trap)) { table_trap = NULL; return; }
+	table_trap = &trap;
+	sound_load_table(bar);
+	table_trap = NULL;
+}
+\#define SERVE_PREPARE sound_prepare
 
 /* the scenario: lane nl cells... nr cells... nt ft horizon, each phantom's edge (dx: where its sensor's view ends),
    then 0, or 1 and each vehicle's sensed interval (lo hi, same-direction then oncoming), then 0, or 1 and for each

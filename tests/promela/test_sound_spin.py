@@ -168,6 +168,47 @@ def test_two_profiles_share_one_verifier_each_answering_with_its_own_table() -> 
     assert answers["default"] != answers["paper"]
 
 
+def test_a_served_verifier_answers_each_request_with_its_own_table_read_before_its_fork(tmp_path: Path) -> None:
+    """The server reads a request's table before it forks the run (``sound_prepare``, once per table): requests that
+    alternate between two tables of one verifier each get their own table's answer, the same as a verifier run on
+    its own; a table that will not read is the run's to report (exit 2, one line), and the server serves on."""
+    lane, left, right, targets = DIFFERS
+    base = make_scenario(lane, list(left), list(right), targets, horizon=30)
+    problems = {name: problem_for(replace(base, sound=Sound(profile(name))), ModelKind.FINAL)
+                for name in ("default", "paper")}
+    alone = {name: runner.search(p, Strategy.SENSIBLE, serve=False) for name, p in problems.items()}
+    assert alone["default"].actions != alone["paper"].actions
+    built = runner.verifier(sound_model.shape_of(problems["paper"]), Strategy.SENSIBLE)
+    server = runner.Server(built.path)
+    try:
+        bad = tmp_path / "table.txt"
+        whole = sound_model.table_text(sound_model.table_sound(problems["paper"]), problems["paper"].grid)
+        bad.write_text(whole[: len(whole) // 2])
+        for name in ("paper", "default", "default", "paper", "default"):  # through the pipeline's own server
+            found = runner.search(problems[name], Strategy.SENSIBLE)
+            assert (found.status, found.actions, found.states) == (alone[name].status, alone[name].actions,
+                                                                   alone[name].states), name
+        summary = {}  # pan's closing summary on each table, run on its own
+        for name, problem in problems.items():
+            env = {**os.environ, "OVERTAKE_SCENARIO": runner.injected(problem)}
+            done = subprocess.run([str(built.path), "-E"], cwd=tmp_path, env=env, capture_output=True, text=True,
+                                  timeout=60)
+            summary[name] = [line for line in done.stdout.splitlines() if "errors:" in line]
+        assert summary["default"] != summary["paper"]
+        for name in ("paper", "bad", "default", "paper"):  # one server: a table, another, one that fails, the first
+            if name == "bad":
+                code, text = server.run(f"{runner.scenario_values(problems['paper'])} | {bad}", ["-E"], 10.0)
+                assert code == 2
+                refused = f"overtake: the sound model's table {bad} is not this verifier's (too few numbers)"
+                assert text.strip() == refused
+                continue
+            code, text = server.run(runner.injected(problems[name]), ["-E"], 10.0)
+            assert code == 0 and [line for line in text.splitlines() if "errors:" in line] == summary[name], name
+        assert server.alive()
+    finally:
+        server.close()
+
+
 def test_the_sound_model_in_full_is_in_its_table_and_only_the_shape_in_the_verifier() -> None:
     problem = problem_for(replace(make_scenario("right", [12], [], 1), sound=Sound(profile("default"))),
                           ModelKind.FINAL)
