@@ -137,10 +137,8 @@ def verifier(shape: Shape | sound_model.SoundShape, strategy: Strategy) -> Verif
     if target.exists():
         discard(target)  # damaged (truncated, altered, not executable, no checksum): built again below
     target.parent.mkdir(parents=True, exist_ok=True)
-    source = sound_model.render(shape) if isinstance(shape, sound_model.SoundShape) else render(shape)
-    flags = _flags(strategy)
     with tempfile.TemporaryDirectory(dir=target.parent, prefix=".build-") as build:
-        _compile(Path(build), source, flags, serve=True)
+        _compile(Path(build), _source(shape), _flags(strategy), serve=True)
         (Path(build) / CHECKSUM_FILE).write_text(_sha256(Path(build) / "pan"))
         try:
             os.rename(build, target)  # atomic: a concurrent build of the same key wins or loses whole
@@ -156,13 +154,17 @@ def _cached_name(shape: Shape | sound_model.SoundShape, strategy: Strategy, vers
     """The cache folder's name of ``shape``'s verifier for ``strategy`` under the tools ``versions`` (``verifier``'s
     key), made once per process: hashing the rendered model on every search cost more than a served search's own
     start."""
-    source = sound_model.render(shape) if isinstance(shape, sound_model.SoundShape) else render(shape)
-    key_text = [source, f"cell_m={shape.grid.cell_m}", " ".join(_flags(strategy)), versions, _server_source(),
+    key_text = [_source(shape), f"cell_m={shape.grid.cell_m}", " ".join(_flags(strategy)), versions, _server_source(),
                 _own_source()]
     if isinstance(shape, sound_model.SoundShape):
         key_text.append(shape.key_text())
     key = hashlib.sha256("\n".join(key_text).encode()).hexdigest()[:24]
     return f"pan-{shape.name}-{strategy.value}-{key}"
+
+
+def _source(shape: Shape | sound_model.SoundShape) -> str:
+    """The Promela model a verifier of ``shape`` is compiled from: the sound model's or the paper model's."""
+    return sound_model.render(shape) if isinstance(shape, sound_model.SoundShape) else render(shape)
 
 
 _VERIFIED: dict[Path, tuple[int, int]] = {}  # pan -> (size, mtime) when its checksum last matched

@@ -10,9 +10,10 @@
  * starts from the server's pristine globals, so every search is pan's own from a fresh start,
  * without the exec, the dynamic linking and the interpreter's process set-up. A model may name a
  * hook, SERVE_PREPARE(scenario), that the server calls before each fork to read data the runs share
- * (the sound model's table, once per table: promela.sound); a run finds it read, or reads it itself. The server answers
- * each request with one line once the copy has ended: "exit N", "signal N" or "timeout" (the copy
- * was killed at the time limit), or "error <reason>". Both die with their parent (PR_SET_PDEATHSIG).
+ * (the sound model's table, once per table: promela.sound); a run finds it read, or reads it
+ * itself. The server answers each request with one line once the copy has ended: "exit N",
+ * "signal N" or "timeout" (the copy was killed at the time limit), or "error <reason>". Both die
+ * with their parent (PR_SET_PDEATHSIG).
  */
 #define main pan_main
 #include "pan.c"

@@ -749,14 +749,19 @@ static void **table_blocks = NULL;  /* the blocks its reading allocated: freed w
 static int n_table_blocks = 0, max_table_blocks = 0;
 static jmp_buf *table_trap = NULL;  /* set while a served verifier reads a table before its fork (sound_prepare) */
 
-static void sound_bad_table(const char *why)
+/* a table that will not read, while the server reads it (sound_prepare): back there, the run reports it */
+static void table_escape(void)
 {	if (table_trap) { longjmp(*table_trap, 1); }
+}
+
+static void sound_bad_table(const char *why)
+{	table_escape();
 	fprintf(stderr, "overtake: the sound model's table %s is not this verifier's (%s)\n", table_path, why);
 	exit(2);
 }
 
 static void table_no_memory(void)
-{	if (table_trap) { longjmp(*table_trap, 1); }
+{	table_escape();
 	fprintf(stderr, "overtake: out of memory reading the sound model's table\n");
 	exit(2);
 }
@@ -777,12 +782,13 @@ static int table_int(int lo, int hi, const char *what)
 
 static void *table_alloc(int n, size_t size)
 {	void *p = calloc(n > 0 ? (size_t) n : 1, size), **more;
+	int grown = max_table_blocks ? 2 * max_table_blocks : 64;
 	if (!p) { table_no_memory(); }
 	if (n_table_blocks == max_table_blocks)
-	{	more = realloc(table_blocks, (size_t) (max_table_blocks ? 2 * max_table_blocks : 64) * sizeof(void *));
+	{	more = realloc(table_blocks, (size_t) grown * sizeof(void *));
 		if (!more) { free(p); table_no_memory(); }
 		table_blocks = more;
-		max_table_blocks = max_table_blocks ? 2 * max_table_blocks : 64;
+		max_table_blocks = grown;
 	}
 	table_blocks[n_table_blocks++] = p;
 	return p;
@@ -809,7 +815,7 @@ static void sound_load_table(const char *path)
 	while (n_table_blocks > 0) { free(table_blocks[--n_table_blocks]); }
 	f = fopen(path, "rb");
 	if (!f)
-	{	if (table_trap) { longjmp(*table_trap, 1); }
+	{	table_escape();
 		fprintf(stderr, "overtake: cannot read the sound model's table %s\n", path);
 		exit(2);
 	}
