@@ -198,7 +198,7 @@ class SpreadTraffic(PaperTraffic):
                 leader = _nearest_ahead(done, ordered, car.x_m, sign)
                 if av_leader and sign * (av.x_m - car.x_m) > 0 and (
                         leader is None or av.x_m - car.x_m <= leader.x_m - car.x_m):
-                    gap_m, leader_mps = av.x_m - car.x_m - CAR.length_m, av.speed_mps  # the AV (first on ties)
+                    gap_m, leader_mps = av.x_m - car.x_m - CAR.length_m, av.along_mps  # the AV (first on ties)
                 elif leader is None:
                     gap_m, leader_mps = math.inf, 0.0
                 else:

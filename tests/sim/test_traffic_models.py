@@ -148,6 +148,16 @@ def test_the_av_is_a_leader_in_the_left_lane_and_touching_it_is_not_a_traffic_co
     assert traffic.collisions == 0
 
 
+def test_a_vehicle_behind_the_av_follows_its_speed_along_the_road_not_along_its_heading(scene: Scene) -> None:
+    traffic = SpreadTraffic(scene, np.random.default_rng(SEED), 0.0, events=EventSpec(stop_rate_per_h=0.0))
+    last = min(traffic.left, key=lambda c: c.x_m)
+    driver = traffic.drivers[last.body]
+    av = Pose(last.x_m + CAR.length_m + IDM.min_gap_m / 2, 1.8, 0.6, driver.speed_mps + 1.0)  # closed up, turning
+    assert av.along_mps < driver.speed_mps < av.speed_mps
+    traffic.advance(1 / 30, av)
+    assert driver.speed_mps == av.along_mps
+
+
 def test_two_vehicles_that_touch_are_one_traffic_collision_and_both_stop(scene: Scene) -> None:
     traffic = SpreadTraffic(scene, np.random.default_rng(SEED), 0.0, events=EventSpec(stop_rate_per_h=0.0))
     front, behind = sorted(traffic.left, key=lambda c: -c.x_m)[:2]
