@@ -12,11 +12,12 @@ Two models that do not keep to it (``spec.physical``: ``SpeedSpec``, ``IdmSpec``
 speed, drawn around 7 m/s, until it closes to the minimum gap behind a slower one, which it
 then follows at that one's speed) and ``FollowingTraffic`` (every vehicle drives by the
 Intelligent Driver Model behind the one ahead of it, the AV included when it is in the left
-lane at its speed along the road, so platoons compress and leaders run below 7 m/s). Both respawn by the paper's rules
-but at continuous distances (a paper gap of g cells is drawn uniformly between g - 1 and
-g + 1 cells, never below the minimum spawn gap), and make left-lane vehicles brake to a
-standstill at a stated rate. Oncoming vehicles follow each other, never the AV. Two vehicles
-that touch each other stop where they are (wrecks) until they are left behind.
+lane at its speed along the road, so platoons compress and leaders run below 7 m/s). Both
+respawn by the paper's rules but at continuous distances (a paper gap of g cells is drawn
+uniformly between g - 1 and g + 1 cells, never below the minimum spawn gap), and make
+left-lane vehicles brake to a standstill at a stated rate. Oncoming vehicles follow each
+other, never the AV. Two vehicles that touch each other stop where they are (wrecks) until
+they are left behind.
 """
 
 from __future__ import annotations
