@@ -1,23 +1,18 @@
-"""One controller per action: it follows the action's physical mapping from spec/ for its duration.
+"""One controller per action: it follows the action's physical mapping from spec/ for its duration, applying the
+controller's law (``sim.driver.control``) to the car step by step.
 
-Longitudinal: a position reference advancing along a speed profile (``spec.motion``: the action's
-speed, speed factor x the common speed, with feasible ramps to its neighbours' speeds); the speed command
-adds a correction towards that reference, divided by the cosine of the car's heading (the reference is a
-speed along the road, and a car turned sideways covers less of it), and the car's wheel motors limit
-acceleration and braking. Lateral: a reference that stays on the lane
-centre, or for a lane change moves one lane width (a smooth cosine profile) within the
-first ``LOOP.lane_change_lateral_s`` of the action's time, since the model puts the AV in its
-new lane before any oncoming vehicle moves; tracked by a PD law on the lateral position
-turned into a steering angle, less the sideways part of the car's own speeding up or braking (a lane change
-from a slow queue ramps to its action's speed while the car is turned by 30 degrees and more: without it the
-car ran on past the new lane's centre to the road's edge).
+Longitudinal: a position reference advancing along a speed profile (``spec.motion``: the action's speed, speed factor
+x the common speed, with feasible ramps to its neighbours' speeds). Lateral: a reference that stays on the lane
+centre, or for a lane change moves one lane width (a smooth cosine profile) within the first
+``LOOP.lane_change_lateral_s`` of the action's time, since the model puts the AV in its new lane before any oncoming
+vehicle moves. The car's wheel motors limit acceleration and braking.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 
+from sim.driver.control import CarState, command, cosine_move
 from sim.scene import Scene
 from sim.vehicle import WheeledCar
 from spec.actions import ACTION_RULES, Action
@@ -26,11 +21,6 @@ from spec.grid import Grid
 from spec.lanes import Lane
 from spec.motion import SpeedProfile, action_speed_mps
 from spec.physical import LOOP
-
-K_X = 0.8  # 1/s: speed correction per metre behind the position reference
-K_Y, K_VY = 3.0, 3.5  # lateral PD gains (1/s^2, 1/s)
-MAX_SPEED_FACTOR = 2.4
-MIN_HEADING_COS = 0.5  # the heading's correction of the speed command is at most 2x (a car turned by 60 degrees)
 
 
 class Executor:
@@ -73,7 +63,7 @@ class Executor:
         lateral_s = min(duration_s, LOOP.lane_change_lateral_s)
         for k in range(min(steps, round(skip_s / self.dt_s)), steps):
             phase = min(1.0, (k + 1) * self.dt_s / lateral_s)
-            y_ref, vy_ref = _cosine_move(y_from, y_to, phase, lateral_s)
+            y_ref, vy_ref = cosine_move(y_from, y_to, phase, lateral_s)
             self.lane_due = to_lane if phase >= 1 else None
             if not self.control(profile.at(k * self.dt_s), y_ref, vy_ref, tick):
                 return False
@@ -94,7 +84,7 @@ class Executor:
         self.lane_due = None
         steps = max(1, round(done_s / self.dt_s))
         for j in range(steps):
-            y_ref, vy_ref = _cosine_move(y_at_m, y_back_m, (j + 1) / steps, steps * self.dt_s)
+            y_ref, vy_ref = cosine_move(y_at_m, y_back_m, (j + 1) / steps, steps * self.dt_s)
             if not self.control(profile.at((k + j) * self.dt_s), y_ref, vy_ref, tick):
                 return False
         self.lane_due = self.lane
@@ -107,21 +97,17 @@ class Executor:
         return all(self.control(speed_mps, y_ref, 0.0, tick) for _ in range(max(1, round(seconds / self.dt_s))))
 
     def control(self, speed_mps: float, y_ref: float, vy_ref: float, tick: Callable[[float], bool]) -> bool:
+        """One control step towards the references (the position reference advances at ``speed_mps``), then
+        ``tick``."""
         pose = self.car.pose()
         self.x_ref_m += speed_mps * self.dt_s
         self.v_ref_mps = speed_mps
-        # the reference is a speed along the road: turned sideways, the car drives faster along its heading to keep it
-        command = (speed_mps + K_X * (self.x_ref_m - pose.x_m)) / max(MIN_HEADING_COS, math.cos(pose.yaw_rad))
-        command = max(0.0, min(MAX_SPEED_FACTOR * self.grid.speed, command))
-        v = max(pose.speed_mps, 1.0)
-        vy = v * math.sin(pose.yaw_rad)
-        # a car turned sideways that speeds up moves sideways faster without turning: the turn asked for is the rest
-        speeding_up = (pose.speed_mps - self._speed_before_mps) / self.dt_s  # over the last control step
+        state = CarState(pose.x_m, pose.y_m, pose.yaw_rad, pose.speed_mps, self._speed_before_mps)
         self._speed_before_mps = pose.speed_mps
-        lateral_accel = K_Y * (y_ref - pose.y_m) + K_VY * (vy_ref - vy) - speeding_up * math.sin(pose.yaw_rad)
-        steer = math.atan(self.car.spec.wheelbase_m * lateral_accel / (v * v)) + self.steer_offset_rad
+        speed, steer = command(state, self.x_ref_m, speed_mps, y_ref, vy_ref, self.dt_s, self.grid.speed,
+                               self.car.spec.wheelbase_m, self.steer_offset_rad)
         for _ in range(LOOP.control_every_steps):
-            self.car.command(command, steer, self.scene.dt_s)
+            self.car.command(speed, steer, self.scene.dt_s)
             self.scene.step()
         return tick(self.dt_s)
 
@@ -130,8 +116,3 @@ class Executor:
         """The lane a lateral position is in."""
         return Lane.LEFT if y_m >= 0 else Lane.RIGHT
 
-
-def _cosine_move(y_from_m: float, y_to_m: float, phase: float, seconds: float) -> tuple[float, float]:
-    """The lateral reference and its rate at ``phase`` (0 to 1) of a smooth cosine move over ``seconds``."""
-    return (y_from_m + (y_to_m - y_from_m) * (1 - math.cos(math.pi * phase)) / 2,
-            (y_to_m - y_from_m) * math.pi * math.sin(math.pi * phase) / (2 * seconds))

@@ -35,14 +35,17 @@ from dataclasses import asdict, dataclass, field
 from enum import Enum
 from typing import Any
 
+from sim.driver.decide import NO_OVERTAKE
 from sim.executor import Executor
 from sim.safety import SafetyMonitor
 from sim.scene import Scene
 from sim.traffic import TrafficModel
 from sim.vehicle import KinematicCar, WheeledCar, first_contact
 from spec.actions import Action
+from spec.answers import Answer, Status
 from spec.grid import Grid
 from spec.lanes import Lane
+from spec.models import ModelKind
 from spec.motion import SpeedProfile, plan_profiles
 from spec.physical import CAR, LOOP, SENSORS
 from spec.safety import SAFETY
@@ -251,3 +254,14 @@ class _Attempt:
         self.executor.x_ref_m, self.executor.lane = checkpoint.x_ref_m, checkpoint.lane
         self.monitor, self.first = copy.deepcopy(checkpoint.monitor), checkpoint.first
         self.failed.clear()
+
+
+def refusal(answer: Answer) -> Refusal | None:
+    """Why ``answer`` does not start an overtake now, or None when it does (or could not tell: incomplete)."""
+    if any(kind is ModelKind.FINAL and status in NO_OVERTAKE for kind, status, _ in answer.stages):
+        return Refusal.REFUSED
+    if answer.status is not Status.PLAN:
+        return None
+    if not answer.actions:
+        return Refusal.OUTSIDE_WINDOW
+    return None if answer.actions[0] is Action.RIGHT_LANE_CHANGE else Refusal.DELAYED

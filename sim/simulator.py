@@ -28,10 +28,10 @@ from pathlib import Path
 import numpy as np
 
 from oracle.sound import keep_lane
-from sim import opportunity
+from sim import opportunity, tolerance
 from sim.containment import Breach, BreachKind, Containment, Sighting
-from sim.discretiser import discretise, in_window, reading_cell
-from sim.driver import decide, fallback
+from sim.discretiser import discretise
+from sim.driver import control, decide, fallback, plan
 from sim.driver.nearest import Nearest
 from sim.driver.readings import Reading
 from sim.executor import Executor
@@ -44,18 +44,18 @@ from sim.summary import Failure, RunSummary, Takeover
 from sim.tolerance import ToleranceReport, Violation
 from sim.tracking import Detection, Track, Tracker
 from sim.vehicle import KinematicCar, Pose, first_contact
-from spec.actions import ACTION_RULES, Action
+from spec.actions import Action
 from spec.answers import Answer, Status
 from spec.assumptions import PROFILES
 from spec.dynamics import Overtaken
-from spec.envelope import MINIMAL_RISK, TRACKING
+from spec.envelope import MINIMAL_RISK
 from spec.errors import ScenarioError
 from spec.faults import lost_control
 from spec.files import scenario_to_dict
 from spec.kinds import FailureKind
 from spec.lanes import Lane
 from spec.models import ModelKind
-from spec.motion import SpeedProfile, action_speed_mps, plan_profiles, ramp_gain_m, reference_offset_m
+from spec.motion import SpeedProfile, action_speed_mps, plan_profiles, reference_offset_m
 from spec.physical import CAR, LOOP, SENSORS
 from spec.scenario import Scenario, problem_for
 from spec.sound import Sound
@@ -280,10 +280,8 @@ class Simulator:
             self.interrupt = self.interrupt or self.takeover is None
 
     def _followed(self) -> bool:
-        """Whether a left-lane vehicle behind the AV's centre can only be one that follows it (``Containment.sense``):
-        the action under way started in the left lane and has not put the AV wholly into the right one (an action in
-        lane, or the move out); from the right lane a vehicle it passed, or is returning behind, can be there."""
-        return self.executor.lane is Lane.LEFT and self.executor.lane_due is not Lane.RIGHT
+        """``decide.only_followers_behind`` for the action under way."""
+        return decide.only_followers_behind(self.executor.lane, self.executor.lane_due)
 
     def _sensed(self, car: KinematicCar) -> bool:
         """Whether ``car`` is sensed now (exact rays, whatever the drive's sensor model: a vehicle the sensors could
@@ -479,30 +477,23 @@ class Simulator:
         return True
 
     def _refused(self, actions: tuple[Action, ...], under_way: tuple[Action, ...]) -> bool:
-        """With tracking, a plan that would start an overtake (a lane change out of the left lane) does not start
-        while a lane holds an unresolved contradiction (the return's gap is part of the overtake). Only the decision
-        that starts it is refused: one with no lane change ``under_way`` (the rest of the last plan) and the AV in
-        its lane at the common speed, so that driving on in lane is what it was doing anyway. Mid-manoeuvre (an
-        acceleration towards the lane change already run) the plan goes on: stopping it there leaves the AV too fast
-        and too near the vehicle it meant to pass (measured: 8 of 10 failures of a refusal that acted there)."""
-        if self.tracker is None or not self.unresolved or Action.RIGHT_LANE_CHANGE not in actions:
+        """Whether the tracker's contradiction refuses the overtake ``actions`` would start (``plan.refuses``; only
+        with tracking); a refusal is counted and drops the rest of the last plan."""
+        if self.tracker is None:
             return False
         pose = self.car.pose()
-        if any(ACTION_RULES[a].to_lane is not None for a in under_way) or Executor.lane_of(pose.y_m) is not Lane.LEFT \
-                or abs(pose.along_mps - self.grid.speed) > TRACKING.speed_mps:
+        if not plan.refuses(bool(self.unresolved), actions, under_way, Executor.lane_of(pose.y_m), pose.along_mps,
+                            self.grid.speed):
             return False
         self.summary.refusals += 1
         self.pending = ()
         return True
 
     def _hold_a_sweep(self) -> bool:
-        """Drive on in lane at the common speed until the next sweep (at least one control step). The position
-        reference runs on while the car is within its stated envelope of it (``TRACKING.position_m``), so a series of
-        refusals holds the common speed in position too: restarted at the car every sweep, the speed command alone
-        let the car creep 0.16 m/s faster than the traffic into the vehicle ahead (measured, seed 2)."""
+        """Drive on in lane at the common speed until the next sweep (at least one control step), the position
+        reference where ``control.held_reference`` puts it."""
         y_ref = self.scene.lane_y(Executor.lane_of(self.car.pose().y_m))
-        if abs(self.executor.x_ref_m - self.car.pose().x_m) > TRACKING.position_m:
-            self.executor.reset_reference()
+        self.executor.x_ref_m = control.held_reference(self.executor.x_ref_m, self.car.pose().x_m)
         if not self.executor.control(float(self.grid.speed), y_ref, 0.0, self._tick):
             return False
         return self._await_sweep()
@@ -537,46 +528,6 @@ class Simulator:
             raise ScenarioError("snapshot", "dropped sweep", "the sensors' last sweep never arrived")
         return self.sweep
 
-    def _frame(self, readings: tuple[Reading, ...], speed_mps: float, first_mps: float) -> tuple[Reading, ...]:
-        """The readings as the model's AV sees them: a car at the plan's first speed from the start.
-
-        The model starts each action at its own speed; the real car gets there on a ramp, gaining
-        (or losing) ``ramp_gain_m`` on traffic meanwhile, so the plan is made, executed and checked in
-        the frame where that gain is already done. Planning from the raw snapshot would ignore the
-        AV's momentum (a re-plan right after an accelerate found it at 14 m/s beside a car).
-        """
-        gain_m = ramp_gain_m(speed_mps, first_mps)
-        return tuple(replace(r, dx_m=r.dx_m - gain_m) for r in readings)
-
-    def _decide(self, readings: tuple[Reading, ...], speed_mps: float,
-                lane: Lane) -> tuple[Answer, tuple[Reading, ...], Scenario, float]:
-        """A plan, the readings in the frame it was made in, its scenario, and that frame's speed.
-
-        Plan in the frame of a first action at the common speed; if the plan starts at another
-        speed, plan again in that speed's frame and keep the second plan when it starts at that
-        speed too. Otherwise the first plan stands, made in the common-speed frame (the executor's
-        reference then starts where that frame puts the AV: see ``reference_offset_m``).
-        """
-        common = self.grid.speed
-        seen = self._frame(readings, speed_mps, common)
-        scenario = self.planner.scenario(seen, lane)
-        answer = self.planner.plan(scenario)
-        first_mps = action_speed_mps(answer.actions[0], self.grid) if answer.actions else common
-        if answer.status is not Status.PLAN or first_mps == common:
-            return answer, seen, scenario, common
-        seen_again = self._frame(readings, speed_mps, first_mps)
-        try:
-            scenario_again = self.planner.scenario(seen_again, lane)
-        except ScenarioError:
-            self.summary.frame_fallbacks += 1
-            return answer, seen, scenario, common
-        again = self.planner.plan(scenario_again)
-        both_ms = again.elapsed_ms + answer.elapsed_ms
-        if again.status is Status.PLAN and again.actions and action_speed_mps(again.actions[0], self.grid) == first_mps:
-            return replace(again, elapsed_ms=both_ms), seen_again, scenario_again, first_mps
-        self.summary.frame_fallbacks += 1
-        return replace(answer, elapsed_ms=both_ms), seen, scenario, common
-
     def _one_plan(self) -> bool:
         if not self._await_sweep():
             return False
@@ -594,26 +545,30 @@ class Simulator:
             return self._sensing_stop(pending, err)
         self._watch(readings, pose.x_m, lane)
         try:
-            answer, seen, scenario, frame_mps = self._decide(readings, pose.along_mps, lane)
+            framed = plan.plan_in_frame(self.planner, self.grid, readings, pose.along_mps, lane)
         except ScenarioError as err:
             return self._sensing_stop(pending, err)
+        self.summary.frame_fallbacks += int(framed.fell_back)
+        answer, scenario = framed.answer, framed.scenario
         self._planned(answer, scenario, lane)
-        if answer.status is not Status.PLAN and pending:
+        act = decide.paper_choice(answer.status, bool(answer.actions), bool(pending),
+                                  refused=lambda: self._refused(answer.actions, pending))
+        if act is decide.PaperAct.KEEP:
             return self._keep(pending, FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
-        if answer.status is not Status.PLAN:
+        if act is decide.PaperAct.WAIT:
             self._fail(FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
             self.doing = "waiting without a plan"
             return self.executor.hold(LOOP.wait_s, self.grid.speed, self._tick)
-        if not answer.actions:  # nothing to overtake: drive on
+        if act is decide.PaperAct.DRIVE:
             self.doing = "drive (nothing to overtake)"
             self.executor.reset_reference()
             profile = plan_profiles((Action.DRIVE,), pose.along_mps, self.grid)[0]
             return self.executor.run(Action.DRIVE, self._tick, profile)
-        if self._refused(answer.actions, pending):
+        if act is decide.PaperAct.HOLD:
             self.doing = "driving on in lane (an overtake refused: the tracker holds a contradiction)"
             return self._hold_a_sweep()
         self._sight(readings, pose.x_m)
-        return self._execute(answer.actions, answer.states, seen, pose.along_mps, frame_mps)
+        return self._execute(answer.actions, answer.states, framed.seen, pose.along_mps, framed.frame_mps)
 
     def _while_planning(self) -> bool:
         """A sound decision's snapshot ages while the planner runs: the world moves on for ``LOOP.plan_budget_s``
@@ -773,10 +728,8 @@ class Simulator:
         self.pending, self.pending_profiles = sequence[executed:], profiles[executed:]
         skip_s = 0.0
         if executed and since is not None:
-            dt_s = self.executor.dt_s
-            last_s = float(ACTION_RULES[sequence[0]].duration_s) - dt_s  # at least its last control step is run
-            skip_s = min(round((self.summary.sim_time_s - since[0]) / dt_s) * dt_s, last_s)
-            self.executor.x_ref_m = since[1] + profiles[0].distance_m(skip_s) - profiles[0].distance_m(0.0)
+            skip_s, self.executor.x_ref_m = control.resumed(sequence[0], profiles[0], *since, self.summary.sim_time_s,
+                                                            self.executor.dt_s)
         self.enveloped = True
         try:
             for k in range(executed):
@@ -925,7 +878,7 @@ class Simulator:
         left exactly as it was."""
         x = self.car.pose().x_m
         target = opportunity.target_ahead(x, self.traffic.left)
-        refusal = None if target is None else self._refusal(answer)
+        refusal = None if target is None else opportunity.refusal(answer)
         if target is None or refusal is None:
             return
         report = self.summary.opportunities
@@ -941,17 +894,6 @@ class Simulator:
             report.missed.append(opportunity.Opportunity(round(self.summary.km, 3), round(self.summary.sim_time_s, 1),
                                                          refusal.value, said, accelerates, gap_m,
                                                          scenario_to_dict(scenario)))
-
-    @staticmethod
-    def _refusal(answer: Answer) -> opportunity.Refusal | None:
-        """Why ``answer`` does not start an overtake now, or None when it does (or could not tell: incomplete)."""
-        if any(kind is ModelKind.FINAL and status in decide.NO_OVERTAKE for kind, status, _ in answer.stages):
-            return opportunity.Refusal.REFUSED
-        if answer.status is not Status.PLAN:
-            return None
-        if not answer.actions:
-            return opportunity.Refusal.OUTSIDE_WINDOW
-        return None if answer.actions[0] is Action.RIGHT_LANE_CHANGE else opportunity.Refusal.DELAYED
 
     @staticmethod
     def _no_plan(answer: Answer, scenario: Scenario) -> str:
@@ -983,14 +925,15 @@ class Simulator:
         self.executor.reset_reference(reference_offset_m(speed_mps, frame_mps, action_speed_mps(actions[0], self.grid)))
         cars = {car.body: car for car in self.traffic.cars()}
         # the tolerance check follows vehicles; a ghost a fault injected is none (``sim.faults``)
-        tracked = {key: v for key, v in self._tracked(seen, states[0]).items() if key[2] in cars}
+        tracked = {key: v for key, v in tolerance.tracked(seen, states[0], self.grid).items() if key[2] in cars}
         deviation = dict.fromkeys(tracked, 0.0)
         generation = {body: cars[body].respawns for body in cars}
         executed = actions[: LOOP.replan_after_actions]
         for k, (action, profile) in enumerate(zip(executed, plan_profiles(executed, speed_mps, self.grid))):
             self.doing = f"{action.value} (plan {plan_id}, step {k + 1} of {len(actions)})"
-            self._implied = self._implied_gaps({key: v for key, v in tracked.items()
-                                                if cars[key[2]].respawns == generation[key[2]]}, states[k + 1])
+            self._implied = tolerance.implied_gaps({key: v for key, v in tracked.items()
+                                                    if cars[key[2]].respawns == generation[key[2]]}, states[k + 1],
+                                                   self.grid)
             ok = self.executor.run(action, self._tick, profile)
             self._implied = {}
             if not ok:
@@ -1013,26 +956,6 @@ class Simulator:
                 return True
         self.pending = actions[len(executed):]
         return True
-
-    def _implied_gaps(self, tracked: dict[tuple[Lane, int, int], tuple[float, int]],
-                      predicted: State) -> dict[int, float]:
-        """Per tracked vehicle, the bumper-to-bumper gap to the AV (ahead or behind) its predicted cell's centre
-        implies."""
-        gaps = {}
-        for lane, index, body in tracked:
-            cells = predicted.left_lane if lane is Lane.LEFT else predicted.right_lane
-            gaps[body] = abs(cells[index] - self.grid.av_cell) * self.grid.cell - CAR.length_m
-        return gaps
-
-    def _tracked(self, seen: tuple[Reading, ...], start: State) -> dict[tuple[Lane, int, int], tuple[float, int]]:
-        """Each sensed vehicle in the window, keyed by its lane and index in the scenario, with its start."""
-        tracked = {}
-        for lane, cells in ((Lane.LEFT, start.left_lane), (Lane.RIGHT, start.right_lane)):
-            readings = sorted((r for r in seen if r.lane is lane), key=lambda r: r.dx_m)
-            inside = [r for r in readings if in_window(reading_cell(r, start.lane, self.grid), self.grid)]
-            for index, reading in enumerate(inside):
-                tracked[(lane, index, reading.body)] = (reading.dx_m, cells[index])
-        return tracked
 
     def _observe(self, plan_id: int, step: int, action: Action | None, predicted: State | None,
                  violations: list[Violation], since_s: float | None = None) -> None:

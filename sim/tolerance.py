@@ -15,8 +15,13 @@ from collections import defaultdict
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from sim.discretiser import in_window, reading_cell
+from sim.driver.readings import Reading
+from spec.grid import Grid
 from spec.kinds import ViolationKind
-from spec.physical import LOOP
+from spec.lanes import Lane
+from spec.physical import CAR, LOOP
+from spec.state import State
 
 #: The deviation histograms' bin width and how many bins (beyond the last: one overflow bin), in tolerance units.
 HISTOGRAM_BIN, HISTOGRAM_BINS = 0.02, 50
@@ -112,3 +117,29 @@ def histogram_quantile(bins: list[int], q: float) -> float | None:
         if count and seen >= target:
             return round((i + 1) * HISTOGRAM_BIN, 3)
     return math.inf
+
+
+#: A vehicle the tolerance check follows: its lane, its index in the scenario's lane, and its body.
+Key = tuple[Lane, int, int]
+
+
+def tracked(seen: tuple[Reading, ...], start: State, grid: Grid) -> dict[Key, tuple[float, int]]:
+    """Each vehicle sensed in the plan's window (``seen``, in the plan's frame), keyed by its lane and index in the
+    scenario, with its distance ahead of the AV at the plan's start and its cell in the plan's ``start`` state."""
+    out = {}
+    for lane, cells in ((Lane.LEFT, start.left_lane), (Lane.RIGHT, start.right_lane)):
+        readings = sorted((r for r in seen if r.lane is lane), key=lambda r: r.dx_m)
+        inside = [r for r in readings if in_window(reading_cell(r, start.lane, grid), grid)]
+        for index, reading in enumerate(inside):
+            out[(lane, index, reading.body)] = (reading.dx_m, cells[index])
+    return out
+
+
+def implied_gaps(followed: dict[Key, tuple[float, int]], predicted: State, grid: Grid) -> dict[int, float]:
+    """Per followed vehicle, the bumper-to-bumper gap to the AV (ahead or behind) its predicted cell's centre
+    implies."""
+    gaps = {}
+    for lane, index, body in followed:
+        cells = predicted.left_lane if lane is Lane.LEFT else predicted.right_lane
+        gaps[body] = abs(cells[index] - grid.av_cell) * grid.cell - CAR.length_m
+    return gaps

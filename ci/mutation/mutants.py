@@ -129,8 +129,8 @@ MUTANTS: tuple[Mutant, ...] = (
            "car = first_contact(self.scene, self.car.body, self.traffic.cars())",
            "car = first_contact(self.scene, self.car.body, self.traffic.oncoming)",
            "contacts with same-direction vehicles ignored by the simulator"),
-    Mutant("executor-heading-ignored", "sim/executor.py",
-           "/ max(MIN_HEADING_COS, math.cos(pose.yaw_rad))", "/ 1.0",
+    Mutant("executor-heading-ignored", "sim/driver/control.py",
+           "/ max(MIN_HEADING_COS, math.cos(car.yaw_rad))", "/ 1.0",
            "the executor's speed command not corrected for the car's heading: a lane change from a slow queue falls "
            "more than the envelope's 1.5 m behind its reference"),
     Mutant("fallback-brake-closing-at-hold-speed", "sim/driver/fallback.py",

@@ -1,6 +1,7 @@
-"""What a decision of the sound model does with its planner's answer: the plan (its committed part and escape), a
-safe step in lane, what the last decision proved, or the fallback. The rules, apart from their execution: the
-simulator asks the questions they need (lazily: some of them watch the world) and runs what they choose."""
+"""What a decision does with its planner's answer: under the sound model the plan (its committed part and escape), a
+safe step in lane, what the last decision proved, or the fallback; under the paper's rules the plan, the plan under
+way, or a wait in lane. The rules, apart from their execution: the simulator asks the questions they need (lazily:
+some of them watch the world) and runs what they choose."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from dataclasses import dataclass
 
 from spec.actions import Action
 from spec.answers import Status
+from spec.lanes import Lane
 
 #: The final model's answers that refuse an overtake (no failure of the planner).
 NO_OVERTAKE = (Status.NO_PLAN, Status.NO_PLAN_WITHIN_HORIZON)
@@ -64,3 +66,33 @@ def choose(status: Status, planned: bool, *, refused: Callable[[], bool], step: 
     if not unsafe_again and proved_holds():
         return Choice(Act.KEEP, why)
     return Choice(Act.FALLBACK, f"{why}, and no safe step in lane")
+
+
+class PaperAct(enum.Enum):
+    """What a decision under the paper's rules does."""
+
+    EXECUTE = "execute the plan"
+    KEEP = "keep the plan under way"  # for at most ``LOOP.replan_after_actions`` actions (``Simulator._keep``)
+    WAIT = "wait in lane without a plan"
+    DRIVE = "drive on: nothing to overtake"
+    HOLD = "drive on in lane: an overtake refused"
+
+
+def paper_choice(status: Status, planned: bool, pending: bool, *, refused: Callable[[], bool]) -> PaperAct:
+    """A paper-model decision's act from its answer's ``status`` (``planned``: a plan with actions): without a plan,
+    the rest of the plan under way (``pending``: a re-plan mid-manoeuvre that finds none does not undo the plan
+    being executed, as the paper warns), else a wait; a plan without actions (nothing to overtake) drives on; a plan
+    the tracker's contradiction ``refused`` (asked only then) drives on in lane; any other plan is executed."""
+    if status is not Status.PLAN:
+        return PaperAct.KEEP if pending else PaperAct.WAIT
+    if not planned:
+        return PaperAct.DRIVE
+    return PaperAct.HOLD if refused() else PaperAct.EXECUTE
+
+
+def only_followers_behind(lane: Lane, lane_due: Lane | None) -> bool:
+    """Whether a left-lane vehicle behind the AV's centre can only be one that follows it (``Containment.sense``):
+    the action under way started in the left ``lane`` and has not put the AV wholly into the right one (``lane_due``:
+    the lane it must be wholly in now, None during a sideways move; an action in lane, or the move out); from the
+    right lane a vehicle it passed, or is returning behind, can be there."""
+    return lane is Lane.LEFT and lane_due is not Lane.RIGHT

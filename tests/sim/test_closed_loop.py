@@ -5,15 +5,11 @@ from __future__ import annotations
 import pytest
 
 import sim.parts as parts_module
-from sim.driver.readings import Reading
 from sim.parts import DriveConfig
 from sim.simulator import START_UP_S, Simulator
 from spec.actions import Action
 from spec.errors import ScenarioError
-from spec.grid import PAPER_GRID
 from spec.kinds import FailureKind, ViolationKind
-from spec.lanes import Lane
-from spec.motion import ramp_gain_m
 from spec.physical import LOOP
 
 
@@ -65,17 +61,6 @@ def test_simulate_cli_json_trace_and_plot(tmp_path) -> None:
     assert len(recorded) == runs[0]["tolerance"]["violations"]  # every violation is in the trace, with its values
     assert {"step", "action", "predicted_cells", "measured_cells"} <= set(recorded[0])
     assert (tmp_path / "trace-seed3.jsonl").stat().st_size > 0 and (tmp_path / "spacetime-seed3.png").exists()
-
-
-def test_the_plans_frame_is_the_snapshot_moved_by_what_the_first_ramp_gains() -> None:
-    sim = paper_simulator(3)
-    try:
-        readings = (Reading(Lane.LEFT, 0, 30.0), Reading(Lane.RIGHT, 1, 200.0))
-        moved = sim._frame(readings, 14.0, PAPER_GRID.speed)  # braking to 7 m/s gains on traffic
-        assert [r.dx_m for r in moved] == pytest.approx([30.0 - ramp_gain_m(14.0, 7.0), 200.0 - ramp_gain_m(14.0, 7.0)])
-        assert sim._frame(readings, 7.0, 7.0) == readings
-    finally:
-        sim.close()
 
 
 def test_a_replan_that_cannot_plan_keeps_the_plan_under_way_and_says_why(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from sim.executor import Executor
-from sim.opportunity import MAX_ACCELERATES, Outcome, Refusal, Replay, WorldSave, _Attempt, overtake
+from sim.opportunity import MAX_ACCELERATES, Outcome, Refusal, Replay, WorldSave, _Attempt, overtake, refusal
 from sim.parts import DriveConfig
 from sim.scene import Scene
-from sim.simulator import Simulator, run_drive
+from sim.simulator import run_drive
 from sim.traffic import FollowingTraffic, PaperTraffic
 from sim.vehicle import WheeledCar
 from spec.actions import Action
@@ -150,7 +150,7 @@ def _answer(status: Status, actions: tuple[Action, ...], stages: tuple[tuple[Mod
     return Answer(status, ModelKind.FINAL, "interpreter", Strategy.SENSIBLE, actions, (), 0, 0.0, "", stages)
 
 
-@pytest.mark.parametrize(("answer", "refusal"), [
+@pytest.mark.parametrize(("answer", "why"), [
     (_answer(Status.PLAN, overtake(2), ((ModelKind.FINAL, Status.PLAN, ""),)), None),
     (_answer(Status.PLAN, (Action.DRIVE, *overtake(2)), ((ModelKind.FINAL, Status.PLAN, ""),)), Refusal.DELAYED),
     (_answer(Status.PLAN, (Action.ACCELERATE,), ((ModelKind.FINAL, Status.NO_PLAN, ""),
@@ -160,8 +160,8 @@ def _answer(status: Status, actions: tuple[Action, ...], stages: tuple[tuple[Mod
     (_answer(Status.PLAN, (), ((ModelKind.FINAL, Status.PLAN, ""),)), Refusal.OUTSIDE_WINDOW),
     (_answer(Status.INCOMPLETE, (), ((ModelKind.FINAL, Status.INCOMPLETE, ""),)), None),
 ])
-def test_each_answer_that_starts_no_overtake_says_why(answer: Answer, refusal: Refusal | None) -> None:
-    assert Simulator._refusal(answer) is refusal
+def test_each_answer_that_starts_no_overtake_says_why(answer: Answer, why: Refusal | None) -> None:
+    assert refusal(answer) is why
 
 
 def test_a_collision_restarts_the_drive_when_asked_and_ends_it_otherwise() -> None:

@@ -3,9 +3,16 @@ one within it is none, and a deviation that builds up beyond the plan tolerance 
 
 from __future__ import annotations
 
+import pytest
+
+from sim import tolerance
+from sim.driver.readings import Reading
 from sim.tolerance import ToleranceReport
+from spec.grid import PAPER_GRID
 from spec.kinds import ViolationKind
-from spec.physical import LOOP
+from spec.lanes import Lane
+from spec.physical import CAR, LOOP
+from spec.state import State
 
 UNIT_M = LOOP.tolerance_unit_m
 
@@ -27,3 +34,16 @@ def test_small_steps_that_build_up_beyond_the_plan_tolerance_are_a_plan_violatio
     for k in range(1, 4):
         deviation = _check(report, 0.2 * k, deviation)
     assert [v.kind for v in report.violations] == [ViolationKind.PLAN]
+
+
+def test_the_check_follows_each_vehicle_in_the_window_by_its_lane_and_index_from_its_start() -> None:
+    g = PAPER_GRID
+    seen = (Reading(Lane.LEFT, 7, 45.0), Reading(Lane.LEFT, 8, -5000.0), Reading(Lane.LEFT, 9, 2.0),
+            Reading(Lane.RIGHT, 4, 300.0))
+    start = State(Lane.LEFT, (10, 12), (25,))
+    followed = tolerance.tracked(seen, start, g)
+    # the one far behind is outside the window; indices count each lane's vehicles in it from behind
+    assert followed == {(Lane.LEFT, 0, 9): (2.0, 10), (Lane.LEFT, 1, 7): (45.0, 12), (Lane.RIGHT, 0, 4): (300.0, 25)}
+    gaps = tolerance.implied_gaps(followed, State(Lane.LEFT, (11, 13), (20,)), g)
+    assert gaps == pytest.approx({9: g.cell - CAR.length_m, 7: 3 * g.cell - CAR.length_m,
+                                  4: 10 * g.cell - CAR.length_m})

@@ -7,9 +7,10 @@ from collections.abc import Callable
 
 import pytest
 
-from sim.driver.decide import Act, Choice, choose, planner_failed
+from sim.driver.decide import Act, Choice, PaperAct, choose, only_followers_behind, paper_choice, planner_failed
 from spec.actions import Action
 from spec.answers import Status
+from spec.lanes import Lane
 
 
 def asked(log: list[str], name: str, value: object) -> Callable[[], object]:
@@ -65,3 +66,39 @@ def test_only_an_answer_that_is_neither_a_plan_a_refusal_nor_an_unsafe_start_is_
     assert [s for s in Status if planner_failed(s)] == [
         s for s in Status if s not in (Status.PLAN, Status.NO_PLAN, Status.NO_PLAN_WITHIN_HORIZON, Status.UNSAFE_START)]
     assert planner_failed(Status.INCOMPLETE) and not planner_failed(Status.UNSAFE_START)
+
+
+@pytest.mark.parametrize(("status", "planned", "pending", "refused", "act", "asked"), [
+    (Status.PLAN, True, False, False, PaperAct.EXECUTE, True),
+    (Status.PLAN, True, True, True, PaperAct.HOLD, True),
+    (Status.PLAN, False, True, True, PaperAct.DRIVE, False),  # nothing to overtake: drives on, never refused
+    (Status.NO_PLAN, False, True, True, PaperAct.KEEP, False),  # a re-plan mid-manoeuvre keeps the plan under way
+    (Status.INCOMPLETE, False, True, False, PaperAct.KEEP, False),
+    (Status.NO_PLAN_WITHIN_HORIZON, False, False, False, PaperAct.WAIT, False),
+    (Status.INCOMPLETE, False, False, False, PaperAct.WAIT, False),
+])
+def test_a_paper_decision_executes_keeps_waits_or_drives_on_as_its_answer_says(
+        status: Status, planned: bool, pending: bool, refused: bool, act: PaperAct, asked: bool) -> None:
+    log: list[str] = []
+    got = paper_choice(status, planned, pending, refused=refusal_asked(log, refused))
+    assert got is act and (log == ["refused"]) is asked
+
+
+def refusal_asked(log: list[str], value: bool) -> Callable[[], bool]:
+    def answer() -> bool:
+        log.append("refused")
+        return value
+    return answer
+
+
+@pytest.mark.parametrize(("lane", "due", "only"), [
+    (Lane.LEFT, Lane.LEFT, True),  # an action in lane
+    (Lane.LEFT, None, True),  # the move out, under way
+    (Lane.LEFT, Lane.RIGHT, False),  # the move out, done: the AV wholly in the right lane
+    (Lane.RIGHT, Lane.RIGHT, False),  # passing in the right lane
+    (Lane.RIGHT, None, False),  # the return, under way
+    (Lane.RIGHT, Lane.LEFT, False),  # the return, done: the vehicle passed may be behind
+])
+def test_a_vehicle_behind_is_only_a_follower_while_the_action_started_in_the_left_lane_keeps_the_av_out_of_the_right(
+        lane: Lane, due: Lane | None, only: bool) -> None:
+    assert only_followers_behind(lane, due) is only
