@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from sim.driver.control import CarState, command, cosine_move
+from sim.driver.control import CarState, Steps, command, cosine_move
 from sim.scene import Scene
 from sim.vehicle import WheeledCar
 from spec.actions import ACTION_RULES, Action
@@ -24,7 +24,9 @@ from spec.physical import LOOP
 
 
 class Executor:
-    """Drives the AV through actions; ``tick`` runs after every control step (traffic, contacts)."""
+    """The AV's controller: the control steps of an action, a hold or a move sent back (``Steps``, which the world
+    applies one at a time: ``control``); ``perform`` applies them all with a ``tick`` after each (traffic,
+    contacts)."""
 
     def __init__(self, scene: Scene, car: WheeledCar, lane: Lane, grid: Grid) -> None:
         self.scene, self.car, self.lane, self.grid = scene, car, lane, grid
@@ -42,8 +44,13 @@ class Executor:
     def run(self, action: Action, tick: Callable[[float], bool], profile: SpeedProfile | None = None,
             stop: Callable[[], bool] | None = None, skip_s: float = 0.0,
             reverse: Callable[[Lane, float, float], bool] | None = None) -> bool:
+        """``perform`` the ``action``'s control steps (``action``)."""
+        return self.perform(self.action(action, profile, stop, skip_s, reverse), tick)
+
+    def action(self, action: Action, profile: SpeedProfile | None = None, stop: Callable[[], bool] | None = None,
+               skip_s: float = 0.0, reverse: Callable[[Lane, float, float], bool] | None = None) -> Steps:
         """Execute ``action`` for its duration along ``profile`` (default: its speed throughout); False as soon
-        as ``tick`` reports a collision. ``stop`` is asked after every control step once any sideways move is over
+        as a step does not go on. ``stop`` is asked after every control step once any sideways move is over
         (an action in lane has none: from its first step); when it says so the action ends there, the AV in the
         action's lane. ``reverse(to_lane, done_s, left_s)`` is asked after every control step of a sideways move
         (seconds of it done and left); when it says so the move goes back (``reverse_move``) and the action ends
@@ -65,19 +72,18 @@ class Executor:
             phase = min(1.0, (k + 1) * self.dt_s / lateral_s)
             y_ref, vy_ref = cosine_move(y_from, y_to, phase, lateral_s)
             self.lane_due = to_lane if phase >= 1 else None
-            if not self.control(profile.at(k * self.dt_s), y_ref, vy_ref, tick):
+            if not (yield profile.at(k * self.dt_s), y_ref, vy_ref):
                 return False
             done_s = (k + 1) * self.dt_s
             if reverse is not None and phase < 1 and to_lane is not self.lane and \
                     reverse(to_lane, done_s, lateral_s - done_s):
-                return self.reverse_move(y_ref, y_from, done_s, profile, k + 1, tick)
+                return (yield from self.reverse_move(y_ref, y_from, done_s, profile, k + 1))
             if stop is not None and (phase >= 1 or to_lane is self.lane) and stop():
                 break
         self.lane = to_lane
         return True
 
-    def reverse_move(self, y_at_m: float, y_back_m: float, done_s: float, profile: SpeedProfile, k: int,
-                     tick: Callable[[float], bool]) -> bool:
+    def reverse_move(self, y_at_m: float, y_back_m: float, done_s: float, profile: SpeedProfile, k: int) -> Steps:
         """Take a sideways move back from the lateral reference ``y_at_m`` to the lane centre ``y_back_m`` it left,
         on a cosine of the time the move had taken (``MinimalRisk``'s cut-short move), the speed reference going on
         along the action's ``profile`` from its step ``k``; the AV stays in its lane. False on a collision."""
@@ -85,20 +91,38 @@ class Executor:
         steps = max(1, round(done_s / self.dt_s))
         for j in range(steps):
             y_ref, vy_ref = cosine_move(y_at_m, y_back_m, (j + 1) / steps, steps * self.dt_s)
-            if not self.control(profile.at((k + j) * self.dt_s), y_ref, vy_ref, tick):
+            if not (yield profile.at((k + j) * self.dt_s), y_ref, vy_ref):
                 return False
         self.lane_due = self.lane
         return True
 
     def hold(self, seconds: float, speed_mps: float, tick: Callable[[float], bool]) -> bool:
+        """``perform`` a ``holding``."""
+        return self.perform(self.holding(seconds, speed_mps), tick)
+
+    def holding(self, seconds: float, speed_mps: float) -> Steps:
         """Keep the lane at ``speed_mps`` for ``seconds`` (start-up, or waiting without a plan)."""
         y_ref = self.scene.lane_y(self.lane)
         self.lane_due = self.lane
-        return all(self.control(speed_mps, y_ref, 0.0, tick) for _ in range(max(1, round(seconds / self.dt_s))))
+        for _ in range(max(1, round(seconds / self.dt_s))):
+            if not (yield speed_mps, y_ref, 0.0):
+                return False
+        return True
 
-    def control(self, speed_mps: float, y_ref: float, vy_ref: float, tick: Callable[[float], bool]) -> bool:
-        """One control step towards the references (the position reference advances at ``speed_mps``), then
-        ``tick``."""
+    def perform(self, steps: Steps, tick: Callable[[float], bool]) -> bool:
+        """Apply ``steps`` one control step at a time (``control``), each followed by ``tick``, whose answer (whether
+        the world went on) the steps are told."""
+        try:
+            command = next(steps)
+            while True:
+                self.control(*command)
+                command = steps.send(tick(self.dt_s))
+        except StopIteration as done:
+            return bool(done.value)
+
+    def control(self, speed_mps: float, y_ref: float, vy_ref: float) -> None:
+        """One control step towards the references (the position reference advances at ``speed_mps``): the
+        controller's commands (``sim.driver.control.command``) applied to the car through the physics steps."""
         pose = self.car.pose()
         self.x_ref_m += speed_mps * self.dt_s
         self.v_ref_mps = speed_mps
@@ -109,7 +133,6 @@ class Executor:
         for _ in range(LOOP.control_every_steps):
             self.car.command(speed, steer, self.scene.dt_s)
             self.scene.step()
-        return tick(self.dt_s)
 
     @staticmethod
     def lane_of(y_m: float) -> Lane:

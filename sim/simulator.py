@@ -7,8 +7,10 @@ on by default, not in the paper) as soon as a vehicle deviates from the predicti
 beyond the tolerance, since the plan's safety margins no longer hold. Under the sound model
 (``DriveConfig.model``) a decision is kept only while containment holds (``sim.containment``, checked
 every control step under both models): a breach ends it, and without a plan the AV keeps its lane
-safely, keeps what the last decision proved, or hands over to the fallback. The world is re-centred on
-the AV every kilometre so coordinates stay small however far it drives.
+safely, keeps what the last decision proved, or hands over to the fallback. A decision is the control
+steps it yields (``sim.driver.control.Steps``); the world's loop (``_perform``) applies each and ticks the world
+after it, so the world never runs inside a decision. The world is re-centred on the AV every kilometre so
+coordinates stay small however far it drives.
 
 Every part (scene, car, traffic, sensors, planner, observers) is passed in (``sim.parts``);
 the simulator owns its scene's ``BulletClient`` and one ``numpy`` generator seeded with the
@@ -31,10 +33,10 @@ from oracle.sound import keep_lane
 from sim import opportunity, tolerance
 from sim.containment import Breach, BreachKind, Containment, Sighting
 from sim.discretiser import discretise
-from sim.driver import control, decide, fallback, plan
+from sim.driver import control, decide, fallback, plan, takeover
 from sim.driver.nearest import Nearest
 from sim.driver.readings import Reading
-from sim.executor import Executor
+from sim.executor import Executor, Steps
 from sim.faults import GHOST_BODY, FaultEvent, FaultySensor, SteeringFault, attribute
 from sim.observers import StepEvent, TraceWriter
 from sim.parts import DriveConfig, Parts
@@ -109,6 +111,9 @@ class Simulator:
         self.flagged = False  # the tracker flagged a contradiction at a decision of the manoeuvre under way
         self.steered: list[FaultEvent] = []  # steering faults under way during it
         self.sweep_every = max(1, round(1 / (SENSORS.sweep_hz * LOOP.physics_dt_s * LOOP.control_every_steps)))
+        #: what a take-over reads and moves each control step, whichever scene, car and executor are assembled now
+        self.cockpit = takeover.Cockpit(lambda: self.car.pose().along_mps, self._around, self._sense,
+                                        lambda: self.executor.reset_reference())
         self._assemble()
 
     def _assemble(self) -> None:
@@ -363,7 +368,7 @@ class Simulator:
         caused); at a collision stop, or with ``restart_after_collision`` start again where the drive stands
         (``_restart``)."""
         started = time.perf_counter()
-        ok = self.executor.hold(START_UP_S, self.grid.speed, self._tick)  # start-up: reach the common speed
+        ok = self._perform(self.executor.holding(START_UP_S, self.grid.speed))  # start-up: reach the common speed
         episode_km = 0.0
         moved = (self.summary.km, self.summary.sim_time_s)  # where and when the AV last moved a car length
         while self.summary.km < km and not (until_failure and self.summary.ended(sensing_only)):
@@ -374,7 +379,7 @@ class Simulator:
                 ok = self._restart()
                 moved = (self.summary.km, self.summary.sim_time_s)
                 continue
-            ok = self._one_plan()
+            ok = self.decide_once()
             if (self.summary.km - moved[0]) * 1000 >= CAR.length_m:
                 moved = (self.summary.km, self.summary.sim_time_s)
             elif ok and self.summary.sim_time_s - moved[1] > BLOCKED_S:
@@ -392,6 +397,17 @@ class Simulator:
                                                    "sweeps": sum(e.sweeps for e in i.events)} for i in injectors}
         return self.summary
 
+    def decide_once(self) -> bool:
+        """One decision, its control steps applied to the world one at a time, each followed by the world's tick;
+        False on a collision (or a loss of control)."""
+        return self._perform(self._one_plan())
+
+    def _perform(self, steps: Steps) -> bool:
+        """The world's loop: what the AV does (``steps``), one control step at a time, the executor moving the car
+        through the physics, then the world's tick (traffic, contacts, containment, sensors: ``_tick``); the steps
+        hear whether the world went on. False on a collision (or a loss of control)."""
+        return self.executor.perform(steps, self._tick)
+
     def _restart(self, collision: bool = True) -> bool:
         """After a collision (or a blocked episode, not counted among ``restarts``): a fresh scene, AV and traffic
         (drawn from the drive's generator as it stands); the distance, the failures and every report go on, so an
@@ -404,7 +420,7 @@ class Simulator:
         self.scene.close()
         self._assemble()
         self.doing = "start-up after a collision" if collision else "start-up after a blocked episode"
-        return self.executor.hold(START_UP_S, self.grid.speed, self._tick)
+        return self._perform(self.executor.holding(START_UP_S, self.grid.speed))
 
     # -- the sensors' clock (``spec.physical.SENSORS.sweep_hz``) ------------------------------------------------
     def swept(self) -> bool:
@@ -466,13 +482,13 @@ class Simulator:
         if self.steering.active is not None and self.steering.active not in self.steered:
             self.steered.append(self.steering.active)
 
-    def _await_sweep(self) -> bool:
+    def _await_sweep(self) -> Steps:
         """Hold the lane and the reference speed until the sensors' next sweep (at most two control steps: an action
         whose time is not a whole number of sweeps, as on 5.25 m cells), so a decision's snapshot is never older than
         the car's pose; False on a collision."""
         y_ref = self.scene.lane_y(Executor.lane_of(self.car.pose().y_m))
         while not self.swept():
-            if not self.executor.control(self.executor.v_ref_mps, y_ref, 0.0, self._tick):
+            if not (yield self.executor.v_ref_mps, y_ref, 0.0):
                 return False
         return True
 
@@ -489,14 +505,14 @@ class Simulator:
         self.pending = ()
         return True
 
-    def _hold_a_sweep(self) -> bool:
+    def _hold_a_sweep(self) -> Steps:
         """Drive on in lane at the common speed until the next sweep (at least one control step), the position
         reference where ``control.held_reference`` puts it."""
         y_ref = self.scene.lane_y(Executor.lane_of(self.car.pose().y_m))
         self.executor.x_ref_m = control.held_reference(self.executor.x_ref_m, self.car.pose().x_m)
-        if not self.executor.control(float(self.grid.speed), y_ref, 0.0, self._tick):
+        if not (yield float(self.grid.speed), y_ref, 0.0):
             return False
-        return self._await_sweep()
+        return (yield from self._await_sweep())
 
     def _sense(self) -> tuple[Reading, ...]:
         """The last sweep's readings (a dropped sweep: none)."""
@@ -528,11 +544,12 @@ class Simulator:
             raise ScenarioError("snapshot", "dropped sweep", "the sensors' last sweep never arrived")
         return self.sweep
 
-    def _one_plan(self) -> bool:
-        if not self._await_sweep():
+    def _one_plan(self) -> Steps:
+        """One decision, from the sensors' next sweep: its control steps."""
+        if not (yield from self._await_sweep()):
             return False
         if self.sound is not None:
-            return self._sound_decision()
+            return (yield from self._sound_decision())
         pending, self.pending = self.pending, ()
         pose = self.car.pose()
         lane = Executor.lane_of(pose.y_m)
@@ -542,35 +559,36 @@ class Simulator:
             readings = self._snapshot()
         except ScenarioError as err:
             self._watch((), pose.x_m, lane)
-            return self._sensing_stop(pending, err)
+            return (yield from self._sensing_stop(pending, err))
         self._watch(readings, pose.x_m, lane)
         try:
             framed = plan.plan_in_frame(self.planner, self.grid, readings, pose.along_mps, lane)
         except ScenarioError as err:
-            return self._sensing_stop(pending, err)
+            return (yield from self._sensing_stop(pending, err))
         self.summary.frame_fallbacks += int(framed.fell_back)
         answer, scenario = framed.answer, framed.scenario
         self._planned(answer, scenario, lane)
         act = decide.paper_choice(answer.status, bool(answer.actions), bool(pending),
                                   refused=lambda: self._refused(answer.actions, pending))
         if act is decide.PaperAct.KEEP:
-            return self._keep(pending, FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
+            return (yield from self._keep(pending, FailureKind.PLANNER, answer.status.value,
+                                          self._no_plan(answer, scenario)))
         if act is decide.PaperAct.WAIT:
             self._fail(FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
             self.doing = "waiting without a plan"
-            return self.executor.hold(LOOP.wait_s, self.grid.speed, self._tick)
+            return (yield from self.executor.holding(LOOP.wait_s, self.grid.speed))
         if act is decide.PaperAct.DRIVE:
             self.doing = "drive (nothing to overtake)"
             self.executor.reset_reference()
             profile = plan_profiles((Action.DRIVE,), pose.along_mps, self.grid)[0]
-            return self.executor.run(Action.DRIVE, self._tick, profile)
+            return (yield from self.executor.action(Action.DRIVE, profile))
         if act is decide.PaperAct.HOLD:
             self.doing = "driving on in lane (an overtake refused: the tracker holds a contradiction)"
-            return self._hold_a_sweep()
+            return (yield from self._hold_a_sweep())
         self._sight(readings, pose.x_m)
-        return self._execute(answer.actions, answer.states, framed.seen, pose.along_mps, framed.frame_mps)
+        return (yield from self._execute(answer.actions, answer.states, framed.seen, pose.along_mps, framed.frame_mps))
 
-    def _while_planning(self) -> bool:
+    def _while_planning(self) -> Steps:
         """A sound decision's snapshot ages while the planner runs: the world moves on for ``LOOP.plan_budget_s``
         (one control step) before the decision acts, the AV keeping its reference speed in its lane; the sound model
         plans for it (its bounds' ``latency_s``: ``spec.sound.Sound.age_m``). The paper model's plans act at their
@@ -579,16 +597,16 @@ class Simulator:
         meanwhile."""
         if not self.doing.startswith("planning ("):  # a decision that did nothing since the last: not nested again
             self.doing = f"planning ({self.doing})"
-        return self.executor.hold(LOOP.plan_budget_s, self.executor.v_ref_mps, self._tick)
+        return (yield from self.executor.holding(LOOP.plan_budget_s, self.executor.v_ref_mps))
 
-    def _sensing_stop(self, pending: tuple[Action, ...], err: ScenarioError) -> bool:
+    def _sensing_stop(self, pending: tuple[Action, ...], err: ScenarioError) -> Steps:
         """The paper model's snapshot could not be read (or made no scenario): the plan under way goes on, else the
         stop is recorded and the AV waits in lane."""
         if pending:
-            return self._keep(pending, FailureKind.SENSING, err.reason, str(err))
+            return (yield from self._keep(pending, FailureKind.SENSING, err.reason, str(err)))
         self._fail(FailureKind.SENSING, err.reason, str(err))
         self.doing = "waiting after a sensing failure"
-        return self.executor.hold(LOOP.wait_s, self.grid.speed, self._tick)
+        return (yield from self.executor.holding(LOOP.wait_s, self.grid.speed))
 
     def _planned(self, answer: Answer, scenario: Scenario, lane: Lane) -> None:
         """Count a plan, its latency and (in the AV's lane) its missed opportunity; keep every SNAPSHOT_EVERY-th
@@ -601,7 +619,7 @@ class Simulator:
             self.summary.snapshots.append(scenario_to_dict(scenario))
 
     # -- the sound model's decisions ----------------------------------------------------------------------------
-    def _sound_decision(self) -> bool:
+    def _sound_decision(self) -> Steps:
         """One decision of the sound model from a fresh snapshot (the AV's measured speed is the plan's start): a
         plan, executed while containment holds; without one, a safe step in lane (``oracle.sound.keep_lane``);
         without that, the fallback (``spec.envelope.MinimalRisk``)."""
@@ -614,7 +632,7 @@ class Simulator:
         except ScenarioError as err:
             self._watch((), pose.x_m, lane)
             self._fail(FailureKind.SENSING, err.reason, str(err))
-            return self._fallback(f"sensing: {err.reason}")
+            return (yield from self._fallback(f"sensing: {err.reason}"))
         view_m = self._view_m(readings, pose.y_m)
         self.summary.shadowed += int(view_m is not None)
         self._watch(readings, pose.x_m, lane, view_m)
@@ -624,16 +642,16 @@ class Simulator:
             scenario = self.planner.scenario(readings, lane, pose.along_mps, view_m)
         except ScenarioError as err:
             self._fail(FailureKind.SENSING, err.reason, str(err))
-            return self._fallback(f"sensing: {err.reason}")
+            return (yield from self._fallback(f"sensing: {err.reason}"))
         answer = self.planner.plan(scenario)
         self._planned(answer, scenario, lane)
         act = self._sound_choice(answer, scenario, readings, pose)
-        if not self._while_planning():
+        if not (yield from self._while_planning()):
             return False
-        return act()
+        return (yield from act())
 
     def _sound_choice(self, answer: Answer, scenario: Scenario, readings: tuple[Reading, ...],
-                      pose: Pose) -> Callable[[], bool]:
+                      pose: Pose) -> Callable[[], Steps]:
         """What a sound decision does, chosen when its snapshot (``readings``, the AV at ``pose``) was taken: the
         plan, a step in lane, what the last decision proved, or the fallback; it acts once the planner's time is over
         (``_while_planning``)."""
@@ -669,7 +687,7 @@ class Simulator:
             return functools.partial(self._keep_proved, choice.why)
         return functools.partial(self._fallback, choice.why)
 
-    def _keep_proved(self, why: str) -> bool:
+    def _keep_proved(self, why: str) -> Steps:
         """No plan and no step from the fresh snapshot (its cells may be coarser than what the last decision knew),
         while the last decision's assumptions still hold: go on with what that decision proved, under its
         containment: the rest of its plan, or, after its end, its minimal-risk manoeuvre."""
@@ -684,20 +702,20 @@ class Simulator:
             # on the last decision's reference and clock: its windows, its position reference, its speed profile; the
             # control steps since its last action ended (the sweep awaited, this decision's planning: the AV held its
             # reference speed) are the kept plan's first
-            return self._run_proved(pending, self.pending_profiles, len(pending), "the last plan, kept",
-                                    since=self.boundary)
+            return (yield from self._run_proved(pending, self.pending_profiles, len(pending), "the last plan, kept",
+                                                since=self.boundary))
         self.summary.minimal_risk_steps += 1
         self.doing = f"minimal-risk manoeuvre (the last decision's, {why})"
         self.enveloped = True
         since_s = self.summary.sim_time_s
         try:
-            return self._brake_in_lane(emergency=False)
+            return (yield from self._brake_in_lane(emergency=False))
         finally:
             self.enveloped = False
             self._observe(self.summary.plans, 0, None, None, [], since_s)
 
     def _sound_execute(self, actions: tuple[Action, ...], speed_mps: float, what: str,
-                       escape: tuple[Action, ...] = ()) -> bool:
+                       escape: tuple[Action, ...] = ()) -> Steps:
         """Execute a sound decision's actions from the speed it planned with (the reference starts at the car), while
         its containment holds as the AV senses it; a sensed breach ends it at once (after any sideways move), and the
         next decision re-plans from a fresh snapshot. The caller has sighted what the decision knew (``_sight``).
@@ -709,11 +727,11 @@ class Simulator:
         self.executor.reset_reference()
         self.escape_pending = bool(escape)
         sequence = (*actions, *escape)
-        return self._run_proved(sequence, plan_profiles(sequence, speed_mps, self.grid, to_common=False),
-                                len(actions), what)
+        return (yield from self._run_proved(sequence, plan_profiles(sequence, speed_mps, self.grid, to_common=False),
+                                            len(actions), what))
 
     def _run_proved(self, sequence: tuple[Action, ...], profiles: list[SpeedProfile], steps: int, what: str,
-                    since: tuple[float, float] | None = None) -> bool:
+                    since: tuple[float, float] | None = None) -> Steps:
         """Run the first ``steps`` (at most ``replan_after_actions``) of a proved ``sequence`` along its
         ``profiles``, from where the position reference stands; the rest stays pending for the next decision.
         ``since``: when the sequence was due to start and where its reference stood then (the end of the action
@@ -738,8 +756,8 @@ class Simulator:
                 self.pending, self.pending_profiles = sequence[k + 1:], profiles[k + 1:]
                 since_s = self.summary.sim_time_s
                 reversed_before = self.summary.reversed_moves
-                ran = self.executor.run(action, self._tick, profiles[k], stop=lambda: self.interrupt and self.swept(),
-                                        skip_s=skip_s if k == 0 else 0.0, reverse=self._reverses)
+                ran = yield from self.executor.action(action, profiles[k], stop=lambda: self.interrupt and self.swept(),
+                                                      skip_s=skip_s if k == 0 else 0.0, reverse=self._reverses)
                 self._observe(self.summary.plans, k + 1, action, None, [], since_s)
                 if not ran:
                     return False
@@ -772,7 +790,7 @@ class Simulator:
         self.pending, self.pending_profiles, self.proved, self.escape_pending = (), [], None, False
         return True
 
-    def _fallback(self, cause: str) -> bool:
+    def _fallback(self, cause: str) -> Steps:
         """The minimal-risk manoeuvre takes over for ``MINIMAL_RISK.takeover_s``: back to the left lane from the
         right one, then brake in lane to the hold speed, and down to the sensed vehicle ahead's speed while it is
         nearer than the safety specification allows (``_brake_in_lane``)."""
@@ -789,14 +807,15 @@ class Simulator:
         since_s = self.summary.sim_time_s
         try:
             if Executor.lane_of(pose.y_m) is Lane.RIGHT:
-                if not self._await_room_to_return():
+                if not (yield from takeover.awaiting_room(self.cockpit, self.scene.lane_y(Lane.RIGHT),
+                                                          self.executor.dt_s)):
                     return False
                 self.executor.reset_reference()
-                if not self.executor.run(Action.LEFT_LANE_CHANGE, self._tick,
-                                         fallback.return_profile(self._around(), self.car.pose().along_mps)):
+                if not (yield from self.executor.action(
+                        Action.LEFT_LANE_CHANGE, fallback.return_profile(self._around(), self.car.pose().along_mps))):
                     return False
             self.pending, self.proved = (), None
-            return self._brake_in_lane(emergency=True)
+            return (yield from self._brake_in_lane(emergency=True))
         finally:
             self._observe(self.summary.plans, 0, None, None, [], since_s)
 
@@ -805,48 +824,18 @@ class Simulator:
         return fallback.Around(self.lead, self.follower, self.oncoming, self.sweep is not None,
                                None if self.watch is None else self.watch.bounds)
 
-    def _await_room_to_return(self) -> bool:
-        """The fallback in the right lane: hold the lane, at the speeds ``fallback.wait_command`` says, until it
-        says return (the sensed left lane leaves room, or the wait ends). False on a collision."""
-        y_ref = self.scene.lane_y(Lane.RIGHT)
-        command = self.car.pose().along_mps
-        held = 0
-        while True:
-            beside = fallback.alongside(self._sense())
-            after = fallback.wait_command(self._around(), self.car.pose().along_mps, beside, command,
-                                          (held + 1) * self.executor.dt_s, self.executor.dt_s)
-            if after is None:
-                return True
-            held, command = held + 1, after
-            self.executor.reset_reference()
-            if not self.executor.control(command, y_ref, 0.0, self._tick):
-                return False
-
-    def _brake_in_lane(self, emergency: bool) -> bool:
-        """The minimal-risk manoeuvre for ``MINIMAL_RISK.takeover_s``: brake in lane to the hold speed, each control
-        step's command from ``fallback.brake_command``. With ``emergency`` (the fallback) no position is kept.
-        Without it (a proved continuation), a breach ends it at once, and the position reference runs on from the
-        plan's (the envelope the proof assumed bounds the car's position about it; a speed command alone would let
-        the car drift for as long as the manoeuvre lasts)."""
+    def _brake_in_lane(self, emergency: bool) -> Steps:
+        """The minimal-risk manoeuvre in the AV's lane (``takeover.braking_in_lane``) towards the hold speed: the
+        fallback's (``emergency``), or a proved continuation's, which a breach ends on a sweep."""
         assert self.watch is not None
         low = self.watch.bounds.same_mps.low_mps
         if not emergency and self.containment is not None:  # the proved manoeuvre's own hold speed
             low = self.containment.hold_floor_mps
         hold = fallback.in_lane_hold_mps(emergency, self.car.pose().along_mps, low)
-        command = self.car.pose().along_mps
         y_ref = self.scene.lane_y(self.executor.lane)
         self.executor.lane_due = self.executor.lane
-        dt_s = self.executor.dt_s
-        for _ in range(max(1, round(MINIMAL_RISK.takeover_s / dt_s))):
-            command = fallback.brake_command(self._around(), self.car.pose().along_mps, command, hold, emergency,
-                                             self._room_needed, dt_s)
-            if emergency:  # towards a standstill no position is to be kept; a proved continuation keeps its own
-                self.executor.reset_reference()
-            if not self.executor.control(command, y_ref, 0.0, self._tick):
-                return False
-            if not emergency and self.interrupt and self.swept():
-                break
-        return True
+        return (yield from takeover.braking_in_lane(self.cockpit, hold, y_ref, self.executor.dt_s, emergency,
+                                                    self._room_needed, lambda: self.interrupt and self.swept()))
 
     def _room_needed(self, speed_mps: float) -> bool:
         """Whether a decision from the last sweep at ``speed_mps`` would find no safe step in lane, where the fallback
@@ -899,7 +888,7 @@ class Simulator:
     def _no_plan(answer: Answer, scenario: Scenario) -> str:
         return f"{answer.status.value} for {scenario}"
 
-    def _keep(self, pending: tuple[Action, ...], kind: FailureKind, cause: str, detail: str) -> bool:
+    def _keep(self, pending: tuple[Action, ...], kind: FailureKind, cause: str, detail: str) -> Steps:
         """A re-plan found no plan (or could not use its snapshot) while a model-checked plan was under way:
         go on with that plan, for at most ``replan_after_actions`` actions, then plan again.
 
@@ -913,14 +902,14 @@ class Simulator:
         kept = pending[: LOOP.replan_after_actions]
         for k, (action, profile) in enumerate(zip(kept, plan_profiles(kept, self.car.pose().along_mps, self.grid))):
             self.doing = f"{action.value} (kept plan after {kind.value}: {cause}, step {k + 1} of {len(kept)})"
-            if not self.executor.run(action, self._tick, profile):
+            if not (yield from self.executor.action(action, profile)):
                 return False
             self.summary.actions += 1
         self.pending = pending[len(kept):]
         return True
 
     def _execute(self, actions: tuple[Action, ...], states: tuple[State, ...], seen: tuple[Reading, ...],
-                 speed_mps: float, frame_mps: float) -> bool:
+                 speed_mps: float, frame_mps: float) -> Steps:
         plan_id = self.summary.plans
         self.executor.reset_reference(reference_offset_m(speed_mps, frame_mps, action_speed_mps(actions[0], self.grid)))
         cars = {car.body: car for car in self.traffic.cars()}
@@ -934,7 +923,7 @@ class Simulator:
             self._implied = tolerance.implied_gaps({key: v for key, v in tracked.items()
                                                     if cars[key[2]].respawns == generation[key[2]]}, states[k + 1],
                                                    self.grid)
-            ok = self.executor.run(action, self._tick, profile)
+            ok = yield from self.executor.action(action, profile)
             self._implied = {}
             if not ok:
                 return False

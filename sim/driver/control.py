@@ -11,11 +11,18 @@ without it the car ran on past the new lane's centre to the road's edge)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Generator
 from dataclasses import dataclass
 
 from spec.actions import ACTION_RULES, Action
 from spec.envelope import TRACKING
 from spec.motion import SpeedProfile
+
+#: One control step's references: the speed along the road (m/s), the lateral position (m) and its rate (m/s).
+Command = tuple[float, float, float]
+#: What the AV does over control steps: each step's references, told after each whether the world's step went on
+#: (False: a collision or a loss of control, and no step follows); returns whether every step did.
+Steps = Generator[Command, bool, bool]
 
 K_X = 0.8  # 1/s: speed correction per metre behind the position reference
 K_Y, K_VY = 3.0, 3.5  # lateral PD gains (1/s^2, 1/s)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 import sim.parts as parts_module
+from sim.executor import Steps
 from sim.parts import DriveConfig
 from sim.simulator import START_UP_S, Simulator
 from spec.actions import Action
@@ -73,13 +74,13 @@ def test_a_replan_that_cannot_plan_keeps_the_plan_under_way_and_says_why(monkeyp
         monkeypatch.setattr(parts_module, "discretise", unusable)
         sim.pending = (Action.DRIVE,) * 12
         actions = sim.summary.actions
-        assert sim._one_plan()
+        assert sim.decide_once()
         assert sim.summary.actions == actions + 10 and sim.pending == (Action.DRIVE,) * 2  # at most 10, then re-plan
         kept = [(f.kind, f.cause) for f in sim.summary.kept_plans]
         assert kept == [(FailureKind.SENSING, "two vehicles in one cell")]
         assert not sim.summary.failures
         sim.pending = ()
-        sim._one_plan()  # no plan under way: now it is a failure
+        sim.decide_once()  # no plan under way: now it is a failure
         assert [(f.kind, f.cause) for f in sim.summary.failures] == [(FailureKind.SENSING, "two vehicles in one cell")]
     finally:
         sim.close()
@@ -102,8 +103,8 @@ def test_tables_name_failure_kinds_by_their_value() -> None:
 class Standing(Simulator):
     """A simulator whose AV stands wherever a decision would be taken: a world it can never get through."""
 
-    def _one_plan(self) -> bool:
-        return self.executor.hold(LOOP.wait_s, 0.0, self._tick)
+    def _one_plan(self) -> Steps:
+        return (yield from self.executor.holding(LOOP.wait_s, 0.0))
 
 
 @pytest.mark.parametrize("restart", [False, True])

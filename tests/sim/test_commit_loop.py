@@ -9,6 +9,7 @@ from typing import Any
 
 import pytest
 
+from sim.executor import Steps
 from sim.parts import DriveConfig
 from sim.simulator import Simulator
 from sim.summary import RunSummary
@@ -36,31 +37,31 @@ class Recorded(Simulator):
         self.ends: list[tuple[float, float]] = []  # after every action run: the position reference, and when
         self.resets = 0
         self.kept_ends: list[tuple[float, float]] = []  # each kept plan's first action's end: reference, when
-        reset, run = self.executor.reset_reference, self.executor.run
+        reset, action = self.executor.reset_reference, self.executor.action
 
         def counted(ahead_m: float = 0.0) -> None:
             self.resets += 1
             reset(ahead_m)
 
-        def ran(*args: Any, **kwargs: Any) -> bool:
-            ok = run(*args, **kwargs)
+        def ran(*args: Any, **kwargs: Any) -> Steps:
+            ok = yield from action(*args, **kwargs)
             self.ends.append((self.executor.x_ref_m, self.summary.sim_time_s))
             return ok
 
         self.executor.reset_reference = counted  # type: ignore[method-assign]
-        self.executor.run = ran  # type: ignore[method-assign]
+        self.executor.action = ran  # type: ignore[method-assign]
 
     def _sound_execute(self, actions: tuple[Action, ...], speed_mps: float, what: str,
-                       escape: tuple[Action, ...] = ()) -> bool:
+                       escape: tuple[Action, ...] = ()) -> Steps:
         sequence = (*actions, *escape)
         profiles = plan_profiles(sequence, speed_mps, self.grid, to_common=False)
         self.decided.append((sequence, profiles, self.car.pose().x_m, self.summary.sim_time_s))
-        return super()._sound_execute(actions, speed_mps, what, escape)
+        return (yield from super()._sound_execute(actions, speed_mps, what, escape))
 
-    def _keep_proved(self, why: str) -> bool:
+    def _keep_proved(self, why: str) -> Steps:
         before, runs = self.resets, len(self.ends)
         pending, profiles = self.pending, list(self.pending_profiles)
-        ok = super()._keep_proved(why)
+        ok = yield from super()._keep_proved(why)
         if pending:
             self.kept.append((pending, profiles, self.resets > before, len(self.decided)))
             self.kept_ends.append(self.ends[runs])

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from sim.executor import Steps
 from sim.parts import DriveConfig
 from sim.simulator import Simulator, run_drive
 from sim.summary import RunSummary
@@ -224,10 +225,17 @@ def test_planning_is_named_once_in_what_the_av_was_doing_however_many_decisions_
     from sim.simulator import Simulator
 
     held: list[float] = []
-    sim = SimpleNamespace(doing="brake (plan 3, step 1 of 2)", _tick=None,
-                          executor=SimpleNamespace(v_ref_mps=7.0, hold=lambda s, v, tick: held.append(s) or True))
+
+    def holding(seconds: float, _speed_mps: float) -> Steps:
+        held.append(seconds)
+        return True
+        yield  # no control step: a generator that holds nothing
+
+    sim = SimpleNamespace(doing="brake (plan 3, step 1 of 2)", executor=SimpleNamespace(v_ref_mps=7.0, holding=holding))
     for _ in range(3):
-        assert Simulator._while_planning(sim)  # type: ignore[arg-type]
+        with pytest.raises(StopIteration) as done:
+            next(Simulator._while_planning(sim))  # type: ignore[arg-type]
+        assert done.value.value is True
     assert sim.doing == "planning (brake (plan 3, step 1 of 2))" and held == [LOOP.plan_budget_s] * 3
 
 
