@@ -19,105 +19,37 @@ envelope breach is an executor fault, which counts as inside the assumptions (an
 does not: the simulator's attribution).
 
 That check reads the truth: it is the simulator's bookkeeping (what broke, when, and whose a collision is), and it
-never steers the AV. The AV's own monitor (``Containment.sense``) sees what its planner sees, each sweep's readings
-without identities: a reading that no vehicle's interval nor any phantom's can explain, the sensing error allowed
-once more (the reading's own), is a breach the AV knows of, and that is what ends a sound decision. A vehicle that
-leaves its bounds unseen (a speed outside them while still inside its interval, a reading the sensors missed) goes
-on until the sensors show it; the run counts those decisions (``unseen``).
+never steers the AV. The AV's own monitor (``sim.driver.monitor.Monitor``, which ``Containment`` extends) sees what
+its planner sees, each sweep's readings without identities: a reading that no vehicle's interval nor any phantom's
+can explain, the sensing error allowed once more (the reading's own), is a breach the AV knows of, and that is what
+ends a sound decision. A vehicle that leaves its bounds unseen (a speed outside them while still inside its interval,
+a reading the sensors missed) goes on until the sensors show it; the run counts those decisions (``unseen``).
 """
 
 from __future__ import annotations
 
-import enum
-import math
 from collections import Counter
 from collections.abc import Callable, Iterable
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any
 
-from sim.discretiser import in_window, reading_cell
+from sim.driver.monitor import ROUNDING_M, Breach, BreachKind, Monitor, apart, outside
 from sim.driver.readings import Reading
 from sim.faults import GHOST_BODY
 from sim.scene import Scene
 from sim.vehicle import KinematicCar, Pose
-from spec.actions import Action
-from spec.assumptions import Bounds
 from spec.grid import Grid
 from spec.lanes import Lane
 from spec.physical import CAR, ROAD
 from spec.safety import SAFETY
 from spec.scenario import Scenario
-from spec.sound import Sound, Vehicle, held_vehicle, held_windows_s, reach_m, slowest_ahead_mps, vehicles
+from spec.sound import Sound, Vehicle, reach_m
 
 #: Breach records kept per run (the counts are exact beyond it).
 MAX_RECORDS = 200
-#: A vehicle this close outside its interval is inside it: floating-point rounding of positions a kilometre from the
-#: origin (~1e-13 m), not motion. The paper's world makes it matter: exact sensing and every vehicle at 7 m/s give
-#: intervals of no width, which every vehicle left by 1e-12 m within a control step (each decision ended by a breach).
-ROUNDING_M = 1e-6
-#: The same for speeds: the paper's world sets every vehicle's speed to the bound's one value, exactly.
+#: A speed this close outside its bounds is inside them (``sim.driver.monitor.ROUNDING_M`` for speeds): the paper's
+#: world sets every vehicle's speed to the bound's one value, exactly.
 ROUNDING_MPS = 1e-9
-#: The ``body`` of a breach the AV's own monitor found: a reading, no vehicle's identity (the AV is -1).
-SENSED_BODY = -4
-
-
-class BreachKind(enum.Enum):
-    """Which assumption a breach broke."""
-
-    #: behind its interval's slow end, or driving slower than its lane's lowest speed (a vehicle whose speed was
-    #: measured: than braking at b_max from its interval allows)
-    TOO_SLOW = "too slow"
-    #: beyond its interval's fast end, or driving faster than its lane's highest speed (a vehicle whose speed was
-    #: measured: than speeding up at a_max from its interval allows)
-    TOO_FAST = "too fast"
-    #: faster, or farther, than a measured same-direction vehicle may be while the AV is in the passing lane under
-    #: ``Overtaken.NO_ACCELERATION`` (it sped up while being overtaken), within what its own dynamics allow
-    ACCELERATED = "accelerated while overtaken"
-    SENSING = "sensing error"  # outside its interval at the snapshot itself (sensed farther off than the error
-    # bound; a measured speed: a range-rate reading beyond its error bound), or a reading of no vehicle (a ghost)
-    APPEARED = "appeared"  # a vehicle the decision did not know, where no phantom could be
-    FOLLOWER = "follower too close"  # one behind the AV in its lane nearer than the safety specification allows
-    AV_ENVELOPE = "AV envelope"  # the AV off its reference by more than its stated tracking, or its sideways move late
-
-    @property
-    def inside(self) -> bool:
-        """Whether a collision after this breach still counts as inside the assumptions (the executor's fault)."""
-        return self is BreachKind.AV_ENVELOPE
-
-    @property
-    def ends_decision(self) -> bool:
-        """Whether the sound model re-plans on it: not on a follower (avoiding the AV is the follower's task, and
-        braking would make it worse), on every other breach."""
-        return self is not BreachKind.FOLLOWER
-
-
-@dataclass(frozen=True, slots=True)
-class Breach:
-    """One vehicle (or the AV) outside its set: when, which bound, by how much, during what."""
-
-    decision: int
-    km: float
-    t_s: float  # the drive's clock
-    vehicle: str
-    body: int  # -1: the AV
-    kind: BreachKind
-    by_m: float  # beyond the bound: metres, or m/s for a speed (``speed``)
-    doing: str
-    speed: bool = False  # whether the bound broken is a speed (a vehicle's or the AV's), not a position
-    sensed: bool = False  # found by the AV's own monitor in a sweep's readings (``Containment.sense``), not the truth
-
-    @property
-    def size(self) -> str:
-        """How far beyond the bound, with its unit."""
-        return f"{self.by_m:.1f} {'m/s' if self.speed else 'm'}"
-
-    def to_json(self) -> dict[str, Any]:
-        return {**asdict(self), "kind": self.kind.value, "km": round(self.km, 3), "t_s": round(self.t_s, 2),
-                "by_m": round(self.by_m, 2)}
-
-    @classmethod
-    def from_json(cls, data: dict[str, Any]) -> Breach:
-        return cls(**{**data, "kind": BreachKind(data["kind"])})
 
 
 @dataclass(slots=True)
@@ -148,65 +80,29 @@ class ContainmentReport:
                    [Breach.from_json(b) for b in data["breaches"]])
 
 
-class Containment:
-    """The sets one decision was made against, from its snapshot, and the breaches found since."""
+class Containment(Monitor):
+    """The sets one decision was made against, from its snapshot (the AV's own ``Monitor``), with the truth held
+    against them: the breaches found since."""
 
     def __init__(self, decision: int, sound: Sound, scenario: Scenario, seen: tuple[Reading, ...], grid: Grid,
                  av_x_m: float, t_s: float, cars: Iterable[KinematicCar]) -> None:
-        self.decision, self.bounds, self.tracking = decision, sound.bounds, sound.tracking
-        self.x0_m, self.t0_s = av_x_m, t_s
-        self.lane, self.sound = scenario.lane, sound
-        #: the decision's passing windows (``passing``): measured same-direction vehicles hold their speed in them
-        self.windows_s: tuple[tuple[float, float], ...] = ()
-        found = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, grid, sound, scenario.left_m,
-                         scenario.right_m, scenario.left_mps, scenario.right_mps)
-        by_index = {(v.lane, v.index): v for v in found if v.index is not None}
-        self.phantoms = {lane: [v for v in found if v.index is None and v.lane is lane] for lane in Lane}
-        self.tracked: dict[int, Vehicle] = {}
+        super().__init__(decision, sound, scenario, seen, grid, av_x_m, t_s)
+        self.tracking = sound.tracking
         cars = list(cars)
         truth_m = {car.body: car.x_m - av_x_m for car in cars}  # the bookkeeping only
         own = _own_readings(seen, truth_m)
-        read: dict[Vehicle, None] = {}  # the vehicles the snapshot's readings make, in order: what the AV knows
-        for lane in Lane:  # a lane's cells in the window, nearest first, are its scenario's vehicles in order
-            readings = sorted((r for r in seen if r.lane is lane), key=lambda r: r.dx_m)  # readings in one cell: one
-            cells = [(c, r) for r in readings if in_window(c := reading_cell(r, scenario.lane, grid), grid)]  # hull
-            order = sorted({c for c, _ in cells})
-            for cell, reading in cells:
-                vehicle = by_index[(lane, order.index(cell))]
-                read[vehicle] = None
-                if own.get(reading.body) is reading:
-                    self.tracked[reading.body] = vehicle
+        #: the vehicle the decision knew each body as: the one its own reading made
+        self.tracked = {reading.body: vehicle for reading, vehicle in self.placed if own.get(reading.body) is reading}
         # a reading of no vehicle (a ghost a fault made, or one the tracker holds), or a vehicle's second reading away
         # from it (a fake gap's displaced copy held beside the vehicle's own kept track): the snapshot broke the sensing
         # assumption (every reading within the error bound of a vehicle), whatever it is planned around
         self.ghosts = [r for r in seen if r.body == GHOST_BODY]
         error_m = self.bounds.sensing_error_m
         self.misread = [(r, miss) for r in seen if r.body in own and r is not own[r.body]
-                        and (miss := abs(_apart(*r.interval_m, truth_m[r.body] - error_m, truth_m[r.body] + error_m)))]
+                        and (miss := abs(apart(*r.interval_m, truth_m[r.body] - error_m, truth_m[r.body] + error_m)))]
         self.generation = {car.body: car.respawns for car in cars}  # a respawned car is a new vehicle
         self.breached: dict[int, Breach] = {}  # body (-1: the AV) -> its first breach under this decision
-        # what may explain a reading of each lane (``sense``): the vehicles the decision knew (from its readings, not
-        # the bookkeeping's bodies), then the phantoms
-        self.explaining = {lane: [*(v for v in read if v.lane is lane), *self.phantoms[lane]] for lane in Lane}
-        self.sensed: Breach | None = None  # the first reading the AV's own monitor could not explain (``sense``)
         self.ended = False  # the decision has ended (its unseen breaches counted: ``unseen``)
-        #: the speed the decision's minimal-risk manoeuvre brakes to, as its proof took it (``slowest_ahead_mps``: a
-        #: standstill where a vehicle's speed was measured)
-        self.hold_floor_mps = slowest_ahead_mps(sound, found)
-
-    def shift_x(self, dx_m: float) -> None:
-        """The world was re-centred by ``dx_m``."""
-        self.x0_m += dx_m
-
-    def passing(self, actions: tuple[Action, ...]) -> None:
-        """The decision executes ``actions``: under ``Overtaken.NO_ACCELERATION`` its proof took every measured
-        same-direction vehicle not to speed up while the AV is in the passing lane (``passing_windows_s``)."""
-        self.windows_s = held_windows_s(self.sound, self.lane, actions)
-
-    def assumed(self, v: Vehicle, elapsed_s: float) -> Vehicle:
-        """``v`` as the decision's proof took it ``elapsed_s`` after the snapshot: within a passing window, a measured
-        same-direction vehicle that has not sped up since the window began (``passing``)."""
-        return held_vehicle(v, self.windows_s, elapsed_s)
 
     def _known(self, car: KinematicCar) -> Vehicle | None:
         """The vehicle the decision knew ``car`` as (None: unknown)."""
@@ -279,7 +175,7 @@ class Containment:
             ends = reach.get(id(v))
             if ends is None:
                 ends = reach[id(v)] = reach_m(self.assumed(v, elapsed_s), self.bounds, elapsed_s)
-            misses.append(_outside(dx, *ends))
+            misses.append(outside(dx, *ends))
         return min(misses, key=abs, default=0.0)
 
     def _fast_kind(self, known: Vehicle, elapsed_s: float, dx_m: float) -> BreachKind:
@@ -312,7 +208,7 @@ class Containment:
         if assumed.dynamics is not None:
             low, high = assumed.dynamics.speeds_mps(max(0.0, elapsed_s))
         along_mps = car.velocity_mps if lane is Lane.LEFT else -car.velocity_mps
-        miss = _outside(along_mps, low, high, ROUNDING_MPS)
+        miss = outside(along_mps, low, high, ROUNDING_MPS)
         if miss == 0.0:
             return None
         if known.dynamics is not None and elapsed_s <= 0.0:  # outside what was measured at the snapshot itself
@@ -342,44 +238,6 @@ class Containment:
         return self._breach(Breach(self.decision, km, t_s, f"the AV ({what})", -1, BreachKind.AV_ENVELOPE, by,
                                    doing, speed=what == "speed"))
 
-    def sense(self, t_s: float, km: float, av_x_m: float, readings: Iterable[Reading], doing: str,
-              followed: bool = False) -> Breach | None:
-        """The AV's own monitor, on one sweep's readings as its planner gets them (no identities, no truth): the first
-        reading whose interval (a kept track's spread, widened by the sensing error bound: the reading's own error)
-        meets no interval of its lane at ``t_s``, neither a vehicle's the decision knew nor a phantom's, if new. An
-        oncoming reading the AV has passed is no vehicle any condition speaks of. Its kind is read from the nearest
-        interval: behind a known vehicle's (``too slow`` in the left lane), beyond it (``too fast``; ``accelerated
-        while overtaken`` where only a passing window's held speed puts it there), or none known near
-        (``appeared``). With ``followed`` (the AV in the left lane, or moving out of it) a left-lane reading behind the
-        AV's centre is a vehicle that follows it, which cannot pass it in its lane, so every condition a decision
-        proved bounds it from ahead: one behind its interval (``too slow``) breaks none of them and is not acted on
-        (the truth's bookkeeping, ``check``, still counts it)."""
-        if self.sensed is not None:
-            return None
-        elapsed, shift_m = t_s - self.t0_s, av_x_m - self.x0_m
-        for r in readings:
-            if r.lane is Lane.RIGHT and r.dx_m < -CAR.length_m:
-                continue
-            misses = [(_miss_m(r, self.assumed(v, elapsed), self.bounds, shift_m, elapsed), v)
-                      for v in self.explaining[r.lane]]
-            if any(miss == 0.0 for miss, _ in misses):
-                continue
-            miss, nearest = min(misses, key=lambda m: abs(m[0]), default=(math.inf, None))
-            if nearest is None or nearest.index is None or not math.isfinite(miss):
-                kind = BreachKind.APPEARED
-            elif (miss < 0) == (r.lane is Lane.LEFT):
-                kind = BreachKind.TOO_SLOW
-            else:
-                held = self.assumed(nearest, elapsed) is not nearest
-                kind = BreachKind.ACCELERATED if held and _miss_m(r, nearest, self.bounds, shift_m, elapsed) == 0.0 \
-                    else BreachKind.TOO_FAST
-            if followed and kind is BreachKind.TOO_SLOW and r.lane is Lane.LEFT and r.dx_m < 0:
-                continue  # a follower farther behind than its bounds allow
-            self.sensed = Breach(self.decision, km, t_s, f"a sensed {r.lane.value}-lane reading at {r.dx_m:+.1f} m",
-                                 SENSED_BODY, kind, abs(miss) if math.isfinite(miss) else 0.0, doing, sensed=True)
-            return self.sensed
-        return None
-
     def _breach(self, breach: Breach) -> Breach:
         self.breached[breach.body] = breach
         return breach
@@ -394,41 +252,6 @@ class Containment:
         return any(body != -1 and b.kind.ends_decision for body, b in self.breached.items())
 
 
-class Sighting:
-    """The vehicles one snapshot showed, as the planner knows them (readings: a lane and a distance, no identity), for
-    the paper's re-planning rule: re-plan when "new surrounding vehicles were sensed". A later reading is a vehicle
-    sensed anew when no reading of the snapshot can explain it under ``bounds``: that reading's interval (the sensing
-    error allowed), grown by its lane's speeds since (``spec.sound.reach_m``), meets none of the new reading's (its
-    own error allowed). A vehicle read at the snapshot and missed since explains nothing extra; one hidden then and
-    come out (of the oncoming lane's stretch a left-lane vehicle hid, ``sim.sensors.oncoming_view_m``), or entered
-    the sensors' range, is new."""
-
-    def __init__(self, readings: Iterable[Reading], bounds: Bounds, av_x_m: float, t_s: float) -> None:
-        self.bounds, self.x0_m, self.t0_s = bounds, av_x_m, t_s
-        error_m = bounds.sensing_error_m
-        self.known = {lane: [Vehicle(lane, None, r.interval_m[0] - error_m, r.interval_m[1] + error_m, "")
-                             for r in readings if r.lane is lane] for lane in Lane}
-
-    def shift_x(self, dx_m: float) -> None:
-        """The world was re-centred by ``dx_m``."""
-        self.x0_m += dx_m
-
-    def new(self, readings: Iterable[Reading], av_x_m: float, t_s: float) -> bool:
-        """Whether a reading of this sweep (the AV at ``av_x_m`` at ``t_s``) is a vehicle the snapshot did not show."""
-        elapsed, shift_m = t_s - self.t0_s, av_x_m - self.x0_m
-        for r in readings:
-            if not any(_miss_m(r, v, self.bounds, shift_m, elapsed) == 0.0 for v in self.known[r.lane]):
-                return True
-        return False
-
-
-def _miss_m(r: Reading, v: Vehicle, bounds: Bounds, shift_m: float, elapsed_s: float) -> float:
-    """How far reading ``r`` (its interval moved by ``shift_m`` into the snapshot's frame, widened by the sensing
-    error: the reading's own) lies outside where ``v`` can be ``elapsed_s`` after the snapshot: 0 where they meet."""
-    error_m, (lo, hi) = bounds.sensing_error_m, r.interval_m
-    return _apart(lo + shift_m - error_m, hi + shift_m + error_m, *reach_m(v, bounds, elapsed_s))
-
-
 def _own_readings(seen: Iterable[Reading], truth_m: dict[int, float]) -> dict[int, Reading]:
     """Each vehicle's own reading among the snapshot's (the bookkeeping: bodies and the truth): of a vehicle read more
     than once, the one nearest where it is."""
@@ -438,15 +261,3 @@ def _own_readings(seen: Iterable[Reading], truth_m: dict[int, float]) -> dict[in
                                                                                           - truth_m[r.body])):
             own[r.body] = r
     return own
-
-
-def _apart(lo: float, hi: float, low: float, high: float) -> float:
-    """How far ``[lo, hi]`` lies outside ``[low, high]``: negative below, positive above, 0 where they meet."""
-    return _outside(hi, low, math.inf) if hi < low else _outside(lo, -math.inf, high)
-
-
-def _outside(x: float, low: float, high: float, rounding: float = ROUNDING_M) -> float:
-    """How far ``x`` is outside ``[low, high]``: negative below, positive above, 0 inside (or within ``rounding``
-    of it)."""
-    miss = x - low if x < low else x - high if x > high else 0.0
-    return 0.0 if abs(miss) <= rounding else miss

@@ -31,9 +31,10 @@ import numpy as np
 
 from oracle.sound import keep_lane
 from sim import opportunity, tolerance
-from sim.containment import Breach, BreachKind, Containment, Sighting
+from sim.containment import Containment
 from sim.discretiser import discretise
 from sim.driver import control, decide, fallback, plan, takeover
+from sim.driver.monitor import Breach, BreachKind, Sighting
 from sim.driver.nearest import Nearest
 from sim.driver.readings import Reading
 from sim.executor import Executor, Steps

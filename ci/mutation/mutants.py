@@ -192,7 +192,7 @@ MUTANTS: tuple[Mutant, ...] = (
            "self.bounds.speeds(lane).high_mps) * dt_s + e_m", "self.bounds.speeds(lane).high_mps) * dt_s",
            "a new reading near a range edge explained as entering only within a sweep's travel, the sensing error "
            "left out"),
-    Mutant("containment-reading-error-doubled", "sim/containment.py",
+    Mutant("containment-reading-error-doubled", "sim/driver/monitor.py",
            "    error_m, (lo, hi) = bounds.sensing_error_m, r.interval_m",
            "    error_m, (lo, hi) = 2 * bounds.sensing_error_m, r.interval_m",
            "the AV's monitor allows a reading twice its own sensing error: it senses a breach 1.5 m late"),
@@ -229,7 +229,7 @@ MUTANTS: tuple[Mutant, ...] = (
            "                dynamics = v.dynamics.held_from(0.0)\n                if held_from_s is not None:",
            "a measured vehicle cut in ahead of taken as never speeding up, without the no-acceleration profile",
            ("tests/oracle/test_sound_measured.py",)),
-    Mutant("containment-overtaken-held-from-the-snapshot", "sim/containment.py",
+    Mutant("containment-overtaken-held-from-the-snapshot", "sim/driver/monitor.py",
            "return held_vehicle(v, self.windows_s, elapsed_s)",
            "return held_vehicle(v, tuple((0.0, t1) for _, t1 in self.windows_s), elapsed_s)",
            "containment holds a vehicle overtaken to the speed it had at the snapshot, not when the AV moved out",

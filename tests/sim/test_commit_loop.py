@@ -163,7 +163,7 @@ def test_an_encounter_while_a_decision_plans_is_attributed_under_the_decision_th
     acted yet. Once that decision acts, its own sets judge."""
     from types import SimpleNamespace
 
-    from sim.containment import Breach, BreachKind
+    from sim.driver.monitor import Breach, BreachKind
     from sim.simulator import Simulator
 
     appeared = Breach(7, 9.3, 1161.0, "unknown right-lane vehicle", 12, BreachKind.APPEARED, 28.4, "right_lane_change")

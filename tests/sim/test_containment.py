@@ -10,7 +10,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from sim.containment import BreachKind, Containment, ContainmentReport, Sighting
+from sim.containment import Containment, ContainmentReport
+from sim.driver.monitor import BreachKind, Sighting
 from sim.driver.readings import Reading
 from sim.vehicle import Pose
 from spec.assumptions import world_bounds

@@ -16,7 +16,7 @@ from ci.report.collect import collect
 from ci.report.histograms import breach_histograms, deviation_histograms
 from ci.report.render import to_html
 from ci.report.road import reproducer_drawing
-from sim.containment import Breach, BreachKind
+from sim.driver.monitor import Breach, BreachKind
 from sim.summary import RunSummary
 from spec.errors import ExitCode
 from tests.conftest import run_cli

@@ -1,4 +1,4 @@
-"""The AV's own containment monitor at its boundaries (``sim.containment.Containment.sense``): a reading is explained
+"""The AV's own containment monitor at its boundaries (``sim.driver.monitor.Monitor.sense``): a reading is explained
 while its interval, widened by the sensing error (its own), meets where a vehicle the decision knew can be (the
 snapshot's reading widened by the sensing error, grown by its lane's speed bounds since, or, for a vehicle whose
 speed was measured, by its own dynamics: braking at b_max to a standstill, speeding up at a_max); a reading just
@@ -13,8 +13,8 @@ from dataclasses import replace
 
 import pytest
 
-from sim.containment import BreachKind, Containment
 from sim.discretiser import discretise
+from sim.driver.monitor import BreachKind, Monitor
 from sim.driver.readings import Reading
 from spec.assumptions import world_bounds
 from spec.dynamics import Dynamics
@@ -34,13 +34,13 @@ NUDGE_M = 1e-3  # just inside or just beyond (the monitor's own slack is 1e-6 m)
 MEASURED_MPS = {Lane.LEFT: (5.0, 6.0), Lane.RIGHT: (5.5, 6.0)}
 
 
-def _monitor(measured: bool) -> Containment:
+def _monitor(measured: bool) -> Monitor:
     seen = tuple(Reading(lane, body, READ_M[lane], speed_mps=MEASURED_MPS[lane] if measured else None)
                  for lane, body in ((Lane.LEFT, 1), (Lane.RIGHT, 2)))
     scenario = replace(discretise(seen, Lane.LEFT, PAPER_GRID, measured=True), sound=Sound(BOUNDS))
     assert scenario.sound is not None
     assert (scenario.left_mps is not None) == measured
-    return Containment(0, scenario.sound, scenario, seen, PAPER_GRID, 0.0, 0.0, [])
+    return Monitor(0, scenario.sound, scenario, seen, PAPER_GRID, 0.0, 0.0)
 
 
 def _edges_m(lane: Lane, measured: bool) -> tuple[float, float]:
