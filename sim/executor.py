@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from sim.driver.control import CarState, Steps, command, cosine_move
+from sim.driver.control import CarState, Command, Steps, control_law, cosine_move, perform
 from sim.scene import Scene
 from sim.vehicle import WheeledCar
 from spec.actions import ACTION_RULES, Action
@@ -44,10 +44,10 @@ class Executor:
     def run(self, action: Action, tick: Callable[[float], bool], profile: SpeedProfile | None = None,
             stop: Callable[[], bool] | None = None, skip_s: float = 0.0,
             reverse: Callable[[Lane, float, float], bool] | None = None) -> bool:
-        """``perform`` the ``action``'s control steps (``action``)."""
-        return self.perform(self.action(action, profile, stop, skip_s, reverse), tick)
+        """``perform`` the ``action``'s control steps (``acting``)."""
+        return self.perform(self.acting(action, profile, stop, skip_s, reverse), tick)
 
-    def action(self, action: Action, profile: SpeedProfile | None = None, stop: Callable[[], bool] | None = None,
+    def acting(self, action: Action, profile: SpeedProfile | None = None, stop: Callable[[], bool] | None = None,
                skip_s: float = 0.0, reverse: Callable[[Lane, float, float], bool] | None = None) -> Steps:
         """Execute ``action`` for its duration along ``profile`` (default: its speed throughout); False as soon
         as a step does not go on. ``stop`` is asked after every control step once any sideways move is over
@@ -112,23 +112,21 @@ class Executor:
     def perform(self, steps: Steps, tick: Callable[[float], bool]) -> bool:
         """Apply ``steps`` one control step at a time (``control``), each followed by ``tick``, whose answer (whether
         the world went on) the steps are told."""
-        try:
-            command = next(steps)
-            while True:
-                self.control(*command)
-                command = steps.send(tick(self.dt_s))
-        except StopIteration as done:
-            return bool(done.value)
+        def step(command: Command) -> bool:
+            self.control(*command)
+            return tick(self.dt_s)
+
+        return perform(steps, step)
 
     def control(self, speed_mps: float, y_ref: float, vy_ref: float) -> None:
         """One control step towards the references (the position reference advances at ``speed_mps``): the
-        controller's commands (``sim.driver.control.command``) applied to the car through the physics steps."""
+        controller's commands (``sim.driver.control.control_law``) applied to the car through the physics steps."""
         pose = self.car.pose()
         self.x_ref_m += speed_mps * self.dt_s
         self.v_ref_mps = speed_mps
         state = CarState(pose.x_m, pose.y_m, pose.yaw_rad, pose.speed_mps, self._speed_before_mps)
         self._speed_before_mps = pose.speed_mps
-        speed, steer = command(state, self.x_ref_m, speed_mps, y_ref, vy_ref, self.dt_s, self.grid.speed,
+        speed, steer = control_law(state, self.x_ref_m, speed_mps, y_ref, vy_ref, self.dt_s, self.grid.speed,
                                self.car.spec.wheelbase_m, self.steer_offset_rad)
         for _ in range(LOOP.control_every_steps):
             self.car.command(speed, steer, self.scene.dt_s)

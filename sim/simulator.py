@@ -9,7 +9,8 @@ beyond the tolerance, since the plan's safety margins no longer hold. Under the 
 every control step under both models): a breach ends it, and without a plan the AV keeps its lane
 safely, keeps what the last decision proved, or hands over to the fallback. A decision is the control
 steps it yields (``sim.driver.control.Steps``); the world's loop (``_perform``) applies each and ticks the world
-after it, so the world never runs inside a decision. The world is re-centred on the AV every kilometre so
+after it, so the world's clock never advances inside a decision (a missed-opportunity replay steps a saved copy of
+the world and restores it). The world is re-centred on the AV every kilometre so
 coordinates stay small however far it drives.
 
 Every part (scene, car, traffic, sensors, planner, observers) is passed in (``sim.parts``);
@@ -34,10 +35,11 @@ from sim import opportunity, tolerance
 from sim.containment import Containment
 from sim.discretiser import discretise
 from sim.driver import control, decide, fallback, plan, takeover
+from sim.driver.control import Steps
 from sim.driver.monitor import Breach, BreachKind, Sighting
 from sim.driver.nearest import Nearest
 from sim.driver.readings import Reading
-from sim.executor import Executor, Steps
+from sim.executor import Executor
 from sim.faults import GHOST_BODY, FaultEvent, FaultySensor, SteeringFault, attribute
 from sim.observers import StepEvent, TraceWriter
 from sim.parts import DriveConfig, Parts
@@ -274,7 +276,7 @@ class Simulator:
             self.interrupt = True
 
     def _sense_breach(self, pose: Pose) -> None:
-        """The AV's own monitor on this sweep's readings, as its planner gets them (``Containment.sense``): a reading
+        """The AV's own monitor on this sweep's readings, as its planner gets them (``Monitor.sense``): a reading
         the decision's sets cannot explain ends a sound decision (not a take-over under way: the next decision
         ends at once instead)."""
         c = self.containment
@@ -582,7 +584,7 @@ class Simulator:
             self.doing = "drive (nothing to overtake)"
             self.executor.reset_reference()
             profile = plan_profiles((Action.DRIVE,), pose.along_mps, self.grid)[0]
-            return (yield from self.executor.action(Action.DRIVE, profile))
+            return (yield from self.executor.acting(Action.DRIVE, profile))
         if act is decide.PaperAct.HOLD:
             self.doing = "driving on in lane (an overtake refused: the tracker holds a contradiction)"
             return (yield from self._hold_a_sweep())
@@ -757,7 +759,7 @@ class Simulator:
                 self.pending, self.pending_profiles = sequence[k + 1:], profiles[k + 1:]
                 since_s = self.summary.sim_time_s
                 reversed_before = self.summary.reversed_moves
-                ran = yield from self.executor.action(action, profiles[k], stop=lambda: self.interrupt and self.swept(),
+                ran = yield from self.executor.acting(action, profiles[k], stop=lambda: self.interrupt and self.swept(),
                                                       skip_s=skip_s if k == 0 else 0.0, reverse=self._reverses)
                 self._observe(self.summary.plans, k + 1, action, None, [], since_s)
                 if not ran:
@@ -812,7 +814,7 @@ class Simulator:
                                                           self.executor.dt_s)):
                     return False
                 self.executor.reset_reference()
-                if not (yield from self.executor.action(
+                if not (yield from self.executor.acting(
                         Action.LEFT_LANE_CHANGE, fallback.return_profile(self._around(), self.car.pose().along_mps))):
                     return False
             self.pending, self.proved = (), None
@@ -903,7 +905,7 @@ class Simulator:
         kept = pending[: LOOP.replan_after_actions]
         for k, (action, profile) in enumerate(zip(kept, plan_profiles(kept, self.car.pose().along_mps, self.grid))):
             self.doing = f"{action.value} (kept plan after {kind.value}: {cause}, step {k + 1} of {len(kept)})"
-            if not (yield from self.executor.action(action, profile)):
+            if not (yield from self.executor.acting(action, profile)):
                 return False
             self.summary.actions += 1
         self.pending = pending[len(kept):]
@@ -915,7 +917,7 @@ class Simulator:
         self.executor.reset_reference(reference_offset_m(speed_mps, frame_mps, action_speed_mps(actions[0], self.grid)))
         cars = {car.body: car for car in self.traffic.cars()}
         # the tolerance check follows vehicles; a ghost a fault injected is none (``sim.faults``)
-        tracked = {key: v for key, v in tolerance.tracked(seen, states[0], self.grid).items() if key[2] in cars}
+        tracked = {key: v for key, v in tolerance.followed(seen, states[0], self.grid).items() if key[2] in cars}
         deviation = dict.fromkeys(tracked, 0.0)
         generation = {body: cars[body].respawns for body in cars}
         executed = actions[: LOOP.replan_after_actions]
@@ -924,7 +926,7 @@ class Simulator:
             self._implied = tolerance.implied_gaps({key: v for key, v in tracked.items()
                                                     if cars[key[2]].respawns == generation[key[2]]}, states[k + 1],
                                                    self.grid)
-            ok = yield from self.executor.action(action, profile)
+            ok = yield from self.executor.acting(action, profile)
             self._implied = {}
             if not ok:
                 return False

@@ -123,7 +123,7 @@ def histogram_quantile(bins: list[int], q: float) -> float | None:
 Key = tuple[Lane, int, int]
 
 
-def tracked(seen: tuple[Reading, ...], start: State, grid: Grid) -> dict[Key, tuple[float, int]]:
+def followed(seen: tuple[Reading, ...], start: State, grid: Grid) -> dict[Key, tuple[float, int]]:
     """Each vehicle sensed in the plan's window (``seen``, in the plan's frame), keyed by its lane and index in the
     scenario, with its distance ahead of the AV at the plan's start and its cell in the plan's ``start`` state."""
     out = {}
@@ -135,11 +135,11 @@ def tracked(seen: tuple[Reading, ...], start: State, grid: Grid) -> dict[Key, tu
     return out
 
 
-def implied_gaps(followed: dict[Key, tuple[float, int]], predicted: State, grid: Grid) -> dict[int, float]:
+def implied_gaps(vehicles: dict[Key, tuple[float, int]], predicted: State, grid: Grid) -> dict[int, float]:
     """Per followed vehicle, the bumper-to-bumper gap to the AV (ahead or behind) its predicted cell's centre
     implies."""
     gaps = {}
-    for lane, index, body in followed:
+    for lane, index, body in vehicles:
         cells = predicted.left_lane if lane is Lane.LEFT else predicted.right_lane
         gaps[body] = abs(cells[index] - grid.av_cell) * grid.cell - CAR.length_m
     return gaps

@@ -182,7 +182,7 @@ class Row:
     overtakes: int = 0
     decisions: int = 0  # snapshots decided from (containment measured from each)
     attributed: dict[str, int] = field(default_factory=dict)  # "contact inside", "near_miss after", ...
-    breaches: dict[str, int] = field(default_factory=dict)  # by kind (``sim.containment.BreachKind``)
+    breaches: dict[str, int] = field(default_factory=dict)  # by kind (``sim.driver.monitor.BreachKind``)
     breached_share: float | None = None  # of the time under containment, the share after a breach that ends it
     breach_replans: int = 0
     keep_lane_steps: int = 0

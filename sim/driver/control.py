@@ -11,7 +11,7 @@ without it the car ran on past the new lane's centre to the road's edge)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Generator
+from collections.abc import Callable, Generator
 from dataclasses import dataclass
 
 from spec.actions import ACTION_RULES, Action
@@ -42,7 +42,7 @@ class CarState:
     speed_before_mps: float
 
 
-def command(car: CarState, x_ref_m: float, speed_mps: float, y_ref_m: float, vy_ref_mps: float, dt_s: float,
+def control_law(car: CarState, x_ref_m: float, speed_mps: float, y_ref_m: float, vy_ref_mps: float, dt_s: float,
             common_mps: float, wheelbase_m: float, steer_offset_rad: float = 0.0) -> tuple[float, float]:
     """One control step's (speed command in m/s, steering angle in rad): towards the position reference ``x_ref_m``
     (already advanced for this step) at the reference speed ``speed_mps``, and towards the lateral reference
@@ -56,6 +56,20 @@ def command(car: CarState, x_ref_m: float, speed_mps: float, y_ref_m: float, vy_
     speeding_up = (car.speed_mps - car.speed_before_mps) / dt_s  # over the last control step
     lateral_accel = K_Y * (y_ref_m - car.y_m) + K_VY * (vy_ref_mps - vy) - speeding_up * math.sin(car.yaw_rad)
     return speed, math.atan(wheelbase_m * lateral_accel / (v * v)) + steer_offset_rad
+
+
+def perform(steps: Steps, step: Callable[[Command], bool]) -> bool:
+    """Run ``steps``: each command goes to ``step`` (the world applies it and says whether it went on), whose answer
+    the steps are told; their return value is the answer. Should ``step`` raise, the steps are closed first, so their
+    own ``finally`` clauses run while the world they speak of is still there."""
+    try:
+        command = next(steps)
+        while True:
+            command = steps.send(step(command))
+    except StopIteration as done:
+        return bool(done.value)
+    finally:
+        steps.close()
 
 
 def cosine_move(y_from_m: float, y_to_m: float, phase: float, seconds: float) -> tuple[float, float]:

@@ -91,7 +91,7 @@ def paper_choice(status: Status, planned: bool, pending: bool, *, refused: Calla
 
 
 def only_followers_behind(lane: Lane, lane_due: Lane | None) -> bool:
-    """Whether a left-lane vehicle behind the AV's centre can only be one that follows it (``Containment.sense``):
+    """Whether a left-lane vehicle behind the AV's centre can only be one that follows it (``Monitor.sense``):
     the action under way started in the left ``lane`` and has not put the AV wholly into the right one (``lane_due``:
     the lane it must be wholly in now, None during a sideways move; an action in lane, or the move out); from the
     right lane a vehicle it passed, or is returning behind, can be there."""

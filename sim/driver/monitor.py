@@ -179,7 +179,6 @@ class Monitor:
         return None
 
 
-
 class Sighting:
     """The vehicles one snapshot showed, as the planner knows them (readings: a lane and a distance, no identity), for
     the paper's re-planning rule: re-plan when "new surrounding vehicles were sensed". A later reading is a vehicle

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 import sim.parts as parts_module
-from sim.executor import Steps
+from sim.driver.control import Steps
 from sim.parts import DriveConfig
 from sim.simulator import START_UP_S, Simulator
 from spec.actions import Action

@@ -9,7 +9,7 @@ from typing import Any
 
 import pytest
 
-from sim.executor import Steps
+from sim.driver.control import Steps
 from sim.parts import DriveConfig
 from sim.simulator import Simulator
 from sim.summary import RunSummary
@@ -37,7 +37,7 @@ class Recorded(Simulator):
         self.ends: list[tuple[float, float]] = []  # after every action run: the position reference, and when
         self.resets = 0
         self.kept_ends: list[tuple[float, float]] = []  # each kept plan's first action's end: reference, when
-        reset, action = self.executor.reset_reference, self.executor.action
+        reset, action = self.executor.reset_reference, self.executor.acting
 
         def counted(ahead_m: float = 0.0) -> None:
             self.resets += 1
@@ -49,7 +49,7 @@ class Recorded(Simulator):
             return ok
 
         self.executor.reset_reference = counted  # type: ignore[method-assign]
-        self.executor.action = ran  # type: ignore[method-assign]
+        self.executor.acting = ran  # type: ignore[method-assign]
 
     def _sound_execute(self, actions: tuple[Action, ...], speed_mps: float, what: str,
                        escape: tuple[Action, ...] = ()) -> Steps:

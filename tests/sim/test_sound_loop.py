@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from sim.executor import Steps
+from sim.driver.control import Steps
 from sim.parts import DriveConfig
 from sim.simulator import Simulator, run_drive
 from sim.summary import RunSummary

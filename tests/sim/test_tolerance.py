@@ -41,7 +41,7 @@ def test_the_check_follows_each_vehicle_in_the_window_by_its_lane_and_index_from
     seen = (Reading(Lane.LEFT, 7, 45.0), Reading(Lane.LEFT, 8, -5000.0), Reading(Lane.LEFT, 9, 2.0),
             Reading(Lane.RIGHT, 4, 300.0))
     start = State(Lane.LEFT, (10, 12), (25,))
-    followed = tolerance.tracked(seen, start, g)
+    followed = tolerance.followed(seen, start, g)
     # the one far behind is outside the window; indices count each lane's vehicles in it from behind
     assert followed == {(Lane.LEFT, 0, 9): (2.0, 10), (Lane.LEFT, 1, 7): (45.0, 12), (Lane.RIGHT, 0, 4): (300.0, 25)}
     gaps = tolerance.implied_gaps(followed, State(Lane.LEFT, (11, 13), (20,)), g)

@@ -14,9 +14,12 @@ from sim.driver.control import (
     MAX_SPEED_FACTOR,
     MIN_HEADING_COS,
     CarState,
-    command,
+    Command,
+    Steps,
+    control_law,
     cosine_move,
     held_reference,
+    perform,
     resumed,
 )
 from spec.actions import ACTION_RULES, Action
@@ -34,7 +37,7 @@ def steady(x_m: float = 0.0, y_m: float = 0.0, yaw_rad: float = 0.0, speed_mps: 
 
 def law(car: CarState, x_ref_m: float = 0.0, speed_mps: float = COMMON, y_ref_m: float = 0.0,
         vy_ref_mps: float = 0.0, offset_rad: float = 0.0) -> tuple[float, float]:
-    return command(car, x_ref_m, speed_mps, y_ref_m, vy_ref_mps, DT, COMMON, CAR.wheelbase_m, offset_rad)
+    return control_law(car, x_ref_m, speed_mps, y_ref_m, vy_ref_mps, DT, COMMON, CAR.wheelbase_m, offset_rad)
 
 
 def test_a_car_on_its_references_is_commanded_its_reference_speed_straight_ahead() -> None:
@@ -116,3 +119,34 @@ def test_driving_on_in_lane_keeps_the_position_reference_while_the_car_is_within
     assert held_reference(10.0 + TRACKING.position_m, 10.0) == 10.0 + TRACKING.position_m
     assert held_reference(10.0 - TRACKING.position_m, 10.0) == 10.0 - TRACKING.position_m
     assert held_reference(10.0 + TRACKING.position_m + 0.01, 10.0) == 10.0  # beyond it: restarted at the car
+
+
+def three_steps(log: list[str]) -> Steps:
+    try:
+        for k in range(3):
+            if not (yield float(k), 0.0, 0.0):
+                return False
+        return True
+    finally:
+        log.append("closed")
+
+
+def test_performing_steps_applies_each_once_and_tells_it_whether_the_world_went_on() -> None:
+    applied: list[Command] = []
+    log: list[str] = []
+    assert perform(three_steps(log), lambda c: applied.append(c) is None) is True
+    assert applied == [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (2.0, 0.0, 0.0)] and log == ["closed"]
+    applied.clear()
+    assert perform(three_steps(log), lambda c: applied.append(c) is None and c[0] < 1.0) is False
+    assert len(applied) == 2  # the step the world did not go on after is the last
+
+
+def test_steps_the_world_fails_under_are_closed_before_the_error_goes_on() -> None:
+    log: list[str] = []
+
+    def broken(_command: Command) -> bool:
+        raise RuntimeError("the world")
+
+    with pytest.raises(RuntimeError):
+        perform(three_steps(log), broken)
+    assert log == ["closed"]  # its ``finally`` ran while the world was still there

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 import pytest
 
-from sim.driver.control import Command, Steps
+from sim.driver.control import Command, Steps, perform
 from sim.driver.fallback import Around
 from sim.driver.readings import Reading
 from sim.driver.takeover import Cockpit, awaiting_room, braking_in_lane
@@ -37,14 +37,12 @@ class World:
             self.restarts += 1
         return Cockpit(lambda: self.speed_mps, lambda: self.around, lambda: self.readings, restart)
 
+    def step(self, command: Command) -> bool:
+        self.commands.append(command)
+        return len(self.commands) - 1 != self.fails_at
+
     def perform(self, steps: Steps) -> bool:
-        try:
-            command = next(steps)
-            while True:
-                self.commands.append(command)
-                command = steps.send(len(self.commands) - 1 != self.fails_at)
-        except StopIteration as done:
-            return bool(done.value)
+        return perform(steps, self.step)
 
 
 ALONGSIDE = (Reading(Lane.LEFT, 1, -2.0),)
