@@ -127,7 +127,7 @@ class Executor:
         state = CarState(pose.x_m, pose.y_m, pose.yaw_rad, pose.speed_mps, self._speed_before_mps)
         self._speed_before_mps = pose.speed_mps
         speed, steer = control_law(state, self.x_ref_m, speed_mps, y_ref, vy_ref, self.dt_s, self.grid.speed,
-                               self.car.spec.wheelbase_m, self.steer_offset_rad)
+                                   self.car.spec.wheelbase_m, self.steer_offset_rad)
         for _ in range(LOOP.control_every_steps):
             self.car.command(speed, steer, self.scene.dt_s)
             self.scene.step()

@@ -1,6 +1,7 @@
 """The AV's controller as pure functions of its references and the car's state: each control step's speed and
 steering commands, the lateral reference of a sideways move, and where a proved sequence's position reference stands
-when it is resumed. ``sim.executor`` applies them to the car, step by step.
+when it is resumed; and the loop that runs a decision's control steps (``Steps``) against a world (``perform``).
+``sim.executor`` applies the commands to the car, step by step.
 
 Longitudinal: the speed command adds a correction towards the position reference, divided by the cosine of the
 car's heading (the reference is a speed along the road, and a car turned sideways covers less of it). Lateral: a PD

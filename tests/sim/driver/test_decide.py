@@ -68,7 +68,7 @@ def test_only_an_answer_that_is_neither_a_plan_a_refusal_nor_an_unsafe_start_is_
     assert planner_failed(Status.INCOMPLETE) and not planner_failed(Status.UNSAFE_START)
 
 
-@pytest.mark.parametrize(("status", "planned", "pending", "refused", "act", "asked"), [
+@pytest.mark.parametrize(("status", "planned", "pending", "refused", "act", "was_asked"), [
     (Status.PLAN, True, False, False, PaperAct.EXECUTE, True),
     (Status.PLAN, True, True, True, PaperAct.HOLD, True),
     (Status.PLAN, False, True, True, PaperAct.DRIVE, False),  # nothing to overtake: drives on, never refused
@@ -78,17 +78,10 @@ def test_only_an_answer_that_is_neither_a_plan_a_refusal_nor_an_unsafe_start_is_
     (Status.INCOMPLETE, False, False, False, PaperAct.WAIT, False),
 ])
 def test_a_paper_decision_executes_keeps_waits_or_drives_on_as_its_answer_says(
-        status: Status, planned: bool, pending: bool, refused: bool, act: PaperAct, asked: bool) -> None:
+        status: Status, planned: bool, pending: bool, refused: bool, act: PaperAct, was_asked: bool) -> None:
     log: list[str] = []
-    got = paper_choice(status, planned, pending, refused=refusal_asked(log, refused))
-    assert got is act and (log == ["refused"]) is asked
-
-
-def refusal_asked(log: list[str], value: bool) -> Callable[[], bool]:
-    def answer() -> bool:
-        log.append("refused")
-        return value
-    return answer
+    got = paper_choice(status, planned, pending, refused=asked(log, "refused", refused))  # type: ignore[arg-type]
+    assert got is act and (log == ["refused"]) is was_asked
 
 
 @pytest.mark.parametrize(("lane", "due", "only"), [
