@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from sim.driver.control import CarState, Command, Steps, control_law, cosine_move, perform
+from sim.driver.control import CarState, Command, Steps, control_law, cosine_move, lane_of, perform
 from sim.scene import Scene
 from sim.vehicle import WheeledCar
 from spec.actions import ACTION_RULES, Action
@@ -132,8 +132,5 @@ class Executor:
             self.car.command(speed, steer, self.scene.dt_s)
             self.scene.step()
 
-    @staticmethod
-    def lane_of(y_m: float) -> Lane:
-        """The lane a lateral position is in."""
-        return Lane.LEFT if y_m >= 0 else Lane.RIGHT
+    lane_of = staticmethod(lane_of)  # the lane a lateral position is in (``sim.driver.control.lane_of``)
 

@@ -13,8 +13,8 @@ import os
 import sys
 from collections.abc import Iterator
 
-from spec.lanes import Lane
-from spec.physical import LOOP, ROAD
+from sim.driver.control import lane_y
+from spec.physical import LOOP
 
 
 @contextlib.contextmanager
@@ -54,11 +54,7 @@ class Scene:
         self._reset_pose = functools.partial(p.resetBasePositionAndOrientation, **own)
         self._contacts = functools.partial(p.getContactPoints, **own)
 
-    @staticmethod
-    def lane_y(lane: Lane) -> float:
-        """The y of a lane's centre line."""
-        half = ROAD.lane_width_m / 2
-        return half if lane is Lane.LEFT else -half
+    lane_y = staticmethod(lane_y)  # the y of a lane's centre line (``sim.driver.control.lane_y``)
 
     def step(self) -> None:
         """One physics step of ``dt_s``."""

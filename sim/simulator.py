@@ -7,10 +7,11 @@ on by default, not in the paper) as soon as a vehicle deviates from the predicti
 beyond the tolerance, since the plan's safety margins no longer hold. Under the sound model
 (``DriveConfig.model``) a decision is kept only while containment holds (``sim.containment``, checked
 every control step under both models): a breach ends it, and without a plan the AV keeps its lane
-safely, keeps what the last decision proved, or hands over to the fallback. A decision is the control
-steps it yields (``sim.driver.control.Steps``); the world's loop (``_perform``) applies each and ticks the world
-after it, so the world's clock never advances inside a decision (a missed-opportunity replay steps a saved copy of
-the world and restores it). The world is re-centred on the AV every kilometre so
+safely, keeps what the last decision proved, or hands over to the fallback. The sound model's decisions are its
+driver's (``sim.driver.sound.SoundDriver``), which reads and reports through this simulator (its ``Host``).
+A decision is the control steps it yields (``sim.driver.control.Steps``); the world's loop (``_perform``) applies
+each and ticks the world after it, so the world's clock never advances inside a decision (a missed-opportunity
+replay steps a saved copy of the world and restores it). The world is re-centred on the AV every kilometre so
 coordinates stay small however far it drives.
 
 Every part (scene, car, traffic, sensors, planner, observers) is passed in (``sim.parts``);
@@ -21,7 +22,6 @@ drive's seed, which every random part draws from.
 from __future__ import annotations
 
 import contextlib
-import functools
 import math
 import time
 from collections.abc import Callable
@@ -30,7 +30,6 @@ from pathlib import Path
 
 import numpy as np
 
-from oracle.sound import keep_lane
 from sim import opportunity, tolerance
 from sim.containment import Containment
 from sim.discretiser import discretise
@@ -38,7 +37,8 @@ from sim.driver import control, decide, fallback, plan, takeover
 from sim.driver.control import Steps
 from sim.driver.monitor import Breach, BreachKind, Sighting
 from sim.driver.nearest import Nearest
-from sim.driver.readings import Reading
+from sim.driver.readings import Reading, snapshot
+from sim.driver.sound import SoundDriver
 from sim.executor import Executor
 from sim.faults import GHOST_BODY, FaultEvent, FaultySensor, SteeringFault, attribute
 from sim.observers import StepEvent, TraceWriter
@@ -50,7 +50,7 @@ from sim.tolerance import ToleranceReport, Violation
 from sim.tracking import Detection, Track, Tracker
 from sim.vehicle import KinematicCar, Pose, first_contact
 from spec.actions import Action
-from spec.answers import Answer, Status
+from spec.answers import Answer
 from spec.assumptions import PROFILES
 from spec.dynamics import Overtaken
 from spec.envelope import MINIMAL_RISK
@@ -59,10 +59,9 @@ from spec.faults import lost_control
 from spec.files import scenario_to_dict
 from spec.kinds import FailureKind
 from spec.lanes import Lane
-from spec.models import ModelKind
-from spec.motion import SpeedProfile, action_speed_mps, plan_profiles, reference_offset_m
+from spec.motion import action_speed_mps, plan_profiles, reference_offset_m
 from spec.physical import CAR, LOOP, SENSORS
-from spec.scenario import Scenario, problem_for
+from spec.scenario import Scenario
 from spec.sound import Sound
 from spec.state import State
 
@@ -82,7 +81,10 @@ Report = Callable[[tuple[int, float]], None]
 
 class Simulator:
     """A physics world, the AV, traffic, sensors and a planner, assembled from ``parts``, driven by one seeded
-    generator."""
+    generator; the host of the sound model's driver (``sim.driver.sound.Host``: what it reads, moves and reports)."""
+
+    #: the sound model's driver, assembled afresh with the scene (at the start, and after a restart)
+    driving: type[SoundDriver[Containment]] = SoundDriver
 
     def __init__(self, seed: int, parts: Parts, replan_on_violation: bool = True,
                  tolerance: ToleranceReport | None = None, report: Report | None = None, snapshots: int = 0,
@@ -115,7 +117,7 @@ class Simulator:
         self.steered: list[FaultEvent] = []  # steering faults under way during it
         self.sweep_every = max(1, round(1 / (SENSORS.sweep_hz * LOOP.physics_dt_s * LOOP.control_every_steps)))
         #: what a take-over reads and moves each control step, whichever scene, car and executor are assembled now
-        self.cockpit = takeover.Cockpit(lambda: self.car.pose().along_mps, self._around, self._sense,
+        self.cockpit = takeover.Cockpit(lambda: self.car.pose().along_mps, self.around, self._sense,
                                         lambda: self.executor.reset_reference())
         self._assemble()
 
@@ -132,32 +134,23 @@ class Simulator:
         self.executor = Executor(self.scene, self.car, Lane.LEFT, self.grid)
         self.safety.forget()
         self._implied: dict[int, float] = {}  # body -> the gap the plan under way implies at the action's end
-        self.pending: tuple[Action, ...] = ()  # the rest of the plan under way when a re-plan starts
-        self.escape_pending = False  # the plan under way ends in a proved escape (the commitment semantics)
-        self.pending_profiles: list[SpeedProfile] = []  # the proved reference's speed profile for ``pending``
-        self.boundary = (0.0, 0.0)  # when the last action of a proved sequence ended, and its position reference then
-        self.unsafe_before = False  # the last sound decision found its start breaking the safety specification
+        self.pending: tuple[Action, ...] = ()  # the rest of the paper model's plan under way when a re-plan starts
         self.doing = "start-up"  # what the AV was executing: recorded with every collision
         self._side = {car.body: car.x_m > 0 for car in self.traffic.left}
         self.visible = RaySensor(self.scene, self.sensor_rng)  # exact rays, no draws: is a vehicle sensed now?
         self._seen: set[int] = set()  # the bodies ``visible`` saw at ``_seen_at`` (the drive's clock)
         self._seen_at = -1.0
         self.containment: Containment | None = None  # the sets of the decision under way
-        self.sighted: Sighting | None = None  # the vehicles the plan under way was made knowing (``_sensed_anew``)
-        self.enveloped = False  # a sound decision's action is under way: the AV is held to its envelope
-        self.interrupt = False  # a breach asks the sound model's decision under way to end
+        self.sighted: Sighting | None = None  # the vehicles the plan under way was made knowing (``sensed_anew``)
         self.broken_before = False  # a vehicle broke the previous decision's assumptions (the truth: bookkeeping)
         self.previous: Containment | None = None  # the sets of the decision before the one under way
         self.takeover: Takeover | None = None  # the fallback's take-over under way
-        self.proved: Containment | None = None  # the containment of the last sound decision that was executed
         self.sweep: tuple[Reading, ...] | None = ()  # the last sweep the sensors delivered (None: it was dropped)
         self.swept_at = (0.0, 0.0)  # where the AV was when it was taken, along the road from the start (m), and when
         # for the fallback: the nearest vehicles sensed ahead and behind in the left lane, ahead in the oncoming one
         self.lead: Nearest | None = None
         self.follower: Nearest | None = None
         self.oncoming: Nearest | None = None
-        self._room: bool = False  # whether the fallback opens the gap ahead (``_room_needed``), and on which sweep
-        self._room_sweep: tuple[Reading, ...] | None = None
         # with tracking, the planner sees the tracker's vehicles (``sim.tracking``); bodies only for bookkeeping
         self.tracker = (Tracker(self.parts.bounds, speed_error_mps=self.parts.speed_error_mps)
                         if self.parts.tracking and self.parts.bounds is not None else None)
@@ -167,6 +160,9 @@ class Simulator:
         self.speed_log: list[tuple[float, tuple[float, float], float]] | None = None
         self.unresolved: frozenset[Lane] = frozenset()  # lanes where the tracker holds a contradiction
         self.controls = 0  # control steps since the scene was assembled: the sensors sweep on every ``sweep_every``-th
+        #: the sound model's decisions (None: the paper's rules decide, in ``_one_plan``)
+        self.driver = None if self.sound is None else self.driving(
+            self, self.planner, self.grid, None if self.watch is None else self.watch.bounds)
         self._on_sweep()
 
     # -- the physics clock ------------------------------------------------------------------
@@ -182,7 +178,7 @@ class Simulator:
                             self.summary.km, self.summary.sim_time_s, self.doing, self._implied.get, self._attribution)
         lost = lost_control(pose.y_m, pose.yaw_rad)
         if lost is not None:
-            self._fail(FailureKind.LOSS_OF_CONTROL, lost, f"during {self.doing}" + (
+            self.fail(FailureKind.LOSS_OF_CONTROL, lost, f"during {self.doing}" + (
                 f", steering offset {math.degrees(self.executor.steer_offset_rad):+.0f} degrees"
                 if self.executor.steer_offset_rad else ""))
             return False
@@ -193,7 +189,7 @@ class Simulator:
                                 self.summary.sim_time_s, self.doing, self._implied.get(car.body),
                                 self._attribution(car.body))
             lane = "left-lane" if in_left else "oncoming"
-            self._fail(FailureKind.COLLISION, f"collision with a{'n' if lane == 'oncoming' else ''} {lane} vehicle",
+            self.fail(FailureKind.COLLISION, f"collision with a{'n' if lane == 'oncoming' else ''} {lane} vehicle",
                        f"{car.x_m - x:+.1f} m ahead, during {self.doing}", car.body)
             if self.takeover is not None:
                 self.takeover.outcome = "collision"
@@ -226,13 +222,14 @@ class Simulator:
         return True
 
     # -- containment (``sim.containment``) --------------------------------------------------------------------
-    def _view_m(self, readings: tuple[Reading, ...], av_y_m: float) -> float | None:
+    def view_m(self, readings: tuple[Reading, ...], av_y_m: float) -> float | None:
         """How far the sound model's snapshot sees the oncoming lane (``sim.sensors.oncoming_view_m``, the sensing
         error its bounds allow): where a left-lane vehicle hides it, the oncoming phantom stands."""
         assert self.sound is not None
         return oncoming_view_m(readings, av_y_m, self.sound.bounds.sensing_error_m)
 
-    def _watch(self, readings: tuple[Reading, ...], pose_x_m: float, lane: Lane, view_m: float | None = None) -> None:
+    def contain_from(self, readings: tuple[Reading, ...], pose_x_m: float, lane: Lane,
+                     view_m: float | None = None) -> None:
         """Containment from this snapshot on, against the drive's bounds and the snapshot's view of the oncoming lane
         (a snapshot that makes no scenario: none)."""
         old = self.containment
@@ -241,7 +238,7 @@ class Simulator:
         if old is not None and not old.ended:
             old.ended = True
             self.summary.unseen_breaches += int(self.sound is not None and old.unseen())
-        self.containment, self.interrupt = None, False
+        self.containment = None
         if self.watch is None:
             return
         try:  # the sets a sound plan is proved against: where each vehicle was sensed, not its whole cell; a snapshot
@@ -266,28 +263,28 @@ class Simulator:
             report.breached_s += dt_s
         t, km = self.summary.sim_time_s, self.summary.km
         found = c.check(t, km, pose, self.traffic.left, self.traffic.oncoming, self.doing, self._sensed)
-        if self.enveloped:
+        if self.driver is not None and self.driver.enveloped:
             av = c.check_av(t, km, pose, self.executor.x_ref_m, self.executor.v_ref_mps, self.executor.lane_due,
                             self.doing)
             found += [av] if av is not None else []
         for breach in found:
             report.add(breach)
-        if any(b.kind is BreachKind.AV_ENVELOPE for b in found) and self.sound is not None and self.takeover is None:
-            self.interrupt = True
+        if any(b.kind is BreachKind.AV_ENVELOPE for b in found) and self.driver is not None and self.takeover is None:
+            self.driver.interrupt = True
 
     def _sense_breach(self, pose: Pose) -> None:
         """The AV's own monitor on this sweep's readings, as its planner gets them (``Monitor.sense``): a reading
         the decision's sets cannot explain ends a sound decision (not a take-over under way: the next decision
         ends at once instead)."""
-        c = self.containment
-        if c is None or self.sound is None:
+        c, d = self.containment, self.driver
+        if c is None or d is None:
             return
         if c.sense(self.summary.sim_time_s, self.summary.km, pose.x_m, self._sense(), self.doing,
-                   self._followed()) is not None:
+                   self.followed()) is not None:
             self.summary.sensed_breaches += 1
-            self.interrupt = self.interrupt or self.takeover is None
+            d.interrupt = d.interrupt or self.takeover is None
 
-    def _followed(self) -> bool:
+    def followed(self) -> bool:
         """``decide.only_followers_behind`` for the action under way."""
         return decide.only_followers_behind(self.executor.lane, self.executor.lane_due)
 
@@ -341,7 +338,7 @@ class Simulator:
         """A failure record stamped with where and when the drive is now."""
         return Failure(kind, cause, detail, round(self.summary.km, 3), round(self.summary.sim_time_s, 1))
 
-    def _fail(self, kind: FailureKind, cause: str, detail: str, body: int | None = None) -> None:
+    def fail(self, kind: FailureKind, cause: str, detail: str, body: int | None = None) -> None:
         in_snapshot = self.faulty.in_sweep() if self.faulty else []
         fault = attribute(body, self.manoeuvre_faults if kind.ends_run else in_snapshot,
                           self.steered if kind.ends_run else [])
@@ -349,7 +346,7 @@ class Simulator:
                                              fault=None if fault is None else fault.kind.value,
                                              flagged=self.flagged if self.tracker is not None else None))
 
-    def _decided(self, lane: Lane) -> None:
+    def decided(self, lane: Lane) -> None:
         """A decision was taken from the last sweep: a decision in the left lane starts a new manoeuvre; the faults
         that changed its snapshot are remembered for the attribution (``sim.faults.attribute``)."""
         if lane is Lane.LEFT:
@@ -386,7 +383,7 @@ class Simulator:
             if (self.summary.km - moved[0]) * 1000 >= CAR.length_m:
                 moved = (self.summary.km, self.summary.sim_time_s)
             elif ok and self.summary.sim_time_s - moved[1] > BLOCKED_S:
-                self._fail(FailureKind.BLOCKED, "blocked", f"the AV moved less than a car length in "
+                self.fail(FailureKind.BLOCKED, "blocked", f"the AV moved less than a car length in "
                            f"{self.summary.sim_time_s - moved[1]:.0f} s, during {self.doing}")
                 if not self.restart_after_collision:
                     break
@@ -495,9 +492,9 @@ class Simulator:
                 return False
         return True
 
-    def _refused(self, actions: tuple[Action, ...], under_way: tuple[Action, ...]) -> bool:
+    def refused(self, actions: tuple[Action, ...], under_way: tuple[Action, ...]) -> bool:
         """Whether the tracker's contradiction refuses the overtake ``actions`` would start (``plan.refuses``; only
-        with tracking); a refusal is counted and drops the rest of the last plan."""
+        with tracking); a refusal is counted (the decision drops the rest of the plan ``under_way``)."""
         if self.tracker is None:
             return False
         pose = self.car.pose()
@@ -505,7 +502,6 @@ class Simulator:
                             self.grid.speed):
             return False
         self.summary.refusals += 1
-        self.pending = ()
         return True
 
     def _hold_a_sweep(self) -> Steps:
@@ -521,63 +517,57 @@ class Simulator:
         """The last sweep's readings (a dropped sweep: none)."""
         return self.sweep or ()
 
-    def _sight(self, readings: tuple[Reading, ...], av_x_m: float, t_s: float | None = None) -> None:
+    def sight(self, readings: tuple[Reading, ...], av_x_m: float, t_s: float | None = None) -> None:
         """The vehicles a plan is made knowing, for the paper's re-planning rule (``Sighting``), under the drive's
         bounds (without any: the paper's world, every vehicle at the common speed, sensed exactly): ``readings`` taken
         with the AV at ``av_x_m`` at ``t_s`` (default: now)."""
         bounds = self.watch.bounds if self.watch is not None else PROFILES["paper"]
         self.sighted = Sighting(readings, bounds, av_x_m, self.summary.sim_time_s if t_s is None else t_s)
 
-    def _sensed_anew(self) -> bool:
+    def sensed_anew(self) -> bool:
         """Whether the last sweep shows a vehicle the plan under way was not made knowing: re-plan (the paper's rule;
         readings carry no identity, so "new" is a reading no vehicle of the plan's snapshot can explain). Its readings
         are placed from where the AV was when it was taken, at that time: an action may end after the sweep (a
         decision acts a control step after its snapshot, and actions on 5.25 m cells are not whole sweeps)."""
         assert self.sighted is not None
-        return self.sighted.new(self._sense(), *self._where_swept())
+        return self.sighted.new(self._sense(), *self.where_swept())
 
-    def _where_swept(self) -> tuple[float, float]:
+    def where_swept(self) -> tuple[float, float]:
         """Where the AV was when the last sweep was taken (in the road's frame now) and when."""
         along_m, t_s = self.swept_at
         return along_m - self.origin_km * 1000, t_s
-
-    def _snapshot(self) -> tuple[Reading, ...]:
-        """The last sweep as a decision's snapshot; a dropped sweep is a snapshot that cannot be read."""
-        if self.sweep is None:
-            raise ScenarioError("snapshot", "dropped sweep", "the sensors' last sweep never arrived")
-        return self.sweep
 
     def _one_plan(self) -> Steps:
         """One decision, from the sensors' next sweep: its control steps."""
         if not (yield from self._await_sweep()):
             return False
-        if self.sound is not None:
-            return (yield from self._sound_decision())
+        if self.driver is not None:
+            return (yield from self.driver.decision())
         pending, self.pending = self.pending, ()
         pose = self.car.pose()
         lane = Executor.lane_of(pose.y_m)
         self.executor.lane = lane
-        self._decided(lane)
+        self.decided(lane)
         try:
-            readings = self._snapshot()
+            readings = snapshot(self.sweep)
         except ScenarioError as err:
-            self._watch((), pose.x_m, lane)
+            self.contain_from((), pose.x_m, lane)
             return (yield from self._sensing_stop(pending, err))
-        self._watch(readings, pose.x_m, lane)
+        self.contain_from(readings, pose.x_m, lane)
         try:
             framed = plan.plan_in_frame(self.planner, self.grid, readings, pose.along_mps, lane)
         except ScenarioError as err:
             return (yield from self._sensing_stop(pending, err))
         self.summary.frame_fallbacks += int(framed.fell_back)
         answer, scenario = framed.answer, framed.scenario
-        self._planned(answer, scenario, lane)
+        self.planned(answer, scenario, lane)
         act = decide.paper_choice(answer.status, bool(answer.actions), bool(pending),
-                                  refused=lambda: self._refused(answer.actions, pending))
+                                  refused=lambda: self.refused(answer.actions, pending))
         if act is decide.PaperAct.KEEP:
             return (yield from self._keep(pending, FailureKind.PLANNER, answer.status.value,
                                           self._no_plan(answer, scenario)))
         if act is decide.PaperAct.WAIT:
-            self._fail(FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
+            self.fail(FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
             self.doing = "waiting without a plan"
             return (yield from self.executor.holding(LOOP.wait_s, self.grid.speed))
         if act is decide.PaperAct.DRIVE:
@@ -588,30 +578,19 @@ class Simulator:
         if act is decide.PaperAct.HOLD:
             self.doing = "driving on in lane (an overtake refused: the tracker holds a contradiction)"
             return (yield from self._hold_a_sweep())
-        self._sight(readings, pose.x_m)
+        self.sight(readings, pose.x_m)
         return (yield from self._execute(answer.actions, answer.states, framed.seen, pose.along_mps, framed.frame_mps))
-
-    def _while_planning(self) -> Steps:
-        """A sound decision's snapshot ages while the planner runs: the world moves on for ``LOOP.plan_budget_s``
-        (one control step) before the decision acts, the AV keeping its reference speed in its lane; the sound model
-        plans for it (its bounds' ``latency_s``: ``spec.sound.Sound.age_m``). The paper model's plans act at their
-        snapshot's instant, as its model means (its prediction starts there). The time the planner took on the
-        machine is counted apart (``plan_ms``; the audit counts the plans over the budget). False on a collision
-        meanwhile."""
-        if not self.doing.startswith("planning ("):  # a decision that did nothing since the last: not nested again
-            self.doing = f"planning ({self.doing})"
-        return (yield from self.executor.holding(LOOP.plan_budget_s, self.executor.v_ref_mps))
 
     def _sensing_stop(self, pending: tuple[Action, ...], err: ScenarioError) -> Steps:
         """The paper model's snapshot could not be read (or made no scenario): the plan under way goes on, else the
         stop is recorded and the AV waits in lane."""
         if pending:
             return (yield from self._keep(pending, FailureKind.SENSING, err.reason, str(err)))
-        self._fail(FailureKind.SENSING, err.reason, str(err))
+        self.fail(FailureKind.SENSING, err.reason, str(err))
         self.doing = "waiting after a sensing failure"
         return (yield from self.executor.holding(LOOP.wait_s, self.grid.speed))
 
-    def _planned(self, answer: Answer, scenario: Scenario, lane: Lane) -> None:
+    def planned(self, answer: Answer, scenario: Scenario, lane: Lane) -> None:
         """Count a plan, its latency and (in the AV's lane) its missed opportunity; keep every SNAPSHOT_EVERY-th
         scenario."""
         self.summary.plans += 1
@@ -621,243 +600,46 @@ class Simulator:
         if len(self.summary.snapshots) < self.snapshots and self.summary.plans % SNAPSHOT_EVERY == 1:
             self.summary.snapshots.append(scenario_to_dict(scenario))
 
-    # -- the sound model's decisions ----------------------------------------------------------------------------
-    def _sound_decision(self) -> Steps:
-        """One decision of the sound model from a fresh snapshot (the AV's measured speed is the plan's start): a
-        plan, executed while containment holds; without one, a safe step in lane (``oracle.sound.keep_lane``);
-        without that, the fallback (``spec.envelope.MinimalRisk``)."""
-        pose = self.car.pose()
-        lane = Executor.lane_of(pose.y_m)
-        self.executor.lane = lane
-        self._decided(lane)
-        try:
-            readings = self._snapshot()
-        except ScenarioError as err:
-            self._watch((), pose.x_m, lane)
-            self._fail(FailureKind.SENSING, err.reason, str(err))
-            return (yield from self._fallback(f"sensing: {err.reason}"))
-        view_m = self._view_m(readings, pose.y_m)
-        self.summary.shadowed += int(view_m is not None)
-        self._watch(readings, pose.x_m, lane, view_m)
+    def pose(self) -> Pose:
+        """The car's pose as its odometry gives it."""
+        return self.car.pose()
+
+    def check_snapshot(self) -> None:
+        """The containment check at a decision's snapshot itself (sensed farther off than the error bound, or
+        unknown)."""
         if self.containment is not None:
-            self._contain(pose, 0.0)  # the snapshot itself: sensed farther off than the error bound, or unknown
-        try:
-            scenario = self.planner.scenario(readings, lane, pose.along_mps, view_m)
-        except ScenarioError as err:
-            self._fail(FailureKind.SENSING, err.reason, str(err))
-            return (yield from self._fallback(f"sensing: {err.reason}"))
-        answer = self.planner.plan(scenario)
-        self._planned(answer, scenario, lane)
-        act = self._sound_choice(answer, scenario, readings, pose)
-        if not (yield from self._while_planning()):
-            return False
-        return (yield from act())
+            self._contain(self.car.pose(), 0.0)
 
-    def _sound_choice(self, answer: Answer, scenario: Scenario, readings: tuple[Reading, ...],
-                      pose: Pose) -> Callable[[], Steps]:
-        """What a sound decision does, chosen when its snapshot (``readings``, the AV at ``pose``) was taken: the
-        plan, a step in lane, what the last decision proved, or the fallback; it acts once the planner's time is over
-        (``_while_planning``)."""
-        unsafe_before, self.unsafe_before = self.unsafe_before, answer.status is Status.UNSAFE_START
-        if answer.status is Status.UNSAFE_START:  # an assumption broke before the snapshot: counted, no failure
-            self.summary.unsafe_starts += 1
-        elif decide.planner_failed(answer.status):
-            self._fail(FailureKind.PLANNER, answer.status.value, answer.detail or self._no_plan(answer, scenario))
+    def resume(self, monitor: Containment) -> None:
+        """The decision under way goes on under an earlier decision's sets (``SoundDriver.keep_proved``)."""
+        self.containment = monitor
 
-        def proved_holds() -> bool:
-            return self.proved is not None and self.proved.sensed is None and self.proved.sense(
-                self.summary.sim_time_s, self.summary.km, pose.x_m, readings, self.doing,
-                self._followed()) is None
+    def kept(self, kind: FailureKind, cause: str, detail: str) -> None:
+        """A decision without a plan kept the one under way (``kept_plans``)."""
+        self.summary.kept_plans.append(self._event(kind, cause, detail))
 
-        choice = decide.choose(answer.status, bool(answer.actions),
-                               refused=lambda: self._refused(answer.actions, self.pending),
-                               step=lambda: keep_lane(problem_for(scenario, ModelKind.FINAL)),
-                               unsafe_before=unsafe_before, pending=bool(self.pending), proved_holds=proved_holds)
-        if choice.act is decide.Act.PLAN:
-            self._sight(readings, pose.x_m)
-            escape = answer.commit.escape if answer.commit is not None else None
-            if escape is not None:
-                self.summary.committed_parts += 1
-            return functools.partial(self._sound_execute, answer.actions, pose.along_mps,
-                                     f"plan {self.summary.plans}", escape=escape.actions if escape else ())
-        if choice.act is decide.Act.STEP:
-            assert choice.step is not None
-            self.summary.keep_lane_steps += 1
-            self._sight(readings, pose.x_m)
-            return functools.partial(self._sound_execute, (choice.step,), pose.along_mps,
-                                     f"keeping the lane ({choice.why})")
-        if choice.act is decide.Act.KEEP:
-            return functools.partial(self._keep_proved, choice.why)
-        return functools.partial(self._fallback, choice.why)
+    def traced(self, step: int, action: Action | None, since_s: float) -> None:
+        """``_observe`` a sound decision's action (None: a minimal-risk manoeuvre or a take-over) since ``since_s``."""
+        self._observe(self.summary.plans, step, action, None, [], since_s)
 
-    def _keep_proved(self, why: str) -> Steps:
-        """No plan and no step from the fresh snapshot (its cells may be coarser than what the last decision knew),
-        while the last decision's assumptions still hold: go on with what that decision proved, under its
-        containment: the rest of its plan, or, after its end, its minimal-risk manoeuvre."""
-        assert self.proved is not None
-        self.containment, self.interrupt = self.proved, False
-        pending, self.pending = self.pending, ()
-        if pending:
-            self.summary.escapes += int(self.escape_pending)
-            self.summary.kept_plans.append(self._event(FailureKind.PLANNER, why, "kept the rest of the last plan"
-                                                       + (" and its escape" if self.escape_pending else "")))
-            self._sight(self._sense(), *self._where_swept())
-            # on the last decision's reference and clock: its windows, its position reference, its speed profile; the
-            # control steps since its last action ended (the sweep awaited, this decision's planning: the AV held its
-            # reference speed) are the kept plan's first
-            return (yield from self._run_proved(pending, self.pending_profiles, len(pending), "the last plan, kept",
-                                                since=self.boundary))
-        self.summary.minimal_risk_steps += 1
-        self.doing = f"minimal-risk manoeuvre (the last decision's, {why})"
-        self.enveloped = True
-        since_s = self.summary.sim_time_s
-        try:
-            return (yield from self._brake_in_lane(emergency=False))
-        finally:
-            self.enveloped = False
-            self._observe(self.summary.plans, 0, None, None, [], since_s)
-
-    def _sound_execute(self, actions: tuple[Action, ...], speed_mps: float, what: str,
-                       escape: tuple[Action, ...] = ()) -> Steps:
-        """Execute a sound decision's actions from the speed it planned with (the reference starts at the car), while
-        its containment holds as the AV senses it; a sensed breach ends it at once (after any sideways move), and the
-        next decision re-plans from a fresh snapshot. The caller has sighted what the decision knew (``_sight``).
-        Under the commitment semantics ``actions`` are the committed part and ``escape`` the escape's actions proved
-        after it. The reference is the proved sequence's, ramps into the escape included: what is left of it is what
-        a decision that proves nothing keeps (``_keep_proved``)."""
-        if self.containment is not None:
-            self.containment.passing((*actions, *escape))
-        self.executor.reset_reference()
-        self.escape_pending = bool(escape)
-        sequence = (*actions, *escape)
-        return (yield from self._run_proved(sequence, plan_profiles(sequence, speed_mps, self.grid, to_common=False),
-                                            len(actions), what))
-
-    def _run_proved(self, sequence: tuple[Action, ...], profiles: list[SpeedProfile], steps: int, what: str,
-                    since: tuple[float, float] | None = None) -> Steps:
-        """Run the first ``steps`` (at most ``replan_after_actions``) of a proved ``sequence`` along its
-        ``profiles``, from where the position reference stands; the rest stays pending for the next decision.
-        ``since``: when the sequence was due to start and where its reference stood then (the end of the action
-        before it); the control steps since went by at the reference speed the AV held, so the reference is put where
-        the proof's is now and goes on on the proof's clock."""
-        self._hand_back()
-        self.proved = self.containment
-        # a breach sensed while a take-over was under way did not interrupt it; it ends this decision before its step
-        self.interrupt = self.interrupt or (self.containment is not None and self.containment.sensed is not None)
-        # a breach sensed before the first step (while a take-over was handing back): no step
-        executed = 0 if self.interrupt else min(steps, LOOP.replan_after_actions)
-        self.pending, self.pending_profiles = sequence[executed:], profiles[executed:]
-        skip_s = 0.0
-        if executed and since is not None:
-            skip_s, self.executor.x_ref_m = control.resumed(sequence[0], profiles[0], *since, self.summary.sim_time_s,
-                                                            self.executor.dt_s)
-        self.enveloped = True
-        try:
-            for k in range(executed):
-                action = sequence[k]
-                self.doing = f"{action.value} ({what}, step {k + 1} of {steps})"
-                self.pending, self.pending_profiles = sequence[k + 1:], profiles[k + 1:]
-                since_s = self.summary.sim_time_s
-                reversed_before = self.summary.reversed_moves
-                ran = yield from self.executor.acting(action, profiles[k], stop=lambda: self.interrupt and self.swept(),
-                                                      skip_s=skip_s if k == 0 else 0.0, reverse=self._reverses)
-                self._observe(self.summary.plans, k + 1, action, None, [], since_s)
-                if not ran:
-                    return False
-                if self.summary.reversed_moves == reversed_before:  # a move sent back is no action done
-                    self.summary.actions += 1
-                    self.boundary = (self.summary.sim_time_s, self.executor.x_ref_m)
-                if self.interrupt:
-                    break
-                if self._sensed_anew():
-                    self.summary.replans += 1
-                    return True
-        finally:
-            self.enveloped = False
-        if not self.interrupt:
-            return True
-        self.summary.breach_replans += 1
-        return True
-
-    def _reverses(self, to_lane: Lane, done_s: float, left_s: float) -> bool:
-        """Whether the sideways move under way goes back to the lane it left: only once a breach (sensed, or of the
-        AV's own envelope) has ended the decision, on a sweep, as ``fallback.reverses`` decides from it
-        (``MinimalRisk``'s cut-short move); counted. Nothing of the decision's proof is kept after it: the proof
-        covers neither finishing the move nor undoing it, so the next decision has no plan to keep."""
-        if self.sound is None or not (self.interrupt and self.swept()):
-            return False
-        if not fallback.reverses(self._around(), self.sweep or (), self.car.pose().along_mps, to_lane, done_s, left_s):
-            return False
-        self.summary.reversed_moves += 1
-        self.doing = self.doing.replace(" (", " reversed (", 1)
-        self.pending, self.pending_profiles, self.proved, self.escape_pending = (), [], None, False
-        return True
-
-    def _fallback(self, cause: str) -> Steps:
-        """The minimal-risk manoeuvre takes over for ``MINIMAL_RISK.takeover_s``: back to the left lane from the
-        right one, then brake in lane to the hold speed, and down to the sensed vehicle ahead's speed while it is
-        nearer than the safety specification allows (``_brake_in_lane``)."""
-        pose = self.car.pose()
+    def take_over(self, cause: str, lane: Lane) -> None:
+        """Record the fallback's take-over from ``lane`` (``SoundDriver.fallback``): whether an assumption had broken
+        (under the decision before, the one under way, or the take-over it follows), and what it ended."""
         again = self.takeover is not None and self.takeover.outcome == "under way"
         broke = self.broken_before or (self.containment is not None and self.containment.world_breached()) \
             or (again and self.takeover is not None and self.takeover.after_breach)  # one take-over after another
         if again and self.takeover is not None:
             self.takeover.outcome = "taken over again"
-        self.takeover = Takeover(round(self.summary.km, 3), round(self.summary.sim_time_s, 1), cause,
-                                 Executor.lane_of(pose.y_m).value, broke)
+        self.takeover = Takeover(round(self.summary.km, 3), round(self.summary.sim_time_s, 1), cause, lane.value,
+                                 broke)
         self.summary.takeovers.append(self.takeover)
-        self.doing = f"fallback ({cause})"
-        since_s = self.summary.sim_time_s
-        try:
-            if Executor.lane_of(pose.y_m) is Lane.RIGHT:
-                if not (yield from takeover.awaiting_room(self.cockpit, self.scene.lane_y(Lane.RIGHT),
-                                                          self.executor.dt_s)):
-                    return False
-                self.executor.reset_reference()
-                if not (yield from self.executor.acting(
-                        Action.LEFT_LANE_CHANGE, fallback.return_profile(self._around(), self.car.pose().along_mps))):
-                    return False
-            self.pending, self.proved = (), None
-            return (yield from self._brake_in_lane(emergency=True))
-        finally:
-            self._observe(self.summary.plans, 0, None, None, [], since_s)
 
-    def _around(self) -> fallback.Around:
+    def around(self) -> fallback.Around:
         """What the fallback knows at the last sweep."""
         return fallback.Around(self.lead, self.follower, self.oncoming, self.sweep is not None,
                                None if self.watch is None else self.watch.bounds)
 
-    def _brake_in_lane(self, emergency: bool) -> Steps:
-        """The minimal-risk manoeuvre in the AV's lane (``takeover.braking_in_lane``) towards the hold speed: the
-        fallback's (``emergency``), or a proved continuation's, which a breach ends on a sweep."""
-        assert self.watch is not None
-        low = self.watch.bounds.same_mps.low_mps
-        if not emergency and self.containment is not None:  # the proved manoeuvre's own hold speed
-            low = self.containment.hold_floor_mps
-        hold = fallback.in_lane_hold_mps(emergency, self.car.pose().along_mps, low)
-        y_ref = self.scene.lane_y(self.executor.lane)
-        self.executor.lane_due = self.executor.lane
-        return (yield from takeover.braking_in_lane(self.cockpit, hold, y_ref, self.executor.dt_s, emergency,
-                                                    self._room_needed, lambda: self.interrupt and self.swept()))
-
-    def _room_needed(self, speed_mps: float) -> bool:
-        """Whether a decision from the last sweep at ``speed_mps`` would find no safe step in lane, where the fallback
-        may open the gap ahead (``fallback.brake_command`` asks, once ``fallback.may_open_gap``). Asked of the planner
-        once per sweep."""
-        if self.sweep is None or self.planner.sound is None:
-            return False  # a dropped sweep, or the paper's rules (no decision to hand back to)
-        if self._room_sweep is self.sweep:
-            return self._room
-        self._room_sweep, self._room = self.sweep, False
-        try:
-            scenario = self.planner.scenario(self.sweep, self.executor.lane, speed_mps,
-                                             self._view_m(self.sweep, self.car.pose().y_m))
-        except ScenarioError:
-            return False
-        self._room = keep_lane(problem_for(scenario, ModelKind.FINAL)) is None
-        return self._room
-
-    def _hand_back(self) -> None:
+    def hand_back(self) -> None:
         """A decision found a plan or a safe step: the take-over under way (if any) ends here."""
         if self.takeover is not None:
             if self.takeover.outcome == "under way":
@@ -942,7 +724,7 @@ class Simulator:
                     (cells[index] - start_cell) * self.grid.cell, start_dx, now[body], deviation[(lane, index, body)])
             new_violations = self.summary.tolerance.violations[violations_before:]
             self._observe(plan_id, k + 1, action, states[k + 1], new_violations)
-            if (self.replan_on_violation and new_violations) or self._sensed_anew():
+            if (self.replan_on_violation and new_violations) or self.sensed_anew():
                 self.summary.replans += 1
                 self.pending = actions[k + 1:]
                 return True

@@ -138,6 +138,14 @@ MUTANTS: tuple[Mutant, ...] = (
            "        closing = lead.closing_mps(hold_mps)\n        if lead.too_near_after(closing, 0.0):",
            "the fallback's emergency brake reads the closing speed on the vehicle ahead at the hold speed, not at the "
            "car's own: behind a vehicle slower than the hold speed it brakes on below that vehicle's speed"),
+    Mutant("driver-breach-ends-no-committed-part", "sim/driver/sound.py",
+           "stop=lambda: self.interrupt and h.swept(),", "stop=None,",
+           "a breach the AV senses does not end the proved action under way: the decision runs on past it to the "
+           "action's end"),
+    Mutant("driver-kept-escape-off-its-proofs-clock", "sim/driver/sound.py",
+           'since=self.boundary))', 'since=None))',
+           "a kept escape starts from its own beginning wherever the reference stands, not where and when the proof "
+           "has it after the steps since the last action ended"),
     Mutant("fallback-reverse-ignores-oncoming", "sim/driver/fallback.py",
            "    return blocked and oncoming_leaves_time(a, speed_mps, done_s + RETURN_S)",
            "    return blocked",

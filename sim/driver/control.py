@@ -17,7 +17,9 @@ from dataclasses import dataclass
 
 from spec.actions import ACTION_RULES, Action
 from spec.envelope import TRACKING
+from spec.lanes import Lane
 from spec.motion import SpeedProfile
+from spec.physical import ROAD
 
 #: One control step's references: the speed along the road (m/s), the lateral position (m) and its rate (m/s).
 Command = tuple[float, float, float]
@@ -96,3 +98,14 @@ def held_reference(x_ref_m: float, x_m: float) -> float:
     sweeps holds the common speed in position too; else at the car. Restarted at the car every sweep, the speed
     command alone let the car creep 0.16 m/s faster than the traffic into the vehicle ahead (measured, seed 2)."""
     return x_ref_m if abs(x_ref_m - x_m) <= TRACKING.position_m else x_m
+
+
+def lane_of(y_m: float) -> Lane:
+    """The lane a lateral position is in."""
+    return Lane.LEFT if y_m >= 0 else Lane.RIGHT
+
+
+def lane_y(lane: Lane) -> float:
+    """The y of a lane's centre line."""
+    half = ROAD.lane_width_m / 2
+    return half if lane is Lane.LEFT else -half

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from spec.errors import ScenarioError
 from spec.lanes import Lane
 
 
@@ -23,3 +24,10 @@ class Reading:
     @property
     def interval_m(self) -> tuple[float, float]:
         return self.dx_m - self.spread_m[0], self.dx_m + self.spread_m[1]
+
+
+def snapshot(sweep: tuple[Reading, ...] | None) -> tuple[Reading, ...]:
+    """The sensors' last sweep as a decision's snapshot; a dropped sweep (None) is a snapshot that cannot be read."""
+    if sweep is None:
+        raise ScenarioError("snapshot", "dropped sweep", "the sensors' last sweep never arrived")
+    return sweep

@@ -5,11 +5,13 @@ decision's reference and clock."""
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
+from typing import Any, cast
 
 import pytest
 
+from sim.containment import Containment
 from sim.driver.control import Steps
+from sim.driver.sound import SoundDriver
 from sim.parts import DriveConfig
 from sim.simulator import Simulator
 from sim.summary import RunSummary
@@ -26,17 +28,18 @@ KEPT = DriveConfig(3.0, model="sound", sensor="noisy", semantics=Semantics.COMMI
 
 class Recorded(Simulator):
     """A simulator that records every proved sequence a decision executes (with its reference profiles), every
-    reset of the position reference, and every run of the proved sequence kept from the last decision."""
+    reset of the position reference, and every run of the proved sequence kept from the last decision (its driver:
+    ``RecordedDriver``)."""
 
     def __init__(self, *args: object, **kwargs: object) -> None:
-        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
         #: per decision executed: its sequence, its reference's profiles, where the reference started and when
-        self.decided: list[tuple[tuple[Action, ...], list[SpeedProfile], float, float]] = []
+        self.sequences: list[tuple[tuple[Action, ...], list[SpeedProfile], float, float]] = []
         #: per kept plan: its actions, its profiles, whether the reference reset, how many decisions were made before
-        self.kept: list[tuple[tuple[Action, ...], list[SpeedProfile], bool, int]] = []
+        self.kept_runs: list[tuple[tuple[Action, ...], list[SpeedProfile], bool, int]] = []
         self.ends: list[tuple[float, float]] = []  # after every action run: the position reference, and when
         self.resets = 0
         self.kept_ends: list[tuple[float, float]] = []  # each kept plan's first action's end: reference, when
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
         reset, action = self.executor.reset_reference, self.executor.acting
 
         def counted(ahead_m: float = 0.0) -> None:
@@ -51,21 +54,30 @@ class Recorded(Simulator):
         self.executor.reset_reference = counted  # type: ignore[method-assign]
         self.executor.acting = ran  # type: ignore[method-assign]
 
-    def _sound_execute(self, actions: tuple[Action, ...], speed_mps: float, what: str,
-                       escape: tuple[Action, ...] = ()) -> Steps:
-        sequence = (*actions, *escape)
-        profiles = plan_profiles(sequence, speed_mps, self.grid, to_common=False)
-        self.decided.append((sequence, profiles, self.car.pose().x_m, self.summary.sim_time_s))
-        return (yield from super()._sound_execute(actions, speed_mps, what, escape))
 
-    def _keep_proved(self, why: str) -> Steps:
-        before, runs = self.resets, len(self.ends)
+class RecordedDriver(SoundDriver[Containment]):
+    """The sound model's driver, recording on its ``Recorded`` host."""
+
+    def execute(self, actions: tuple[Action, ...], speed_mps: float, what: str,
+                escape: tuple[Action, ...] = ()) -> Steps:
+        sim = cast(Recorded, self.host)
+        sequence = (*actions, *escape)
+        profiles = plan_profiles(sequence, speed_mps, sim.grid, to_common=False)
+        sim.sequences.append((sequence, profiles, sim.car.pose().x_m, sim.summary.sim_time_s))
+        return (yield from super().execute(actions, speed_mps, what, escape))
+
+    def keep_proved(self, why: str) -> Steps:
+        sim = cast(Recorded, self.host)
+        before, runs = sim.resets, len(sim.ends)
         pending, profiles = self.pending, list(self.pending_profiles)
-        ok = yield from super()._keep_proved(why)
+        ok = yield from super().keep_proved(why)
         if pending:
-            self.kept.append((pending, profiles, self.resets > before, len(self.decided)))
-            self.kept_ends.append(self.ends[runs])
+            sim.kept_runs.append((pending, profiles, sim.resets > before, len(sim.sequences)))
+            sim.kept_ends.append(sim.ends[runs])
         return ok
+
+
+Recorded.driving = RecordedDriver
 
 
 @pytest.fixture(scope="module")
@@ -85,10 +97,10 @@ def test_a_kept_escape_runs_on_the_proved_reference_of_its_decision_not_one_rest
     restarting the position reference at the car (which would start the escape's ramp late: on seed 1 of this world
     it put the AV back into the left lane beside the vehicle it had dropped behind)."""
     sim, summary = kept_drive
-    assert summary.escapes >= 1 and sim.kept
-    for (pending, profiles, reset, made), (x_ref_m, t_s) in zip(sim.kept, sim.kept_ends, strict=True):
+    assert summary.escapes >= 1 and sim.kept_runs
+    for (pending, profiles, reset, made), (x_ref_m, t_s) in zip(sim.kept_runs, sim.kept_ends, strict=True):
         assert not reset
-        seq, prof, x0_m, t0_s = next(d for d in reversed(sim.decided[:made])
+        seq, prof, x0_m, t0_s = next(d for d in reversed(sim.sequences[:made])
                                      if d[0][len(d[0]) - len(pending):] == pending)
         j = len(seq) - len(pending)
         assert profiles == prof[j:]  # the tail of the decision's own reference
@@ -108,7 +120,7 @@ def test_a_committed_part_ramps_into_its_escape_as_the_proof_has_it(kept_drive: 
     the escape already begun before their boundary (centred on it), as the proof of the two as one sequence has it."""
     sim, _ = kept_drive
     grid = KEPT.grid
-    slower = [(seq, prof, k) for seq, prof, _, _ in sim.decided for k in range(1, len(seq))
+    slower = [(seq, prof, k) for seq, prof, _, _ in sim.sequences for k in range(1, len(seq))
               if action_speed_mps(seq[k], grid) < action_speed_mps(seq[k - 1], grid)]
     assert slower
     for seq, prof, k in slower:
@@ -176,40 +188,3 @@ def test_an_encounter_while_a_decision_plans_is_attributed_under_the_decision_th
     assert found == "after an assumption broke: appeared by 28.4 m, 1.5 s before"
     sim.doing = "drive (plan 8, step 1 of 2)"
     assert Simulator._attribution(sim, 12) == "inside the assumptions"  # type: ignore[arg-type]
-
-
-@pytest.mark.parametrize(("sound", "interrupt", "swept", "oncoming_m", "sent_back"), [
-    (True, True, True, 20.0, True),  # a breach ended the decision, on a sweep, an oncoming vehicle 20 m ahead
-    (True, True, True, None, False),  # nothing oncoming: the move goes on
-    (True, False, True, 20.0, False),  # no breach: the proof covers the move
-    (True, True, False, 20.0, False),  # between sweeps: only a sweep's readings decide
-    (False, True, True, 20.0, False),  # the paper model
-])
-def test_a_move_sent_back_keeps_nothing_of_its_decisions_proof(sound: bool, interrupt: bool, swept: bool,
-                                                               oncoming_m: float | None, sent_back: bool) -> None:
-    """``Simulator._reverses``: once a breach has ended a sound decision, on a sweep, as ``fallback.reverses`` says;
-    then nothing of the decision's plan, proof or escape is left for the next decision to keep (the proof covers
-    neither finishing the move nor undoing it), and the move is counted."""
-    from types import SimpleNamespace
-
-    from sim.driver import fallback
-    from sim.driver.nearest import Nearest
-    from sim.simulator import Simulator
-    from spec.assumptions import PROFILES
-    from spec.lanes import Lane
-
-    oncoming = None if oncoming_m is None else Nearest(oncoming_m, 14.0)
-    rest = (Action.DRIVE, Action.LEFT_LANE_CHANGE)
-    sim = SimpleNamespace(sound=object() if sound else None, interrupt=interrupt, swept=lambda: swept,
-                          _around=lambda: fallback.Around(None, None, oncoming, True, PROFILES["paper"]),
-                          sweep=(), car=SimpleNamespace(pose=lambda: SimpleNamespace(along_mps=7.0)),
-                          summary=RunSummary(seed=1), doing="right_lane_change (plan 7, step 1 of 3)",
-                          pending=rest, pending_profiles=[SpeedProfile(7.0, ())] * 2, proved=object(),
-                          escape_pending=True)
-    assert Simulator._reverses(sim, Lane.RIGHT, 0.3, 1.7) is sent_back  # type: ignore[arg-type]
-    assert sim.summary.reversed_moves == int(sent_back)
-    if sent_back:
-        assert sim.pending == () and sim.pending_profiles == [] and sim.proved is None and not sim.escape_pending
-        assert sim.doing == "right_lane_change reversed (plan 7, step 1 of 3)"
-    else:
-        assert sim.pending == rest and sim.proved is not None and sim.escape_pending

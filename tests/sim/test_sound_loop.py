@@ -8,10 +8,13 @@ import json
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
+from typing import cast
 
 import pytest
 
+from sim.containment import Containment
 from sim.driver.control import Steps
+from sim.driver.sound import SoundDriver
 from sim.parts import DriveConfig
 from sim.simulator import Simulator, run_drive
 from sim.summary import RunSummary
@@ -39,7 +42,7 @@ class Watched(Simulator):
         c = self.containment
         if c is not None and c.world_breached():
             self.truth_first.setdefault(c.decision, self.summary.sim_time_s)
-        if c is not None and c.sensed is not None and self.enveloped:
+        if c is not None and c.sensed is not None and self.driver is not None and self.driver.enveloped:
             since = self.first_breach.setdefault(c.decision, c.sensed.t_s)
             self.longest_s = max(self.longest_s, self.summary.sim_time_s - since)
             if not self.doing.startswith(("right_lane_change", "left_lane_change")):
@@ -164,20 +167,26 @@ def run_drive_summary(seed: int, km: float) -> RunSummary:
 
 
 class Timed(Simulator):
-    """A simulator that records, for every sound decision, how long after its snapshot it acted."""
+    """A simulator that records, for every sound decision, how long after its snapshot it acted (``TimedDriver``)."""
 
     def __init__(self, *args: object, **kwargs: object) -> None:
-        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
         self.waits_s: list[float] = []
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
 
-    def _sound_choice(self, *args: object) -> Callable[[], bool]:
-        act = super()._sound_choice(*args)  # type: ignore[arg-type]
-        taken_s = self.summary.sim_time_s
 
-        def timed() -> bool:
-            self.waits_s.append(self.summary.sim_time_s - taken_s)
+class TimedDriver(SoundDriver[Containment]):
+    def choice(self, *args: object) -> Callable[[], Steps]:
+        act = super().choice(*args)  # type: ignore[arg-type]
+        host = cast(Timed, self.host)
+        taken_s = host.summary.sim_time_s
+
+        def timed() -> Steps:
+            host.waits_s.append(host.summary.sim_time_s - taken_s)
             return act()
         return timed
+
+
+Timed.driving = TimedDriver
 
 
 def test_a_sound_decision_acts_one_control_step_after_its_snapshot_and_plans_for_that_age() -> None:
@@ -222,8 +231,6 @@ def test_a_sound_drive_traces_every_action_and_every_fallback_and_plots_them(
 def test_planning_is_named_once_in_what_the_av_was_doing_however_many_decisions_did_nothing() -> None:
     from types import SimpleNamespace
 
-    from sim.simulator import Simulator
-
     held: list[float] = []
 
     def holding(seconds: float, _speed_mps: float) -> Steps:
@@ -231,12 +238,14 @@ def test_planning_is_named_once_in_what_the_av_was_doing_however_many_decisions_
         return True
         yield  # no control step: a generator that holds nothing
 
-    sim = SimpleNamespace(doing="brake (plan 3, step 1 of 2)", executor=SimpleNamespace(v_ref_mps=7.0, holding=holding))
+    host = SimpleNamespace(doing="brake (plan 3, step 1 of 2)", executor=SimpleNamespace(v_ref_mps=7.0,
+                                                                                         holding=holding))
+    driver = SoundDriver(host, None, None, None)  # type: ignore[arg-type]
     for _ in range(3):
         with pytest.raises(StopIteration) as done:
-            next(Simulator._while_planning(sim))  # type: ignore[arg-type]
+            next(driver.while_planning())
         assert done.value.value is True
-    assert sim.doing == "planning (brake (plan 3, step 1 of 2))" and held == [LOOP.plan_budget_s] * 3
+    assert host.doing == "planning (brake (plan 3, step 1 of 2))" and held == [LOOP.plan_budget_s] * 3
 
 
 @pytest.mark.parametrize(("traffic", "speeds", "semantics"), [

@@ -209,19 +209,19 @@ def test_an_overtake_is_refused_only_at_the_decision_that_would_start_it() -> No
         assert pose.y_m > 0  # the AV starts in the left lane
         sim.car.pose = lambda: dataclasses.replace(pose, speed_mps=common)  # type: ignore[method-assign]
         sim.unresolved = frozenset()
-        assert not sim._refused(overtake, ())
+        assert not sim.refused(overtake, ())
         sim.unresolved = frozenset({Lane.LEFT})
-        assert not sim._refused((Action.DRIVE, Action.DRIVE), ())  # no overtake in it
-        assert not sim._refused(overtake, (Action.RIGHT_LANE_CHANGE, Action.ACCELERATE))  # one under way
-        assert sim._refused(overtake, ()) and sim.summary.refusals == 1
+        assert not sim.refused((Action.DRIVE, Action.DRIVE), ())  # no overtake in it
+        assert not sim.refused(overtake, (Action.RIGHT_LANE_CHANGE, Action.ACCELERATE))  # one under way
+        assert sim.refused(overtake, ()) and sim.summary.refusals == 1
         sim.car.pose = lambda: dataclasses.replace(pose, speed_mps=2 * common)  # type: ignore[method-assign]
-        assert not sim._refused(overtake, ())  # already faster than the traffic: too near to brake
+        assert not sim.refused(overtake, ())  # already faster than the traffic: too near to brake
         assert sim.summary.refusals == 1
     finally:
         sim.close()
     untracked = Simulator(1, DriveConfig(1.0).parts())
     try:
         untracked.unresolved = frozenset({Lane.LEFT})
-        assert not untracked._refused(overtake, ())
+        assert not untracked.refused(overtake, ())
     finally:
         untracked.close()

@@ -1,0 +1,419 @@
+"""The sound model's driver (``SoundDriver``): a decision from the sensors' last sweep (its snapshot, its plan, what it
+chooses), the execution of a proved sequence (a committed part and its escape, or a whole plan) while the AV's own
+monitor holds, the last decision's proof kept when a decision proves nothing, a sideways move sent back once a breach
+ends its decision, and the fallback's take-over.
+
+The driver holds what one decision leaves the next: the rest of the proved sequence, its reference's speed profiles
+and clock, whether it ends in an escape, the proof kept, whether a breach ends the decision under way. It reads and
+reports through its ``Host``, the world that runs it (the car's odometry, the sensors' last sweep, the controller, the
+drive's clock and bookkeeping: ``sim.simulator.Simulator``), so tests drive it with a scripted host, without a physics
+engine. A decision is the control steps it yields (``sim.driver.control.Steps``)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from functools import partial
+from typing import Generic, Protocol, TypeVar
+
+from oracle.sound import keep_lane
+from sim.driver import decide, fallback, takeover
+from sim.driver.control import Steps, lane_of, lane_y, resumed
+from sim.driver.monitor import Monitor
+from sim.driver.plan import Planner
+from sim.driver.readings import Reading, snapshot
+from spec.actions import Action
+from spec.answers import Answer, Status
+from spec.assumptions import Bounds
+from spec.errors import ScenarioError
+from spec.grid import Grid
+from spec.kinds import FailureKind
+from spec.lanes import Lane
+from spec.models import ModelKind
+from spec.motion import SpeedProfile, plan_profiles
+from spec.physical import LOOP
+from spec.scenario import Scenario, problem_for
+
+M = TypeVar("M", bound=Monitor)
+
+
+class Odometry(Protocol):
+    """The car's own position (m) and speed along the road (m/s), as its odometry gives them."""
+
+    @property
+    def x_m(self) -> float: ...
+
+    @property
+    def y_m(self) -> float: ...
+
+    @property
+    def along_mps(self) -> float: ...
+
+
+class Controls(Protocol):
+    """The AV's controller as a decision moves it (``sim.executor.Executor``): its references and its control steps."""
+
+    lane: Lane  # the lane the action under way started in
+    lane_due: Lane | None  # the lane the car must be wholly in now (None: a sideways move under way)
+    x_ref_m: float  # the position reference
+
+    @property
+    def v_ref_mps(self) -> float: ...
+
+    @property
+    def dt_s(self) -> float: ...
+
+    def reset_reference(self, ahead_m: float = 0.0) -> None: ...
+
+    def acting(self, action: Action, profile: SpeedProfile | None = None, stop: Callable[[], bool] | None = None,
+               skip_s: float = 0.0, reverse: Callable[[Lane, float, float], bool] | None = None) -> Steps: ...
+
+    def holding(self, seconds: float, speed_mps: float) -> Steps: ...
+
+
+class Tally(Protocol):
+    """The drive's clock and the counters a sound decision adds to (``sim.summary.RunSummary``)."""
+
+    plans: int
+    actions: int
+    replans: int
+    breach_replans: int
+    reversed_moves: int
+    keep_lane_steps: int
+    minimal_risk_steps: int
+    committed_parts: int
+    escapes: int
+    unsafe_starts: int
+    shadowed: int
+
+    @property
+    def km(self) -> float: ...
+
+    @property
+    def sim_time_s(self) -> float: ...
+
+
+class Host(Protocol[M]):
+    """The world that runs a driver: what the driver reads (the car's odometry, the sensors' last sweep, what the
+    fallback knows of it), what it moves (the controller), and the bookkeeping it reports to; ``containment`` is the
+    monitor of the decision under way (the host's, which may hold the truth against the same sets)."""
+
+    doing: str  # what the AV is doing: recorded with every event
+
+    @property
+    def executor(self) -> Controls: ...
+
+    @property
+    def summary(self) -> Tally: ...
+
+    @property
+    def sweep(self) -> tuple[Reading, ...] | None: ...  # the sensors' last sweep (None: it was dropped)
+
+    @property
+    def containment(self) -> M | None: ...
+
+    @property
+    def cockpit(self) -> takeover.Cockpit: ...
+
+    def pose(self) -> Odometry: ...
+
+    def swept(self) -> bool: ...  # whether the sensors swept at the end of this control step
+
+    def around(self) -> fallback.Around: ...
+
+    def view_m(self, readings: tuple[Reading, ...], av_y_m: float) -> float | None: ...
+
+    def where_swept(self) -> tuple[float, float]: ...
+
+    def followed(self) -> bool: ...  # ``decide.only_followers_behind`` for the action under way
+
+    def decided(self, lane: Lane) -> None: ...
+
+    def contain_from(self, readings: tuple[Reading, ...], av_x_m: float, lane: Lane,
+                     view_m: float | None = None) -> None: ...  # a new decision's monitor (``containment``)
+
+    def check_snapshot(self) -> None: ...
+
+    def resume(self, monitor: M) -> None: ...  # the decision under way goes on under an earlier decision's monitor
+
+    def planned(self, answer: Answer, scenario: Scenario, lane: Lane) -> None: ...
+
+    def refused(self, actions: tuple[Action, ...], under_way: tuple[Action, ...]) -> bool: ...
+
+    def sight(self, readings: tuple[Reading, ...], av_x_m: float, t_s: float | None = None) -> None: ...
+
+    def sensed_anew(self) -> bool: ...
+
+    def fail(self, kind: FailureKind, cause: str, detail: str) -> None: ...
+
+    def kept(self, kind: FailureKind, cause: str, detail: str) -> None: ...
+
+    def traced(self, step: int, action: Action | None, since_s: float) -> None: ...
+
+    def take_over(self, cause: str, lane: Lane) -> None: ...
+
+    def hand_back(self) -> None: ...
+
+
+class SoundDriver(Generic[M]):
+    """The sound model's decisions, one after another, through ``host`` (``decision``), planned by ``planner`` on
+    ``grid`` under the drive's ``bounds`` (the fallback's hold speed is their lowest in the left lane)."""
+
+    def __init__(self, host: Host[M], planner: Planner, grid: Grid, bounds: Bounds | None) -> None:
+        self.host, self.planner, self.grid, self.bounds = host, planner, grid, bounds
+        self.pending: tuple[Action, ...] = ()  # the rest of the proved sequence under way when a decision starts
+        self.pending_profiles: list[SpeedProfile] = []  # the proved reference's speed profile for ``pending``
+        self.escape_pending = False  # the sequence under way ends in a proved escape (the commitment semantics)
+        self.boundary = (0.0, 0.0)  # when the last action of a proved sequence ended, and its position reference then
+        self.proved: M | None = None  # the monitor of the last decision that was executed: what it proved
+        self.unsafe_before = False  # the last decision found its start breaking the safety specification
+        self.enveloped = False  # a decision's action is under way: the AV is held to its envelope
+        self.interrupt = False  # a breach asks the decision under way to end
+        self._room = False  # whether the fallback opens the gap ahead (``room_needed``), and on which sweep
+        self._room_sweep: tuple[Reading, ...] | None = None
+
+    def _watch(self, readings: tuple[Reading, ...], av_x_m: float, lane: Lane, view_m: float | None = None) -> None:
+        self.host.contain_from(readings, av_x_m, lane, view_m)
+        self.interrupt = False
+
+    def decision(self) -> Steps:
+        """One decision from the sensors' last sweep (the AV's measured speed is the plan's start): a plan, executed
+        while the AV's monitor holds; without one, a safe step in lane (``oracle.sound.keep_lane``); without that,
+        the fallback (``spec.envelope.MinimalRisk``)."""
+        h = self.host
+        pose = h.pose()
+        lane = lane_of(pose.y_m)
+        h.executor.lane = lane
+        h.decided(lane)
+        try:
+            readings = snapshot(h.sweep)
+        except ScenarioError as err:
+            self._watch((), pose.x_m, lane)
+            h.fail(FailureKind.SENSING, err.reason, str(err))
+            return (yield from self.fallback(f"sensing: {err.reason}"))
+        view_m = h.view_m(readings, pose.y_m)
+        h.summary.shadowed += int(view_m is not None)
+        self._watch(readings, pose.x_m, lane, view_m)
+        h.check_snapshot()  # the snapshot itself: sensed farther off than the error bound, or unknown
+        try:
+            scenario = self.planner.scenario(readings, lane, pose.along_mps, view_m)
+        except ScenarioError as err:
+            h.fail(FailureKind.SENSING, err.reason, str(err))
+            return (yield from self.fallback(f"sensing: {err.reason}"))
+        answer = self.planner.plan(scenario)
+        h.planned(answer, scenario, lane)
+        act = self.choice(answer, scenario, readings, pose)
+        if not (yield from self.while_planning()):
+            return False
+        return (yield from act())
+
+    def choice(self, answer: Answer, scenario: Scenario, readings: tuple[Reading, ...],
+               pose: Odometry) -> Callable[[], Steps]:
+        """What a decision does, chosen when its snapshot (``readings``, the AV at ``pose``) was taken
+        (``decide.choose``): the plan, a step in lane, what the last decision proved, or the fallback; it acts once
+        the planner's time is over (``while_planning``)."""
+        h = self.host
+        unsafe_before, self.unsafe_before = self.unsafe_before, answer.status is Status.UNSAFE_START
+        if answer.status is Status.UNSAFE_START:  # an assumption broke before the snapshot: counted, no failure
+            h.summary.unsafe_starts += 1
+        elif decide.planner_failed(answer.status):
+            h.fail(FailureKind.PLANNER, answer.status.value, answer.detail or f"{answer.status.value} for {scenario}")
+
+        def refused() -> bool:  # a refusal drops the rest of the last plan
+            if not h.refused(answer.actions, self.pending):
+                return False
+            self.pending = ()
+            return True
+
+        def proved_holds() -> bool:
+            return self.proved is not None and self.proved.sensed is None and self.proved.sense(
+                h.summary.sim_time_s, h.summary.km, pose.x_m, readings, h.doing, h.followed()) is None
+
+        choice = decide.choose(answer.status, bool(answer.actions), refused=refused,
+                               step=lambda: keep_lane(problem_for(scenario, ModelKind.FINAL)),
+                               unsafe_before=unsafe_before, pending=bool(self.pending), proved_holds=proved_holds)
+        if choice.act is decide.Act.PLAN:
+            h.sight(readings, pose.x_m)
+            escape = answer.commit.escape if answer.commit is not None else None
+            if escape is not None:
+                h.summary.committed_parts += 1
+            return partial(self.execute, answer.actions, pose.along_mps, f"plan {h.summary.plans}",
+                           escape=escape.actions if escape else ())
+        if choice.act is decide.Act.STEP:
+            assert choice.step is not None
+            h.summary.keep_lane_steps += 1
+            h.sight(readings, pose.x_m)
+            return partial(self.execute, (choice.step,), pose.along_mps, f"keeping the lane ({choice.why})")
+        if choice.act is decide.Act.KEEP:
+            return partial(self.keep_proved, choice.why)
+        return partial(self.fallback, choice.why)
+
+    def while_planning(self) -> Steps:
+        """A decision's snapshot ages while the planner runs: the world moves on for ``LOOP.plan_budget_s`` (one
+        control step) before the decision acts, the AV keeping its reference speed in its lane; the sound model plans
+        for it (its bounds' ``latency_s``: ``spec.sound.Sound.age_m``). The time the planner took on the machine is
+        counted apart (``plan_ms``). False on a collision meanwhile."""
+        h = self.host
+        if not h.doing.startswith("planning ("):  # a decision that did nothing since the last: not nested again
+            h.doing = f"planning ({h.doing})"
+        return (yield from h.executor.holding(LOOP.plan_budget_s, h.executor.v_ref_mps))
+
+    def keep_proved(self, why: str) -> Steps:
+        """No plan and no step from the fresh snapshot (its cells may be coarser than what the last decision knew),
+        while the last decision's assumptions still hold: go on with what that decision proved, under its monitor:
+        the rest of its plan, or, after its end, its minimal-risk manoeuvre."""
+        h = self.host
+        assert self.proved is not None
+        h.resume(self.proved)
+        self.interrupt = False
+        pending, self.pending = self.pending, ()
+        if pending:
+            h.summary.escapes += int(self.escape_pending)
+            h.kept(FailureKind.PLANNER, why, "kept the rest of the last plan"
+                   + (" and its escape" if self.escape_pending else ""))
+            h.sight(h.sweep or (), *h.where_swept())
+            # on the last decision's reference and clock: its windows, its position reference, its speed profile; the
+            # control steps since its last action ended (the sweep awaited, this decision's planning: the AV held its
+            # reference speed) are the kept plan's first
+            return (yield from self.run_proved(pending, self.pending_profiles, len(pending), "the last plan, kept",
+                                               since=self.boundary))
+        h.summary.minimal_risk_steps += 1
+        h.doing = f"minimal-risk manoeuvre (the last decision's, {why})"
+        self.enveloped = True
+        since_s = h.summary.sim_time_s
+        try:
+            return (yield from self.brake_in_lane(emergency=False))
+        finally:
+            self.enveloped = False
+            h.traced(0, None, since_s)
+
+    def execute(self, actions: tuple[Action, ...], speed_mps: float, what: str,
+                escape: tuple[Action, ...] = ()) -> Steps:
+        """Execute a decision's actions from the speed it planned with (the reference starts at the car), while its
+        monitor holds as the AV senses it; a sensed breach ends it at once (after any sideways move), and the next
+        decision re-plans from a fresh snapshot. The decision has sighted what it knew (``Host.sight``). Under the
+        commitment semantics ``actions`` are the committed part and ``escape`` the escape's actions proved after it.
+        The reference is the proved sequence's, ramps into the escape included: what is left of it is what a decision
+        that proves nothing keeps (``keep_proved``)."""
+        h = self.host
+        if h.containment is not None:
+            h.containment.passing((*actions, *escape))
+        h.executor.reset_reference()
+        self.escape_pending = bool(escape)
+        sequence = (*actions, *escape)
+        return (yield from self.run_proved(sequence, plan_profiles(sequence, speed_mps, self.grid, to_common=False),
+                                           len(actions), what))
+
+    def run_proved(self, sequence: tuple[Action, ...], profiles: list[SpeedProfile], steps: int, what: str,
+                   since: tuple[float, float] | None = None) -> Steps:
+        """Run the first ``steps`` (at most ``replan_after_actions``) of a proved ``sequence`` along its
+        ``profiles``, from where the position reference stands; the rest stays pending for the next decision.
+        ``since``: when the sequence was due to start and where its reference stood then (the end of the action
+        before it); the control steps since went by at the reference speed the AV held, so the reference is put where
+        the proof's is now and goes on on the proof's clock."""
+        h, ex = self.host, self.host.executor
+        h.hand_back()
+        self.proved = h.containment
+        # a breach sensed while a take-over was under way did not interrupt it; it ends this decision before its step
+        self.interrupt = self.interrupt or (h.containment is not None and h.containment.sensed is not None)
+        # a breach sensed before the first step (while a take-over was handing back): no step
+        executed = 0 if self.interrupt else min(steps, LOOP.replan_after_actions)
+        self.pending, self.pending_profiles = sequence[executed:], profiles[executed:]
+        skip_s = 0.0
+        if executed and since is not None:
+            skip_s, ex.x_ref_m = resumed(sequence[0], profiles[0], *since, h.summary.sim_time_s, ex.dt_s)
+        self.enveloped = True
+        try:
+            for k in range(executed):
+                action = sequence[k]
+                h.doing = f"{action.value} ({what}, step {k + 1} of {steps})"
+                self.pending, self.pending_profiles = sequence[k + 1:], profiles[k + 1:]
+                since_s = h.summary.sim_time_s
+                reversed_before = h.summary.reversed_moves
+                ran = yield from ex.acting(action, profiles[k], stop=lambda: self.interrupt and h.swept(),
+                                           skip_s=skip_s if k == 0 else 0.0, reverse=self.reverses)
+                h.traced(k + 1, action, since_s)
+                if not ran:
+                    return False
+                if h.summary.reversed_moves == reversed_before:  # a move sent back is no action done
+                    h.summary.actions += 1
+                    self.boundary = (h.summary.sim_time_s, ex.x_ref_m)
+                if self.interrupt:
+                    break
+                if h.sensed_anew():
+                    h.summary.replans += 1
+                    return True
+        finally:
+            self.enveloped = False
+        if not self.interrupt:
+            return True
+        h.summary.breach_replans += 1
+        return True
+
+    def reverses(self, to_lane: Lane, done_s: float, left_s: float) -> bool:
+        """Whether the sideways move under way goes back to the lane it left: only once a breach (sensed, or of the
+        AV's own envelope) has ended the decision, on a sweep, as ``fallback.reverses`` decides from it
+        (``MinimalRisk``'s cut-short move); counted. Nothing of the decision's proof is kept after it: the proof
+        covers neither finishing the move nor undoing it, so the next decision has no plan to keep."""
+        h = self.host
+        if not (self.interrupt and h.swept()):
+            return False
+        if not fallback.reverses(h.around(), h.sweep or (), h.pose().along_mps, to_lane, done_s, left_s):
+            return False
+        h.summary.reversed_moves += 1
+        h.doing = h.doing.replace(" (", " reversed (", 1)
+        self.pending, self.pending_profiles, self.proved, self.escape_pending = (), [], None, False
+        return True
+
+    def fallback(self, cause: str) -> Steps:
+        """The minimal-risk manoeuvre takes over for ``MINIMAL_RISK.takeover_s`` (the host records the take-over):
+        back to the left lane from the right one, then brake in lane to the hold speed, and down to the sensed
+        vehicle ahead's speed while it is nearer than the safety specification allows (``brake_in_lane``)."""
+        h, ex = self.host, self.host.executor
+        lane = lane_of(h.pose().y_m)
+        h.take_over(cause, lane)
+        h.doing = f"fallback ({cause})"
+        since_s = h.summary.sim_time_s
+        try:
+            if lane is Lane.RIGHT:
+                if not (yield from takeover.awaiting_room(h.cockpit, lane_y(Lane.RIGHT), ex.dt_s)):
+                    return False
+                ex.reset_reference()
+                if not (yield from ex.acting(Action.LEFT_LANE_CHANGE,
+                                             fallback.return_profile(h.around(), h.pose().along_mps))):
+                    return False
+            self.pending, self.proved = (), None
+            return (yield from self.brake_in_lane(emergency=True))
+        finally:
+            h.traced(0, None, since_s)
+
+    def brake_in_lane(self, emergency: bool) -> Steps:
+        """The minimal-risk manoeuvre in the AV's lane (``takeover.braking_in_lane``) towards the hold speed: the
+        fallback's (``emergency``), or a proved continuation's (its monitor's ``hold_floor_mps``), which a breach
+        ends on a sweep."""
+        h, ex = self.host, self.host.executor
+        assert self.bounds is not None
+        low = self.bounds.same_mps.low_mps
+        if not emergency and h.containment is not None:  # the proved manoeuvre's own hold speed
+            low = h.containment.hold_floor_mps
+        hold = fallback.in_lane_hold_mps(emergency, h.pose().along_mps, low)
+        ex.lane_due = ex.lane
+        return (yield from takeover.braking_in_lane(h.cockpit, hold, lane_y(ex.lane), ex.dt_s, emergency,
+                                                    self.room_needed, lambda: self.interrupt and h.swept()))
+
+    def room_needed(self, speed_mps: float) -> bool:
+        """Whether a decision from the last sweep at ``speed_mps`` would find no safe step in lane, where the fallback
+        may open the gap ahead (``fallback.brake_command`` asks, once ``fallback.may_open_gap``). Asked of the planner
+        once per sweep."""
+        h = self.host
+        sweep = h.sweep
+        if sweep is None:
+            return False  # a dropped sweep
+        if self._room_sweep is sweep:
+            return self._room
+        self._room_sweep, self._room = sweep, False
+        try:
+            scenario = self.planner.scenario(sweep, h.executor.lane, speed_mps, h.view_m(sweep, h.pose().y_m))
+        except ScenarioError:
+            return False
+        self._room = keep_lane(problem_for(scenario, ModelKind.FINAL)) is None
+        return self._room

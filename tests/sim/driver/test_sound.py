@@ -1,0 +1,291 @@
+"""The sound model's driver (``sim.driver.sound.SoundDriver``) with a scripted host: constructed readings, a scripted
+controller that counts its control steps and moves its position reference a metre a step, a scripted monitor, and
+the drive's clock advanced by the test's own world step; no physics engine."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from types import SimpleNamespace
+from typing import Any
+
+import pytest
+
+from sim.driver.control import Command, Steps, perform, resumed
+from sim.driver.fallback import Around, in_lane_hold_mps
+from sim.driver.monitor import Breach, BreachKind
+from sim.driver.readings import Reading
+from sim.driver.sound import SoundDriver
+from sim.driver.takeover import Cockpit
+from sim.summary import RunSummary
+from spec.actions import Action
+from spec.assumptions import PROFILES
+from spec.envelope import MINIMAL_RISK
+from spec.errors import ScenarioError
+from spec.grid import PAPER_GRID
+from spec.kinds import FailureKind
+from spec.lanes import Lane
+from spec.motion import SpeedProfile, plan_profiles
+
+DT = 0.05  # the scripted controller's control step (s)
+STEPS = 4  # its control steps per action
+BOUNDS = PROFILES["paper"]
+BREACH = Breach(1, 0.0, 0.0, "a sensed left-lane reading at +30.0 m", -4, BreachKind.TOO_SLOW, 2.0, "drive")
+
+
+class Controls:
+    """A scripted controller: ``STEPS`` control steps per action (a metre each), ``stop`` asked after each."""
+
+    def __init__(self) -> None:
+        self.lane: Lane = Lane.LEFT
+        self.lane_due: Lane | None = Lane.LEFT
+        self.x_ref_m, self.v_ref_mps, self.dt_s = 0.0, 7.0, DT
+        self.acted: list[tuple[Action, SpeedProfile | None, float]] = []  # each action asked: profile, skip_s
+        self.resets = 0
+
+    def reset_reference(self, ahead_m: float = 0.0) -> None:
+        self.resets += 1
+        self.x_ref_m = ahead_m
+
+    def acting(self, action: Action, profile: SpeedProfile | None = None, stop: Callable[[], bool] | None = None,
+               skip_s: float = 0.0, reverse: Callable[[Lane, float, float], bool] | None = None) -> Steps:
+        self.acted.append((action, profile, skip_s))
+        for _ in range(STEPS):
+            self.x_ref_m += 1.0
+            if not (yield 7.0, 1.75, 0.0):
+                return False
+            if stop is not None and stop():
+                break
+        return True
+
+    def holding(self, seconds: float, speed_mps: float) -> Steps:
+        for _ in range(max(1, round(seconds / DT))):
+            if not (yield speed_mps, 1.75, 0.0):
+                return False
+        return True
+
+
+@dataclass
+class Monitor:
+    """A scripted monitor: the first breach the AV sensed, and the floor its proved manoeuvre brakes to."""
+
+    sensed: Breach | None = None
+    hold_floor_mps: float = 5.0
+    passed: tuple[Action, ...] | None = None
+
+    def passing(self, actions: tuple[Action, ...]) -> None:
+        self.passed = actions
+
+    def sense(self, *_: object) -> Breach | None:
+        return self.sensed
+
+
+@dataclass
+class Host:
+    """A scripted world that runs the driver: a sweep every control step, the AV at 7 m/s in the left lane; at the
+    world's step ``breach_at`` the AV's monitor senses a breach (``Simulator._sense_breach``: the decision ends)."""
+
+    executor: Controls = field(default_factory=Controls)
+    summary: RunSummary = field(default_factory=lambda: RunSummary(seed=1))
+    doing: str = "start-up"
+    sweep: tuple[Reading, ...] | None = ()
+    containment: Any = None
+    next_monitor: Monitor = field(default_factory=Monitor)
+    breach_at: int | None = None
+    driver: SoundDriver[Any] | None = None
+    commands: list[Command] = field(default_factory=list)
+    log: list[tuple[str, object]] = field(default_factory=list)
+
+    @property
+    def cockpit(self) -> Cockpit:
+        return Cockpit(lambda: 7.0, self.around, lambda: self.sweep or (), self.executor.reset_reference)
+
+    def pose(self) -> Any:
+        return SimpleNamespace(x_m=0.0, y_m=1.75, along_mps=7.0)
+
+    def swept(self) -> bool:
+        return True
+
+    def around(self) -> Around:
+        return Around(None, None, None, self.sweep is not None, BOUNDS)
+
+    def view_m(self, readings: tuple[Reading, ...], av_y_m: float) -> float | None:
+        return None
+
+    def where_swept(self) -> tuple[float, float]:
+        return 0.0, self.summary.sim_time_s
+
+    def followed(self) -> bool:
+        return True
+
+    def contain_from(self, readings: tuple[Reading, ...], av_x_m: float, lane: Lane,
+                     view_m: float | None = None) -> None:
+        self.containment = self.next_monitor
+
+    def resume(self, monitor: Monitor) -> None:
+        self.containment = monitor
+
+    def check_snapshot(self) -> None: ...
+
+    def sensed_anew(self) -> bool:
+        return False
+
+    def refused(self, actions: tuple[Action, ...], under_way: tuple[Action, ...]) -> bool:
+        return False
+
+    def __getattr__(self, name: str) -> Callable[..., None]:
+        """Every other report (``decided``, ``planned``, ``sight``, ``fail``, ``kept``, ``traced``, ``take_over``,
+        ``hand_back``) is logged."""
+        return lambda *args: self.log.append((name, args))
+
+    def reported(self, name: str) -> list[object]:
+        return [args for what, args in self.log if what == name]
+
+    def step(self, command: Command) -> bool:
+        """The world's step: the clock moves on, and at ``breach_at`` the AV senses a breach."""
+        self.commands.append(command)
+        self.summary.sim_time_s += DT
+        if len(self.commands) == self.breach_at and self.containment is not None and self.driver is not None:
+            self.containment.sensed = BREACH
+            self.driver.interrupt = True
+        return True
+
+
+def driver_of(host: Host, planner: object = None) -> SoundDriver[Any]:
+    host.driver = SoundDriver(host, planner, PAPER_GRID, BOUNDS)  # type: ignore[arg-type]
+    return host.driver
+
+
+def test_a_sensed_breach_ends_the_committed_part_at_once_and_the_decision_is_counted_ended_by_it() -> None:
+    """A committed part of two actions and its escape: the monitor senses a breach at the second control step; the
+    action under way ends after that step, no other action starts, and nothing of the decision is kept as proved
+    (its monitor holds the breach, so a later decision cannot keep it)."""
+    host = Host(breach_at=2)
+    driver = driver_of(host)
+    host.contain_from((), 0.0, Lane.LEFT)
+    committed, escape = (Action.ACCELERATE, Action.ACCELERATE), (Action.BRAKE,)
+    assert perform(driver.execute(committed, 7.0, "plan 1", escape=escape), host.step)
+    assert len(host.commands) == 2 and [a for a, _, _ in host.executor.acted] == [Action.ACCELERATE]
+    assert host.summary.breach_replans == 1 and host.summary.actions == 1 and not driver.enveloped
+    assert host.next_monitor.passed == (*committed, *escape)  # the passing windows are the whole proved sequence's
+    assert driver.proved is host.next_monitor and driver.proved.sensed is BREACH
+
+
+def test_without_a_breach_the_committed_part_runs_and_the_rest_waits_with_its_reference_for_the_next_decision() -> None:
+    host = Host()
+    driver = driver_of(host)
+    host.contain_from((), 0.0, Lane.LEFT)
+    committed, escape = (Action.ACCELERATE,), (Action.BRAKE, Action.DRIVE)
+    assert perform(driver.execute(committed, 7.0, "plan 1", escape=escape), host.step)
+    profiles = plan_profiles((*committed, *escape), 7.0, PAPER_GRID, to_common=False)
+    assert [a for a, _, _ in host.executor.acted] == [Action.ACCELERATE] and host.executor.resets == 1
+    assert driver.pending == escape and driver.pending_profiles == profiles[1:] and driver.escape_pending
+    assert driver.boundary == (pytest.approx(STEPS * DT), STEPS * 1.0)
+    assert host.summary.actions == 1 and host.summary.breach_replans == 0
+    assert host.reported("traced") == [(1, Action.ACCELERATE, 0.0)]
+
+
+@pytest.mark.parametrize("waited_steps", [0, 2, 7])
+def test_a_kept_escape_resumes_on_its_proofs_clock_and_reference_not_one_restarted_at_the_car(
+        waited_steps: int) -> None:
+    """#61 point 4: a decision that proves nothing keeps the last one's escape on that proof's reference. The proof
+    was made for the reference at its snapshot, not one restarted at the car: the kept action starts as far into
+    itself as the control steps since the last action's end (the sweep awaited, the planning), its position
+    reference where the proof's is then, and the reference is never reset."""
+    host = Host()
+    driver = driver_of(host)
+    host.contain_from((), 0.0, Lane.LEFT)
+    escape = (Action.BRAKE, Action.DRIVE)
+    assert perform(driver.execute((Action.ACCELERATE,), 7.0, "plan 1", escape=escape), host.step)
+    due_s, ref_m = driver.boundary
+    profiles = list(driver.pending_profiles)
+    for _ in range(waited_steps):  # the next decision awaits a sweep and plans, holding the reference speed
+        host.step((7.0, 1.75, 0.0))
+    host.containment = Monitor()  # that decision's own sets: no plan, no step, so it keeps the last proof
+    resumed_at_s = host.summary.sim_time_s
+    assert perform(driver.keep_proved("no plan"), host.step)
+    skip_s, x_ref_m = resumed(escape[0], profiles[0], due_s, ref_m, resumed_at_s, DT)
+    assert host.executor.acted[1:] == [(escape[0], profiles[0], pytest.approx(skip_s)), (escape[1], profiles[1], 0.0)]
+    assert skip_s == pytest.approx(waited_steps * DT)
+    # from the proof's reference (a metre a step in the scripted controller), never from the car
+    assert host.executor.x_ref_m == pytest.approx(x_ref_m + 2 * STEPS * 1.0)
+    assert host.executor.resets == 1  # only the decision that proved it started a reference at the car
+    assert host.containment is host.next_monitor  # under the sets the escape was proved against
+    assert host.summary.escapes == 1 and host.reported("kept") == [
+        (FailureKind.PLANNER, "no plan", "kept the rest of the last plan and its escape")]
+    assert driver.pending == () and host.summary.actions == 3
+
+
+def test_after_a_proved_sequence_ends_a_kept_proof_is_its_minimal_risk_manoeuvre_braking_to_its_own_floor() -> None:
+    """Nothing of the last plan left: keeping its proof is its minimal-risk manoeuvre, in lane, braking towards the
+    proof's own hold speed (never faster than the AV is), held to the envelope, which a sensed breach ends on a
+    sweep."""
+    host = Host(breach_at=5)
+    driver = driver_of(host)
+    driver.proved = Monitor(hold_floor_mps=3.0)
+    assert perform(driver.keep_proved("no plan"), host.step)
+    assert len(host.commands) == 5 and host.summary.minimal_risk_steps == 1 and not driver.enveloped
+    hold = in_lane_hold_mps(False, 7.0, 3.0)
+    assert all(speed <= 7.0 for speed, _, _ in host.commands) and host.commands[-1][0] >= hold - 1e-9
+    assert host.doing == "minimal-risk manoeuvre (the last decision's, no plan)"
+    assert host.executor.lane_due is Lane.LEFT and host.reported("traced") == [(0, None, 0.0)]
+
+
+def test_a_dropped_sweep_is_a_sensing_failure_and_the_fallback_takes_over_for_its_whole_time() -> None:
+    host = Host(sweep=None)
+    driver = driver_of(host)
+    driver.pending, driver.proved = (Action.DRIVE,), Monitor()  # type: ignore[assignment]
+    assert perform(driver.decision(), host.step)
+    [(kind, reason, _)] = host.reported("fail")  # type: ignore[misc]
+    assert (kind, reason) == (FailureKind.SENSING, "the sensors' last sweep never arrived")
+    assert host.reported("take_over") == [(f"sensing: {reason}", Lane.LEFT)]
+    assert len(host.commands) == round(MINIMAL_RISK.takeover_s / DT)
+    assert driver.pending == () and driver.proved is None and host.doing == f"fallback (sensing: {reason})"
+
+
+def test_the_fallback_asks_the_planner_for_room_ahead_once_per_sweep_and_never_of_a_dropped_one() -> None:
+    asked: list[tuple[Reading, ...]] = []
+
+    class Planner:
+        def scenario(self, readings: tuple[Reading, ...], *_: object) -> object:
+            asked.append(readings)
+            raise ScenarioError("snapshot", "two vehicles in one cell", "scripted")
+
+    host = Host(sweep=(Reading(Lane.LEFT, 3, 30.0),))
+    driver = driver_of(host, Planner())
+    assert not driver.room_needed(7.0) and not driver.room_needed(6.0) and len(asked) == 1
+    host.sweep = (Reading(Lane.LEFT, 3, 29.5),)
+    assert not driver.room_needed(7.0) and len(asked) == 2
+    host.sweep = None
+    assert not driver.room_needed(7.0) and len(asked) == 2
+
+
+@pytest.mark.parametrize(("interrupt", "swept", "oncoming_m", "sent_back"), [
+    (True, True, 20.0, True),  # a breach ended the decision, on a sweep, an oncoming vehicle 20 m ahead
+    (True, True, None, False),  # nothing oncoming: the move goes on
+    (False, True, 20.0, False),  # no breach: the proof covers the move
+    (True, False, 20.0, False),  # between sweeps: only a sweep's readings decide
+])
+def test_a_move_sent_back_keeps_nothing_of_its_decisions_proof(interrupt: bool, swept: bool,
+                                                               oncoming_m: float | None, sent_back: bool) -> None:
+    """``SoundDriver.reverses``: once a breach has ended a decision, on a sweep, as ``fallback.reverses`` says; then
+    nothing of the decision's plan, proof or escape is left for the next decision to keep (the proof covers neither
+    finishing the move nor undoing it), and the move is counted. (The paper's rules have no driver: their moves are
+    never sent back.)"""
+    from sim.driver.nearest import Nearest
+
+    oncoming = None if oncoming_m is None else Nearest(oncoming_m, 14.0)
+    host = SimpleNamespace(swept=lambda: swept, around=lambda: Around(None, None, oncoming, True, BOUNDS), sweep=(),
+                           pose=lambda: SimpleNamespace(along_mps=7.0), summary=RunSummary(seed=1),
+                           doing="right_lane_change (plan 7, step 1 of 3)")
+    driver = SoundDriver(host, None, PAPER_GRID, BOUNDS)  # type: ignore[arg-type]
+    rest = (Action.DRIVE, Action.LEFT_LANE_CHANGE)
+    driver.interrupt, driver.pending, driver.pending_profiles = interrupt, rest, [SpeedProfile(7.0, ())] * 2
+    driver.proved, driver.escape_pending = Monitor(), True  # type: ignore[assignment]
+    assert driver.reverses(Lane.RIGHT, 0.3, 1.7) is sent_back
+    assert host.summary.reversed_moves == int(sent_back)
+    if sent_back:
+        assert driver.pending == () and driver.pending_profiles == [] and driver.proved is None
+        assert not driver.escape_pending and host.doing == "right_lane_change reversed (plan 7, step 1 of 3)"
+    else:
+        assert driver.pending == rest and driver.proved is not None and driver.escape_pending
