@@ -202,15 +202,7 @@ class Simulator:
         if self.traffic.respawn_behind(x):
             self._side.update({car.body: car.x_m > x for car in self.traffic.left})
         if x > RECENTRE_M:
-            self.origin_km += x / 1000
-            self.car.shift_x(-x)
-            self.traffic.shift_x(-x)
-            self.executor.x_ref_m -= x
-            for sets in (self.containment, self.sighted):
-                if sets is not None:
-                    sets.shift_x(-x)
-            if self.tracker is not None:
-                self.tracker.shift_x(-x)
+            self._recentre(x)
             x = 0.0  # the car is now at the origin
         self.summary.km = self.origin_km + x / 1000
         self.controls += 1
@@ -220,6 +212,23 @@ class Simulator:
             self.report((self.summary.seed, self.summary.km))
             self._next_report_km = int(self.summary.km) + 1
         return True
+
+    def _recentre(self, x_m: float) -> None:
+        """Move the world back by ``x_m`` (the car's place): the bodies, the references, and every decision's sets
+        the loop may still read, each once (the decision under way's, the one before it, the last proof the driver
+        keeps, the paper's sighting), and the driver's proved reference."""
+        self.origin_km += x_m / 1000
+        self.car.shift_x(-x_m)
+        self.traffic.shift_x(-x_m)
+        self.executor.x_ref_m -= x_m
+        held: list[Containment | Sighting | None] = [self.containment, self.previous, self.sighted]
+        if self.driver is not None:
+            held.append(self.driver.proved)
+            self.driver.shift_x(-x_m)
+        for sets in {id(s): s for s in held if s is not None}.values():
+            sets.shift_x(-x_m)
+        if self.tracker is not None:
+            self.tracker.shift_x(-x_m)
 
     # -- containment (``sim.containment``) --------------------------------------------------------------------
     def view_m(self, readings: tuple[Reading, ...], av_y_m: float) -> float | None:

@@ -171,6 +171,12 @@ class SoundDriver(Generic[M]):
         self._room = False  # whether the fallback opens the gap ahead (``room_needed``), and on which sweep
         self._room_sweep: tuple[Reading, ...] | None = None
 
+    def shift_x(self, dx_m: float) -> None:
+        """The world was re-centred by ``dx_m``: the proved reference's place at its boundary moves with it (the
+        monitors are the host's to shift, each once)."""
+        due_s, ref_m = self.boundary
+        self.boundary = (due_s, ref_m + dx_m)
+
     def _watch(self, readings: tuple[Reading, ...], av_x_m: float, lane: Lane, view_m: float | None = None) -> None:
         self.host.contain_from(readings, av_x_m, lane, view_m)
         self.interrupt = False

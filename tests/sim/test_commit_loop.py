@@ -188,3 +188,28 @@ def test_an_encounter_while_a_decision_plans_is_attributed_under_the_decision_th
     assert found == "after an assumption broke: appeared by 28.4 m, 1.5 s before"
     sim.doing = "drive (plan 8, step 1 of 2)"
     assert Simulator._attribution(sim, 12) == "inside the assumptions"  # type: ignore[arg-type]
+
+
+def test_a_recentred_world_moves_every_decisions_sets_the_loop_still_reads_once_each() -> None:
+    """``Simulator._recentre``: the sets of the decision under way, of the one before it (an encounter while a
+    decision plans is judged under them), the last proof the driver keeps (a decision may go on under it after the
+    world moved) and the paper's sighting each move with the world, once even where two are the same sets; so do the
+    bodies, the references and the driver's proved reference."""
+    from types import SimpleNamespace
+
+    moved: dict[str, float] = {}
+
+    def part(name: str) -> SimpleNamespace:
+        return SimpleNamespace(shift_x=lambda dx_m: moved.__setitem__(name, moved.get(name, 0.0) + dx_m))
+
+    current, before, sighting = part("current"), part("before"), part("sighting")
+    driver = SimpleNamespace(proved=before, shift_x=part("boundary").shift_x)
+    sim = SimpleNamespace(origin_km=2.0, car=part("car"), traffic=part("traffic"), tracker=part("tracker"),
+                          executor=SimpleNamespace(x_ref_m=1003.0), containment=current, previous=before,
+                          sighted=sighting, driver=driver)
+    Simulator._recentre(sim, 1001.0)  # type: ignore[arg-type]
+    assert moved == dict.fromkeys(["car", "traffic", "current", "before", "sighting", "boundary", "tracker"], -1001.0)
+    assert sim.origin_km == pytest.approx(3.001) and sim.executor.x_ref_m == pytest.approx(2.0)
+    driver.proved, moved = part("kept"), {}
+    Simulator._recentre(sim, 1001.0)  # type: ignore[arg-type]
+    assert moved["kept"] == moved["before"] == -1001.0

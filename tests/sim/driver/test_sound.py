@@ -185,13 +185,14 @@ def test_without_a_breach_the_committed_part_runs_and_the_rest_waits_with_its_re
     assert host.reported("traced") == [(1, Action.ACCELERATE, 0.0)]
 
 
-@pytest.mark.parametrize("waited_steps", [0, 2, 7])
+@pytest.mark.parametrize(("waited_steps", "recentred_m"), [(0, 0.0), (2, 0.0), (7, 0.0), (2, 1004.0)])
 def test_a_kept_escape_resumes_on_its_proofs_clock_and_reference_not_one_restarted_at_the_car(
-        waited_steps: int) -> None:
+        waited_steps: int, recentred_m: float) -> None:
     """#61 point 4: a decision that proves nothing keeps the last one's escape on that proof's reference. The proof
     was made for the reference at its snapshot, not one restarted at the car: the kept action starts as far into
     itself as the control steps since the last action's end (the sweep awaited, the planning), its position
-    reference where the proof's is then, and the reference is never reset."""
+    reference where the proof's is then, and the reference is never reset. A world re-centred meanwhile
+    (``recentred_m``) moves that place with it."""
     host = Host()
     driver = driver_of(host)
     host.contain_from((), 0.0, Lane.LEFT)
@@ -201,6 +202,9 @@ def test_a_kept_escape_resumes_on_its_proofs_clock_and_reference_not_one_restart
     profiles = list(driver.pending_profiles)
     for _ in range(waited_steps):  # the next decision awaits a sweep and plans, holding the reference speed
         host.step((7.0, 1.75, 0.0))
+    host.executor.x_ref_m -= recentred_m  # the world re-centred on the car (``Simulator._recentre``)
+    driver.shift_x(-recentred_m)
+    ref_m -= recentred_m
     host.containment = Monitor()  # that decision's own sets: no plan, no step, so it keeps the last proof
     resumed_at_s = host.summary.sim_time_s
     assert perform(driver.keep_proved("no plan"), host.step)
