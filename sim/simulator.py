@@ -1,14 +1,14 @@
-"""One closed-loop drive: sense, discretise, plan, execute action by action, check against the prediction.
+"""One closed-loop drive: the world (bodies, physics, traffic, sensors, faults), the observers, and the bookkeeping
+against the truth, running the AV's driver.
 
-Two clocks: decisions (one per action, 3 or 6 s) and physics (``LOOP.physics_dt_s``).
-Re-planning as in the paper: when a vehicle not in the current plan is sensed, when the
-plan runs out, and after ``replan_after_actions`` actions; and (``replan_on_violation``,
-on by default, not in the paper) as soon as a vehicle deviates from the prediction
-beyond the tolerance, since the plan's safety margins no longer hold. Under the sound model
-(``DriveConfig.model``) a decision is kept only while containment holds (``sim.containment``, checked
-every control step under both models): a breach ends it, and without a plan the AV keeps its lane
-safely, keeps what the last decision proved, or hands over to the fallback. The sound model's decisions are its
-driver's (``sim.driver.sound.SoundDriver``), which reads and reports through this simulator (its ``Host``).
+Two clocks: decisions (one per action, 3 or 6 s) and physics (``LOOP.physics_dt_s``). What the AV decides is its
+driver's, in the decision layer: the paper's rules (``sim.driver.paper.PaperDriver``: re-planning when a vehicle not
+in the current plan is sensed, when the plan runs out, after ``replan_after_actions`` actions, and, with
+``replan_on_violation``, on by default, not in the paper, as soon as a vehicle deviates from the prediction beyond
+the tolerance, ``sim.tolerance.PlanCheck``) or the sound model (``sim.driver.sound.SoundDriver``: a decision is kept
+only while its sets hold as the AV senses them; without a plan the AV keeps its lane safely, keeps what the last
+decision proved, or hands over to the fallback). The simulator is their host (``sim.driver.host.Host``): what they
+read, move and report through. Containment (``sim.containment``) is checked every control step under both models.
 A decision is the control steps it yields (``sim.driver.control.Steps``); the world's loop (``_perform``) applies
 each and ticks the world after it, so the world's clock never advances inside a decision (a missed-opportunity
 replay steps a saved copy of the world and restores it). The world is re-centred on the AV every kilometre so
@@ -30,14 +30,15 @@ from pathlib import Path
 
 import numpy as np
 
-from sim import opportunity, tolerance
+from sim import opportunity
 from sim.containment import Containment
 from sim.discretiser import discretise
 from sim.driver import control, decide, fallback, plan, takeover
-from sim.driver.control import Steps
+from sim.driver.control import Steps, lane_of, lane_y
 from sim.driver.monitor import Breach, BreachKind, Sighting
 from sim.driver.nearest import Nearest
-from sim.driver.readings import Reading, snapshot
+from sim.driver.paper import PaperDriver
+from sim.driver.readings import Reading
 from sim.driver.sound import SoundDriver
 from sim.executor import Executor
 from sim.faults import GHOST_BODY, FaultEvent, FaultySensor, SteeringFault, attribute
@@ -46,7 +47,7 @@ from sim.parts import DriveConfig, Parts
 from sim.safety import SafetyMonitor
 from sim.sensors import RaySensor, SensorModel, in_range, oncoming_view_m
 from sim.summary import Failure, RunSummary, Takeover
-from sim.tolerance import ToleranceReport, Violation
+from sim.tolerance import PlanCheck, ToleranceReport, Violation
 from sim.tracking import Detection, Track, Tracker
 from sim.vehicle import KinematicCar, Pose, first_contact
 from spec.actions import Action
@@ -59,7 +60,6 @@ from spec.faults import lost_control
 from spec.files import scenario_to_dict
 from spec.kinds import FailureKind
 from spec.lanes import Lane
-from spec.motion import action_speed_mps, plan_profiles, reference_offset_m
 from spec.physical import CAR, LOOP, SENSORS
 from spec.scenario import Scenario
 from spec.sound import Sound
@@ -81,7 +81,7 @@ Report = Callable[[tuple[int, float]], None]
 
 class Simulator:
     """A physics world, the AV, traffic, sensors and a planner, assembled from ``parts``, driven by one seeded
-    generator; the host of the sound model's driver (``sim.driver.sound.Host``: what it reads, moves and reports)."""
+    generator; the host of the AV's driver (``sim.driver.host.Host``: what it reads, moves and reports)."""
 
     #: the sound model's driver, assembled afresh with the scene (at the start, and after a restart)
     driving: type[SoundDriver[Containment]] = SoundDriver
@@ -133,8 +133,7 @@ class Simulator:
             self.faulty.inner, self.sensor = self.sensor, self.faulty
         self.executor = Executor(self.scene, self.car, Lane.LEFT, self.grid)
         self.safety.forget()
-        self._implied: dict[int, float] = {}  # body -> the gap the plan under way implies at the action's end
-        self.pending: tuple[Action, ...] = ()  # the rest of the paper model's plan under way when a re-plan starts
+        self.plan_check: PlanCheck | None = None  # the paper model's plan under way, held against the truth
         self.doing = "start-up"  # what the AV was executing: recorded with every collision
         self._side = {car.body: car.x_m > 0 for car in self.traffic.left}
         self.visible = RaySensor(self.scene, self.sensor_rng)  # exact rays, no draws: is a vehicle sensed now?
@@ -160,9 +159,11 @@ class Simulator:
         self.speed_log: list[tuple[float, tuple[float, float], float]] | None = None
         self.unresolved: frozenset[Lane] = frozenset()  # lanes where the tracker holds a contradiction
         self.controls = 0  # control steps since the scene was assembled: the sensors sweep on every ``sweep_every``-th
-        #: the sound model's decisions (None: the paper's rules decide, in ``_one_plan``)
-        self.driver = None if self.sound is None else self.driving(
+        #: the sound model's driver (None: the paper's rules decide) and the driver that decides (``_one_plan``)
+        self.sound_driver = None if self.sound is None else self.driving(
             self, self.planner, self.grid, None if self.watch is None else self.watch.bounds)
+        self.driver: SoundDriver[Containment] | PaperDriver = self.sound_driver or PaperDriver(
+            self, self.planner, self.grid, self.replan_on_violation)
         self._on_sweep()
 
     # -- the physics clock ------------------------------------------------------------------
@@ -175,7 +176,7 @@ class Simulator:
         if self.containment is not None:
             self._contain(pose, dt_s)
         self.safety.observe(pose, Executor.lane_of(pose.y_m), self.traffic.left, self.traffic.oncoming,
-                            self.summary.km, self.summary.sim_time_s, self.doing, self._implied.get, self._attribution)
+                            self.summary.km, self.summary.sim_time_s, self.doing, self._implied_gap, self._attribution)
         lost = lost_control(pose.y_m, pose.yaw_rad)
         if lost is not None:
             self.fail(FailureKind.LOSS_OF_CONTROL, lost, f"during {self.doing}" + (
@@ -186,7 +187,7 @@ class Simulator:
         if car is not None:
             in_left = car in self.traffic.left
             self.safety.contact(car, Lane.LEFT if in_left else Lane.RIGHT, pose, self.summary.km,
-                                self.summary.sim_time_s, self.doing, self._implied.get(car.body),
+                                self.summary.sim_time_s, self.doing, self._implied_gap(car.body),
                                 self._attribution(car.body))
             lane = "left-lane" if in_left else "oncoming"
             self.fail(FailureKind.COLLISION, f"collision with a{'n' if lane == 'oncoming' else ''} {lane} vehicle",
@@ -222,9 +223,9 @@ class Simulator:
         self.traffic.shift_x(-x_m)
         self.executor.x_ref_m -= x_m
         held: list[Containment | Sighting | None] = [self.containment, self.previous, self.sighted]
-        if self.driver is not None:
-            held.append(self.driver.proved)
-            self.driver.shift_x(-x_m)
+        if self.sound_driver is not None:
+            held.append(self.sound_driver.proved)
+            self.sound_driver.shift_x(-x_m)
         for sets in {id(s): s for s in held if s is not None}.values():
             sets.shift_x(-x_m)
         if self.tracker is not None:
@@ -272,20 +273,21 @@ class Simulator:
             report.breached_s += dt_s
         t, km = self.summary.sim_time_s, self.summary.km
         found = c.check(t, km, pose, self.traffic.left, self.traffic.oncoming, self.doing, self._sensed)
-        if self.driver is not None and self.driver.enveloped:
+        if self.sound_driver is not None and self.sound_driver.enveloped:
             av = c.check_av(t, km, pose, self.executor.x_ref_m, self.executor.v_ref_mps, self.executor.lane_due,
                             self.doing)
             found += [av] if av is not None else []
         for breach in found:
             report.add(breach)
-        if any(b.kind is BreachKind.AV_ENVELOPE for b in found) and self.driver is not None and self.takeover is None:
-            self.driver.interrupt = True
+        d = self.sound_driver
+        if any(b.kind is BreachKind.AV_ENVELOPE for b in found) and d is not None and self.takeover is None:
+            d.interrupt = True
 
     def _sense_breach(self, pose: Pose) -> None:
         """The AV's own monitor on this sweep's readings, as its planner gets them (``Monitor.sense``): a reading
         the decision's sets cannot explain ends a sound decision (not a take-over under way: the next decision
         ends at once instead)."""
-        c, d = self.containment, self.driver
+        c, d = self.containment, self.sound_driver
         if c is None or d is None:
             return
         if c.sense(self.summary.sim_time_s, self.summary.km, pose.x_m, self._sense(), self.doing,
@@ -491,16 +493,6 @@ class Simulator:
         if self.steering.active is not None and self.steering.active not in self.steered:
             self.steered.append(self.steering.active)
 
-    def _await_sweep(self) -> Steps:
-        """Hold the lane and the reference speed until the sensors' next sweep (at most two control steps: an action
-        whose time is not a whole number of sweeps, as on 5.25 m cells), so a decision's snapshot is never older than
-        the car's pose; False on a collision."""
-        y_ref = self.scene.lane_y(Executor.lane_of(self.car.pose().y_m))
-        while not self.swept():
-            if not (yield self.executor.v_ref_mps, y_ref, 0.0):
-                return False
-        return True
-
     def refused(self, actions: tuple[Action, ...], under_way: tuple[Action, ...]) -> bool:
         """Whether the tracker's contradiction refuses the overtake ``actions`` would start (``plan.refuses``; only
         with tracking); a refusal is counted (the decision drops the rest of the plan ``under_way``)."""
@@ -512,15 +504,6 @@ class Simulator:
             return False
         self.summary.refusals += 1
         return True
-
-    def _hold_a_sweep(self) -> Steps:
-        """Drive on in lane at the common speed until the next sweep (at least one control step), the position
-        reference where ``control.held_reference`` puts it."""
-        y_ref = self.scene.lane_y(Executor.lane_of(self.car.pose().y_m))
-        self.executor.x_ref_m = control.held_reference(self.executor.x_ref_m, self.car.pose().x_m)
-        if not (yield float(self.grid.speed), y_ref, 0.0):
-            return False
-        return (yield from self._await_sweep())
 
     def _sense(self) -> tuple[Reading, ...]:
         """The last sweep's readings (a dropped sweep: none)."""
@@ -547,57 +530,26 @@ class Simulator:
         return along_m - self.origin_km * 1000, t_s
 
     def _one_plan(self) -> Steps:
-        """One decision, from the sensors' next sweep: its control steps."""
-        if not (yield from self._await_sweep()):
+        """One decision, from the sensors' next sweep: the driver's control steps."""
+        y_ref = lane_y(lane_of(self.car.pose().y_m))
+        if not (yield from control.until_sweep(self.swept, self.executor.v_ref_mps, y_ref)):
             return False
-        if self.driver is not None:
-            return (yield from self.driver.decision())
-        pending, self.pending = self.pending, ()
-        pose = self.car.pose()
-        lane = Executor.lane_of(pose.y_m)
-        self.executor.lane = lane
-        self.decided(lane)
-        try:
-            readings = snapshot(self.sweep)
-        except ScenarioError as err:
-            self.contain_from((), pose.x_m, lane)
-            return (yield from self._sensing_stop(pending, err))
-        self.contain_from(readings, pose.x_m, lane)
-        try:
-            framed = plan.plan_in_frame(self.planner, self.grid, readings, pose.along_mps, lane)
-        except ScenarioError as err:
-            return (yield from self._sensing_stop(pending, err))
-        self.summary.frame_fallbacks += int(framed.fell_back)
-        answer, scenario = framed.answer, framed.scenario
-        self.planned(answer, scenario, lane)
-        act = decide.paper_choice(answer.status, bool(answer.actions), bool(pending),
-                                  refused=lambda: self.refused(answer.actions, pending))
-        if act is decide.PaperAct.KEEP:
-            return (yield from self._keep(pending, FailureKind.PLANNER, answer.status.value,
-                                          self._no_plan(answer, scenario)))
-        if act is decide.PaperAct.WAIT:
-            self.fail(FailureKind.PLANNER, answer.status.value, self._no_plan(answer, scenario))
-            self.doing = "waiting without a plan"
-            return (yield from self.executor.holding(LOOP.wait_s, self.grid.speed))
-        if act is decide.PaperAct.DRIVE:
-            self.doing = "drive (nothing to overtake)"
-            self.executor.reset_reference()
-            profile = plan_profiles((Action.DRIVE,), pose.along_mps, self.grid)[0]
-            return (yield from self.executor.acting(Action.DRIVE, profile))
-        if act is decide.PaperAct.HOLD:
-            self.doing = "driving on in lane (an overtake refused: the tracker holds a contradiction)"
-            return (yield from self._hold_a_sweep())
-        self.sight(readings, pose.x_m)
-        return (yield from self._execute(answer.actions, answer.states, framed.seen, pose.along_mps, framed.frame_mps))
+        return (yield from self.driver.decision())
 
-    def _sensing_stop(self, pending: tuple[Action, ...], err: ScenarioError) -> Steps:
-        """The paper model's snapshot could not be read (or made no scenario): the plan under way goes on, else the
-        stop is recorded and the AV waits in lane."""
-        if pending:
-            return (yield from self._keep(pending, FailureKind.SENSING, err.reason, str(err)))
-        self.fail(FailureKind.SENSING, err.reason, str(err))
-        self.doing = "waiting after a sensing failure"
-        return (yield from self.executor.holding(LOOP.wait_s, self.grid.speed))
+    def predicting(self, plan_id: int, seen: tuple[Reading, ...], states: tuple[State, ...]) -> PlanCheck:
+        """The paper model's plan ``plan_id`` (made on ``seen``, predicting ``states``) held against the truth as it
+        executes (``tolerance.PlanCheck``), its gaps implied while an action is under way read by the safety
+        measures."""
+        def observe(step: int, action: Action, state: State, violations: list[Violation]) -> None:
+            self._observe(plan_id, step, action, state, violations)
+
+        self.plan_check = PlanCheck(self.summary.tolerance, plan_id, seen, states, self.grid, self.traffic.cars,
+                                    lambda: self.car.pose().x_m, observe)
+        return self.plan_check
+
+    def _implied_gap(self, body: int) -> float | None:
+        """The gap to ``body`` the paper model's action under way implies at its end (None: none followed)."""
+        return None if self.plan_check is None else self.plan_check.implied.get(body)
 
     def planned(self, answer: Answer, scenario: Scenario, lane: Lane) -> None:
         """Count a plan, its latency and (in the AV's lane) its missed opportunity; keep every SNAPSHOT_EVERY-th
@@ -677,68 +629,6 @@ class Simulator:
             report.missed.append(opportunity.Opportunity(round(self.summary.km, 3), round(self.summary.sim_time_s, 1),
                                                          refusal.value, said, accelerates, gap_m,
                                                          scenario_to_dict(scenario)))
-
-    @staticmethod
-    def _no_plan(answer: Answer, scenario: Scenario) -> str:
-        return f"{answer.status.value} for {scenario}"
-
-    def _keep(self, pending: tuple[Action, ...], kind: FailureKind, cause: str, detail: str) -> Steps:
-        """A re-plan found no plan (or could not use its snapshot) while a model-checked plan was under way:
-        go on with that plan, for at most ``replan_after_actions`` actions, then plan again.
-
-        A re-plan mid-manoeuvre sees a new snapshot, where a vehicle near a cell's edge may
-        round the other way; "no plan" there does not undo the plan being executed (the paper
-        warns that re-planning mid-manoeuvre abandons manoeuvres that would have succeeded).
-        Recorded in ``kept_plans`` with its cause; it is a failure only when no plan is under way.
-        """
-        self.summary.kept_plans.append(self._event(kind, cause, detail))
-        self.executor.reset_reference()
-        kept = pending[: LOOP.replan_after_actions]
-        for k, (action, profile) in enumerate(zip(kept, plan_profiles(kept, self.car.pose().along_mps, self.grid))):
-            self.doing = f"{action.value} (kept plan after {kind.value}: {cause}, step {k + 1} of {len(kept)})"
-            if not (yield from self.executor.acting(action, profile)):
-                return False
-            self.summary.actions += 1
-        self.pending = pending[len(kept):]
-        return True
-
-    def _execute(self, actions: tuple[Action, ...], states: tuple[State, ...], seen: tuple[Reading, ...],
-                 speed_mps: float, frame_mps: float) -> Steps:
-        plan_id = self.summary.plans
-        self.executor.reset_reference(reference_offset_m(speed_mps, frame_mps, action_speed_mps(actions[0], self.grid)))
-        cars = {car.body: car for car in self.traffic.cars()}
-        # the tolerance check follows vehicles; a ghost a fault injected is none (``sim.faults``)
-        tracked = {key: v for key, v in tolerance.followed(seen, states[0], self.grid).items() if key[2] in cars}
-        deviation = dict.fromkeys(tracked, 0.0)
-        generation = {body: cars[body].respawns for body in cars}
-        executed = actions[: LOOP.replan_after_actions]
-        for k, (action, profile) in enumerate(zip(executed, plan_profiles(executed, speed_mps, self.grid))):
-            self.doing = f"{action.value} (plan {plan_id}, step {k + 1} of {len(actions)})"
-            self._implied = tolerance.implied_gaps({key: v for key, v in tracked.items()
-                                                    if cars[key[2]].respawns == generation[key[2]]}, states[k + 1],
-                                                   self.grid)
-            ok = yield from self.executor.acting(action, profile)
-            self._implied = {}
-            if not ok:
-                return False
-            self.summary.actions += 1
-            violations_before = len(self.summary.tolerance.violations)
-            now = {car.body: car.x_m - self.car.pose().x_m for car in self.traffic.cars()}
-            for (lane, index, body), (start_dx, start_cell) in tracked.items():
-                if cars[body].respawns != generation[body]:
-                    continue  # respawned ahead since the plan started: a different vehicle now
-                cells = states[k + 1].left_lane if lane is Lane.LEFT else states[k + 1].right_lane
-                deviation[(lane, index, body)] = self.summary.tolerance.check(
-                    plan_id, k + 1, action.value, f"{lane.value}_lane[{index}]",
-                    (cells[index] - start_cell) * self.grid.cell, start_dx, now[body], deviation[(lane, index, body)])
-            new_violations = self.summary.tolerance.violations[violations_before:]
-            self._observe(plan_id, k + 1, action, states[k + 1], new_violations)
-            if (self.replan_on_violation and new_violations) or self.sensed_anew():
-                self.summary.replans += 1
-                self.pending = actions[k + 1:]
-                return True
-        self.pending = actions[len(executed):]
-        return True
 
     def _observe(self, plan_id: int, step: int, action: Action | None, predicted: State | None,
                  violations: list[Violation], since_s: float | None = None) -> None:

@@ -12,11 +12,13 @@ from __future__ import annotations
 
 import math
 from collections import defaultdict
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 from sim.discretiser import in_window, reading_cell
 from sim.driver.readings import Reading
+from spec.actions import Action
 from spec.grid import Grid
 from spec.kinds import ViolationKind
 from spec.lanes import Lane
@@ -143,3 +145,60 @@ def implied_gaps(vehicles: dict[Key, tuple[float, int]], predicted: State, grid:
         cells = predicted.left_lane if lane is Lane.LEFT else predicted.right_lane
         gaps[body] = abs(cells[index] - grid.av_cell) * grid.cell - CAR.length_m
     return gaps
+
+
+class Followed(Protocol):
+    """A vehicle as the tolerance check follows it: its body, how often it respawned, its place along the road."""
+
+    @property
+    def body(self) -> int: ...
+
+    @property
+    def respawns(self) -> int: ...
+
+    @property
+    def x_m(self) -> float: ...
+
+
+class PlanCheck:
+    """One paper-model plan's prediction held against the truth as it executes (``sim.driver.paper.Prediction``):
+    after each action, each vehicle sensed in the plan's window (``seen``) against its predicted cell in ``states``,
+    recorded in ``report`` and told to ``observe`` (step, action, predicted state, the new violations); while an
+    action is under way, the gap each vehicle's predicted cell implies (``implied``, for the safety measures). A
+    vehicle respawned since the plan started is a different vehicle, no longer followed; a ghost a fault injected is
+    none (``sim.faults``)."""
+
+    def __init__(self, report: ToleranceReport, plan_id: int, seen: tuple[Reading, ...], states: tuple[State, ...],
+                 grid: Grid, cars: Callable[[], Iterable[Followed]], av_x_m: Callable[[], float],
+                 observe: Callable[[int, Action, State, list[Violation]], None]) -> None:
+        self.report, self.plan_id, self.states, self.grid = report, plan_id, states, grid
+        self.cars, self.av_x_m, self.observe = cars, av_x_m, observe
+        self.at_start = {car.body: car for car in cars()}
+        self.tracked = {key: v for key, v in followed(seen, states[0], grid).items() if key[2] in self.at_start}
+        self.deviation = dict.fromkeys(self.tracked, 0.0)
+        self.generation = {body: car.respawns for body, car in self.at_start.items()}
+        self.implied: dict[int, float] = {}  # body -> the gap the action under way implies at its end
+
+    def expecting(self, k: int | None) -> None:
+        """The plan's action ``k`` (from 0) is under way: the gaps its predicted state implies (None: no action)."""
+        self.implied = {} if k is None else implied_gaps(
+            {key: v for key, v in self.tracked.items()
+             if self.at_start[key[2]].respawns == self.generation[key[2]]}, self.states[k + 1], self.grid)
+
+    def deviated(self, k: int, action: Action) -> bool:
+        """After the plan's action ``k``: check every followed vehicle and tell the observers; whether any broke the
+        tolerance."""
+        before = len(self.report.violations)
+        now = {car.body: car.x_m - self.av_x_m() for car in self.cars()}
+        predicted = self.states[k + 1]
+        for (lane, index, body), (start_dx, start_cell) in self.tracked.items():
+            if self.at_start[body].respawns != self.generation[body]:
+                continue  # respawned ahead since the plan started: a different vehicle now
+            cells = predicted.left_lane if lane is Lane.LEFT else predicted.right_lane
+            self.deviation[(lane, index, body)] = self.report.check(
+                self.plan_id, k + 1, action.value, f"{lane.value}_lane[{index}]",
+                (cells[index] - start_cell) * self.grid.cell, start_dx, now[body],
+                self.deviation[(lane, index, body)])
+        new = self.report.violations[before:]
+        self.observe(k + 1, action, predicted, new)
+        return bool(new)

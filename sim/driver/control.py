@@ -109,3 +109,13 @@ def lane_y(lane: Lane) -> float:
     """The y of a lane's centre line."""
     half = ROAD.lane_width_m / 2
     return half if lane is Lane.LEFT else -half
+
+
+def until_sweep(swept: Callable[[], bool], speed_mps: float, y_ref_m: float) -> Steps:
+    """Hold the lane centred at ``y_ref_m`` at ``speed_mps`` until the sensors' next sweep (``swept``, asked after each
+    step; at most two control steps: an action whose time is not a whole number of sweeps, as on 5.25 m cells), so a
+    decision's snapshot is never older than the car's pose; False on a collision."""
+    while not swept():
+        if not (yield speed_mps, y_ref_m, 0.0):
+            return False
+    return True

@@ -5,9 +5,9 @@ ends its decision, and the fallback's take-over.
 
 The driver holds what one decision leaves the next: the rest of the proved sequence, its reference's speed profiles
 and clock, whether it ends in an escape, the proof kept, whether a breach ends the decision under way. It reads and
-reports through its ``Host``, the world that runs it (the car's odometry, the sensors' last sweep, the controller, the
-drive's clock and bookkeeping: ``sim.simulator.Simulator``), so tests drive it with a scripted host, without a physics
-engine. A decision is the control steps it yields (``sim.driver.control.Steps``)."""
+reports through its ``SoundHost``, the world that runs it (the car's odometry, the sensors' last sweep, the
+controller, the drive's clock and bookkeeping: ``sim.simulator.Simulator``), so tests drive it with a scripted host,
+without a physics engine. A decision is the control steps it yields (``sim.driver.control.Steps``)."""
 
 from __future__ import annotations
 
@@ -18,6 +18,7 @@ from typing import Generic, Protocol, TypeVar
 from oracle.sound import keep_lane
 from sim.driver import decide, fallback, takeover
 from sim.driver.control import Steps, lane_of, lane_y, resumed
+from sim.driver.host import Counts, Host, Odometry
 from sim.driver.monitor import Monitor
 from sim.driver.plan import Planner
 from sim.driver.readings import Reading, snapshot
@@ -36,46 +37,9 @@ from spec.scenario import Scenario, problem_for
 M = TypeVar("M", bound=Monitor)
 
 
-class Odometry(Protocol):
-    """The car's own position (m) and speed along the road (m/s), as its odometry gives them."""
+class Tally(Counts, Protocol):
+    """The counters a sound decision adds to besides every decision's (``sim.summary.RunSummary``)."""
 
-    @property
-    def x_m(self) -> float: ...
-
-    @property
-    def y_m(self) -> float: ...
-
-    @property
-    def along_mps(self) -> float: ...
-
-
-class Controls(Protocol):
-    """The AV's controller as a decision moves it (``sim.executor.Executor``): its references and its control steps."""
-
-    lane: Lane  # the lane the action under way started in
-    lane_due: Lane | None  # the lane the car must be wholly in now (None: a sideways move under way)
-    x_ref_m: float  # the position reference
-
-    @property
-    def v_ref_mps(self) -> float: ...
-
-    @property
-    def dt_s(self) -> float: ...
-
-    def reset_reference(self, ahead_m: float = 0.0) -> None: ...
-
-    def acting(self, action: Action, profile: SpeedProfile | None = None, stop: Callable[[], bool] | None = None,
-               skip_s: float = 0.0, reverse: Callable[[Lane, float, float], bool] | None = None) -> Steps: ...
-
-    def holding(self, seconds: float, speed_mps: float) -> Steps: ...
-
-
-class Tally(Protocol):
-    """The drive's clock and the counters a sound decision adds to (``sim.summary.RunSummary``)."""
-
-    plans: int
-    actions: int
-    replans: int
     breach_replans: int
     reversed_moves: int
     keep_lane_steps: int
@@ -85,38 +49,20 @@ class Tally(Protocol):
     unsafe_starts: int
     shadowed: int
 
-    @property
-    def km(self) -> float: ...
 
-    @property
-    def sim_time_s(self) -> float: ...
-
-
-class Host(Protocol[M]):
-    """The world that runs a driver: what the driver reads (the car's odometry, the sensors' last sweep, what the
-    fallback knows of it), what it moves (the controller), and the bookkeeping it reports to; ``containment`` is the
-    monitor of the decision under way (the host's, which may hold the truth against the same sets)."""
-
-    doing: str  # what the AV is doing: recorded with every event
-
-    @property
-    def executor(self) -> Controls: ...
+class SoundHost(Host, Protocol[M]):
+    """What the sound driver asks of its host besides every driver's: its counters, the monitor of the decision
+    under way (``containment``: the host's, which may hold the truth against the same sets), what the fallback knows
+    and moves, and the take-over's record."""
 
     @property
     def summary(self) -> Tally: ...
-
-    @property
-    def sweep(self) -> tuple[Reading, ...] | None: ...  # the sensors' last sweep (None: it was dropped)
 
     @property
     def containment(self) -> M | None: ...
 
     @property
     def cockpit(self) -> takeover.Cockpit: ...
-
-    def pose(self) -> Odometry: ...
-
-    def swept(self) -> bool: ...  # whether the sensors swept at the end of this control step
 
     def around(self) -> fallback.Around: ...
 
@@ -126,26 +72,9 @@ class Host(Protocol[M]):
 
     def followed(self) -> bool: ...  # ``decide.only_followers_behind`` for the action under way
 
-    def decided(self, lane: Lane) -> None: ...
-
-    def contain_from(self, readings: tuple[Reading, ...], av_x_m: float, lane: Lane,
-                     view_m: float | None = None) -> None: ...  # a new decision's monitor (``containment``)
-
     def check_snapshot(self) -> None: ...
 
     def resume(self, monitor: M) -> None: ...  # the decision under way goes on under an earlier decision's monitor
-
-    def planned(self, answer: Answer, scenario: Scenario, lane: Lane) -> None: ...
-
-    def refused(self, actions: tuple[Action, ...], under_way: tuple[Action, ...]) -> bool: ...
-
-    def sight(self, readings: tuple[Reading, ...], av_x_m: float, t_s: float | None = None) -> None: ...
-
-    def sensed_anew(self) -> bool: ...
-
-    def fail(self, kind: FailureKind, cause: str, detail: str) -> None: ...
-
-    def kept(self, kind: FailureKind, cause: str, detail: str) -> None: ...
 
     def traced(self, step: int, action: Action | None, since_s: float) -> None: ...
 
@@ -158,7 +87,7 @@ class SoundDriver(Generic[M]):
     """The sound model's decisions, one after another, through ``host`` (``decision``), planned by ``planner`` on
     ``grid`` under the drive's ``bounds`` (the fallback's hold speed is their lowest in the left lane)."""
 
-    def __init__(self, host: Host[M], planner: Planner, grid: Grid, bounds: Bounds | None) -> None:
+    def __init__(self, host: SoundHost[M], planner: Planner, grid: Grid, bounds: Bounds | None) -> None:
         self.host, self.planner, self.grid, self.bounds = host, planner, grid, bounds
         self.pending: tuple[Action, ...] = ()  # the rest of the proved sequence under way when a decision starts
         self.pending_profiles: list[SpeedProfile] = []  # the proved reference's speed profile for ``pending``

@@ -72,14 +72,15 @@ def test_a_replan_that_cannot_plan_keeps_the_plan_under_way_and_says_why(monkeyp
     try:
         sim.drive(0.3)
         monkeypatch.setattr(parts_module, "discretise", unusable)
-        sim.pending = (Action.DRIVE,) * 12
+        sim.driver.pending = (Action.DRIVE,) * 12
         actions = sim.summary.actions
         assert sim.decide_once()
-        assert sim.summary.actions == actions + 10 and sim.pending == (Action.DRIVE,) * 2  # at most 10, then re-plan
+        # at most 10, then re-plan
+        assert sim.summary.actions == actions + 10 and sim.driver.pending == (Action.DRIVE,) * 2
         kept = [(f.kind, f.cause) for f in sim.summary.kept_plans]
         assert kept == [(FailureKind.SENSING, "two vehicles in one cell")]
         assert not sim.summary.failures
-        sim.pending = ()
+        sim.driver.pending = ()
         sim.decide_once()  # no plan under way: now it is a failure
         assert [(f.kind, f.cause) for f in sim.summary.failures] == [(FailureKind.SENSING, "two vehicles in one cell")]
     finally:

@@ -206,7 +206,7 @@ def test_a_recentred_world_moves_every_decisions_sets_the_loop_still_reads_once_
     driver = SimpleNamespace(proved=before, shift_x=part("boundary").shift_x)
     sim = SimpleNamespace(origin_km=2.0, car=part("car"), traffic=part("traffic"), tracker=part("tracker"),
                           executor=SimpleNamespace(x_ref_m=1003.0), containment=current, previous=before,
-                          sighted=sighting, driver=driver)
+                          sighted=sighting, sound_driver=driver)
     Simulator._recentre(sim, 1001.0)  # type: ignore[arg-type]
     assert moved == dict.fromkeys(["car", "traffic", "current", "before", "sighting", "boundary", "tracker"], -1001.0)
     assert sim.origin_km == pytest.approx(3.001) and sim.executor.x_ref_m == pytest.approx(2.0)

@@ -42,7 +42,7 @@ class Watched(Simulator):
         c = self.containment
         if c is not None and c.world_breached():
             self.truth_first.setdefault(c.decision, self.summary.sim_time_s)
-        if c is not None and c.sensed is not None and self.driver is not None and self.driver.enveloped:
+        if c is not None and c.sensed is not None and self.sound_driver is not None and self.sound_driver.enveloped:
             since = self.first_breach.setdefault(c.decision, c.sensed.t_s)
             self.longest_s = max(self.longest_s, self.summary.sim_time_s - since)
             if not self.doing.startswith(("right_lane_change", "left_lane_change")):

@@ -47,3 +47,38 @@ def test_the_check_follows_each_vehicle_in_the_window_by_its_lane_and_index_from
     gaps = tolerance.implied_gaps(followed, State(Lane.LEFT, (11, 13), (20,)), g)
     assert gaps == pytest.approx({9: g.cell - CAR.length_m, 7: 3 * g.cell - CAR.length_m,
                                   4: 10 * g.cell - CAR.length_m})
+
+
+def test_a_plans_check_follows_its_vehicles_until_they_respawn_implies_gaps_only_while_an_action_runs() -> None:
+    """``PlanCheck``: after each action every vehicle of the plan's window against its predicted cell, told to the
+    observers with the new violations; a vehicle respawned since the plan started is another vehicle, no longer
+    followed nor given an implied gap; a ghost a fault injected (no body in the world) is never followed."""
+    from dataclasses import dataclass
+
+    from spec.actions import Action
+
+    @dataclass
+    class Car:
+        body: int
+        x_m: float
+        respawns: int = 0
+
+    g = PAPER_GRID
+    ahead, oncoming = Car(7, 45.0), Car(4, 300.0)
+    seen = (Reading(Lane.LEFT, 7, 45.0), Reading(Lane.LEFT, 99, 80.0), Reading(Lane.RIGHT, 4, 300.0))
+    states = (State(Lane.LEFT, (12, 14), (25,)), State(Lane.LEFT, (12, 14), (25,)), State(Lane.LEFT, (12, 14), (25,)))
+    told: list[tuple[int, Action, int]] = []
+    check = tolerance.PlanCheck(ToleranceReport(), 3, seen, states, g, lambda: [ahead, oncoming], lambda: 0.0,
+                                lambda step, action, state, new: told.append((step, action, len(new))))
+    assert set(check.tracked) == {(Lane.LEFT, 0, 7), (Lane.RIGHT, 0, 4)}  # body 99 is no vehicle of the world
+    assert check.implied == {}
+    check.expecting(0)
+    assert set(check.implied) == {7, 4}
+    check.expecting(None)
+    assert check.implied == {}
+    oncoming.x_m = 300.0 - 3 * LOOP.tolerance_unit_m  # it moved three tolerance units more than predicted: violations
+    assert check.deviated(0, Action.DRIVE) and told == [(1, Action.DRIVE, 1)]
+    oncoming.respawns = 1  # respawned: another vehicle, no longer followed
+    check.expecting(1)
+    assert set(check.implied) == {7}
+    assert not check.deviated(1, Action.DRIVE) and told[-1] == (2, Action.DRIVE, 0)
