@@ -10,6 +10,8 @@ from types import SimpleNamespace
 from typing import Any
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from sim.driver.control import Command, Steps, perform, resumed
 from sim.driver.fallback import Around, in_lane_hold_mps
@@ -293,3 +295,31 @@ def test_a_move_sent_back_keeps_nothing_of_its_decisions_proof(interrupt: bool, 
         assert not driver.escape_pending and host.doing == "right_lane_change reversed (plan 7, step 1 of 3)"
     else:
         assert driver.pending == rest and driver.proved is not None and driver.escape_pending
+
+
+IN_LANE = (Action.ACCELERATE, Action.DRIVE, Action.BRAKE)
+
+
+@given(committed=st.lists(st.sampled_from(IN_LANE), min_size=1, max_size=4),
+       escape=st.lists(st.sampled_from(IN_LANE), max_size=3),
+       breach_at=st.one_of(st.none(), st.integers(min_value=1, max_value=20)))
+def test_no_action_runs_on_past_a_sensed_breach_and_what_is_left_is_the_proved_sequences_own_tail(
+        committed: list[Action], escape: list[Action], breach_at: int | None) -> None:
+    """For any committed part and escape in lane and any control step the monitor senses a breach at: the action
+    under way ends at that step, no other starts, the decision is counted as ended by a breach; without one the
+    committed part runs whole. Either way what waits for the next decision is the proved sequence's own tail with its
+    own reference profiles (a kept escape resumes on them)."""
+    host = Host(breach_at=breach_at)
+    driver = driver_of(host)
+    host.contain_from((), 0.0, Lane.LEFT)
+    sequence = (*committed, *escape)
+    assert perform(driver.execute(tuple(committed), 7.0, "plan 1", escape=tuple(escape)), host.step)
+    whole = len(committed) * STEPS
+    broke = breach_at is not None and breach_at <= whole
+    ran = -(-breach_at // STEPS) if broke else len(committed)  # type: ignore[operator]
+    assert len(host.commands) == (breach_at if broke else whole)
+    assert [a for a, _, _ in host.executor.acted] == list(sequence[:ran])
+    assert host.summary.breach_replans == int(broke) and host.summary.actions == ran
+    profiles = plan_profiles(sequence, 7.0, PAPER_GRID, to_common=False)
+    assert driver.pending == sequence[ran:] and driver.pending_profiles == profiles[ran:]
+    assert not driver.enveloped
