@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from oracle.planner import plan
-from sim.discretiser import discretise
+from sim.driver.discretiser import discretise
 from sim.driver.readings import Reading
 from sim.observers import Observer
 from sim.scene import Scene

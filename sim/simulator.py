@@ -32,9 +32,9 @@ import numpy as np
 
 from sim import opportunity
 from sim.containment import Containment
-from sim.discretiser import discretise
 from sim.driver import control, decide, fallback, plan, takeover
 from sim.driver.control import Steps, lane_of, lane_y
+from sim.driver.discretiser import discretise
 from sim.driver.monitor import Breach, BreachKind, Sighting
 from sim.driver.nearest import Nearest
 from sim.driver.paper import PaperDriver

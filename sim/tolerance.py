@@ -16,7 +16,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from typing import Any, Protocol
 
-from sim.discretiser import in_window, reading_cell
+from sim.driver.discretiser import in_window, reading_cell
 from sim.driver.readings import Reading
 from spec.actions import Action
 from spec.grid import Grid

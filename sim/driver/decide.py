@@ -1,7 +1,7 @@
 """What a decision does with its planner's answer: under the sound model the plan (its committed part and escape), a
 safe step in lane, what the last decision proved, or the fallback; under the paper's rules the plan, the plan under
-way, or a wait in lane. The rules, apart from their execution: the simulator asks the questions they need (lazily:
-some of them watch the world) and runs what they choose."""
+way, or a wait in lane. The rules, apart from their execution: the drivers (``sim.driver.sound``,
+``sim.driver.paper``) ask the questions they need (lazily: some of them watch the world) and run what they choose."""
 
 from __future__ import annotations
 
@@ -72,7 +72,7 @@ class PaperAct(enum.Enum):
     """What a decision under the paper's rules does."""
 
     EXECUTE = "execute the plan"
-    KEEP = "keep the plan under way"  # for at most ``LOOP.replan_after_actions`` actions (``Simulator._keep``)
+    KEEP = "keep the plan under way"  # for at most ``LOOP.replan_after_actions`` actions (``PaperDriver.keep``)
     WAIT = "wait in lane without a plan"
     DRIVE = "drive on: nothing to overtake"
     HOLD = "drive on in lane: an overtake refused"

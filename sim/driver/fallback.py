@@ -1,6 +1,7 @@
 """The fallback's decisions (``spec.envelope.MinimalRisk``), as pure functions of what it sensed (``Around``) and the
 car's speed: when to return from the right lane, how fast to drive while it waits, the return's speed reference,
-and each control step's speed command while it brakes in lane. The simulator executes what they return."""
+and each control step's speed command while it brakes in lane. The sound model's driver executes what they return
+(``sim.driver.takeover``, ``sim.driver.sound.SoundDriver.fallback``)."""
 
 from __future__ import annotations
 

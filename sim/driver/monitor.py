@@ -18,7 +18,7 @@ from collections.abc import Iterable
 from dataclasses import asdict, dataclass
 from typing import Any
 
-from sim.discretiser import in_window, reading_cell
+from sim.driver.discretiser import in_window, reading_cell
 from sim.driver.readings import Reading
 from spec.actions import Action
 from spec.assumptions import Bounds

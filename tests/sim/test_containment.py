@@ -35,7 +35,7 @@ def watch(left: dict[int, float], oncoming: dict[int, float], sound: Sound = SOU
     """Containment of a decision made from readings of ``left`` and ``oncoming`` (body -> metres ahead) at t = 0."""
     readings = tuple(Reading(Lane.LEFT, b, dx) for b, dx in left.items()) + tuple(
         Reading(Lane.RIGHT, b, dx) for b, dx in oncoming.items())
-    from sim.discretiser import discretise
+    from sim.driver.discretiser import discretise
 
     scenario = discretise(readings, Lane.LEFT, PAPER_GRID, measured=True)  # as the simulator watches
     cars = [car(b, dx) for b, dx in (left | oncoming).items()]
@@ -95,7 +95,7 @@ def test_two_readings_in_one_cell_are_one_vehicle_over_their_hull() -> None:
 def test_a_miss_below_the_rounding_of_positions_is_no_breach() -> None:
     """The paper's world: exact sensing and every vehicle at 7 m/s make intervals of no width."""
     readings = (Reading(Lane.LEFT, 1, 42.0),)
-    from sim.discretiser import discretise
+    from sim.driver.discretiser import discretise
 
     scenario = discretise(readings, Lane.LEFT, PAPER_GRID, measured=True)
     c = Containment(1, Sound(world_bounds("paper", "exact")), scenario, readings, PAPER_GRID, 0.0, 0.0,
@@ -228,7 +228,7 @@ NOISY = Sound(world_bounds("spread", "noisy"))  # the same speeds, a sensing err
 def watch_noisy(left: dict[int, float], oncoming: dict[int, float]) -> Containment:
     readings = tuple(Reading(Lane.LEFT, b, dx) for b, dx in left.items()) + tuple(
         Reading(Lane.RIGHT, b, dx) for b, dx in oncoming.items())
-    from sim.discretiser import discretise
+    from sim.driver.discretiser import discretise
 
     scenario = discretise(readings, Lane.LEFT, PAPER_GRID, measured=True)
     cars = [car(b, dx) for b, dx in (left | oncoming).items()]
@@ -284,7 +284,7 @@ def test_a_reading_of_no_vehicle_in_the_snapshot_is_a_sensing_breach_of_the_trut
     """A ghost (a fault's reading where no vehicle is) in a decision's snapshot broke the sensing assumption: the
     truth's bookkeeping records it at once (so a take-over it leads to counts as after an assumption broke); the AV,
     whose sets were made from that snapshot, has nothing to sense."""
-    from sim.discretiser import discretise
+    from sim.driver.discretiser import discretise
     from sim.faults import GHOST_BODY
 
     readings = (Reading(Lane.LEFT, 1, 40.0), Reading(Lane.LEFT, GHOST_BODY, -2.0))
@@ -302,7 +302,7 @@ def test_a_vehicles_second_reading_away_from_it_is_a_sensing_breach_of_the_truth
     per vehicle: the copy broke the sensing assumption (keyed by that vehicle, so an encounter with it counts after
     an assumption broke); the vehicle's own reading is held to its interval as before; the AV's monitor, whose sets
     both readings made, has nothing to sense."""
-    from sim.discretiser import discretise
+    from sim.driver.discretiser import discretise
 
     readings = (Reading(Lane.LEFT, 1, 19.0), Reading(Lane.LEFT, 1, 40.0))  # the copy 21 m behind the vehicle
     scenario = discretise(readings, Lane.LEFT, PAPER_GRID, measured=True)
@@ -321,7 +321,7 @@ def test_a_vehicles_second_reading_away_from_it_is_a_sensing_breach_of_the_truth
 def test_the_avs_monitor_reads_no_identities(bodies: list[int], t_s: float) -> None:
     """Whatever body ids the readings carry (the bookkeeping's, one vehicle's twice, a ghost's), the AV's own monitor
     knows the same sets and senses the same breaches: they are made from the readings' lanes and distances only."""
-    from sim.discretiser import discretise
+    from sim.driver.discretiser import discretise
 
     places = ((Lane.LEFT, 19.0), (Lane.LEFT, 61.0), (Lane.RIGHT, 250.0))
     sweep = (Reading(Lane.LEFT, 77, 19.0 + 1.0 * t_s), Reading(Lane.LEFT, 78, 120.0), Reading(Lane.RIGHT, 79, 150.0))
@@ -375,7 +375,7 @@ def test_a_measured_vehicle_braking_to_a_standstill_is_inside_one_braking_harder
     and the speed that motion reaches are inside its own bounds, where its lane's 4.9 m/s floor called both a breach;
     a speed just below what braking at b_max allows is a breach, ``too slow``, by that much; a speed outside the
     measured interval at the snapshot itself is a ``sensing error`` (the range-rate reading's error bound broke)."""
-    from sim.discretiser import discretise
+    from sim.driver.discretiser import discretise
     from spec.tracking import VEHICLE_SPEED_CHANGE
 
     b = VEHICLE_SPEED_CHANGE.brake_mps2
@@ -406,7 +406,7 @@ def test_a_measured_vehicle_speeding_up_while_overtaken_breaks_the_no_accelerati
     while the AV is in the passing lane (``passing_windows_s`` of the actions it executes): a speed just above the
     one it had when the window began is ``accelerated while overtaken``, one at it is inside; beyond what a_max allows
     is ``too fast``; under ``physics`` speeding up at a_max is inside; outside the window the profile says nothing."""
-    from sim.discretiser import discretise
+    from sim.driver.discretiser import discretise
     from spec.actions import Action
     from spec.dynamics import Overtaken
     from spec.tracking import VEHICLE_SPEED_CHANGE

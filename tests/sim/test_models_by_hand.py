@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from scipy.stats import binom, chi2, norm
 
-from sim.discretiser import reading_cell
+from sim.driver.discretiser import reading_cell
 from sim.driver.readings import Reading
 from sim.parts import SENSOR_MODELS, TRAFFIC_MODELS
 from sim.scene import Scene

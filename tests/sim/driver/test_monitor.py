@@ -13,7 +13,7 @@ from dataclasses import replace
 
 import pytest
 
-from sim.discretiser import discretise
+from sim.driver.discretiser import discretise
 from sim.driver.monitor import BreachKind, Monitor
 from sim.driver.readings import Reading
 from spec.assumptions import world_bounds
