@@ -1,4 +1,4 @@
-"""Traffic rules and sensors against ground truth, and what a snapshot of the oncoming lane hidden behind a vehicle is."""
+"""Traffic rules and sensors against ground truth; a snapshot of the oncoming lane hidden behind a vehicle."""
 
 from __future__ import annotations
 
