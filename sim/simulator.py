@@ -32,11 +32,10 @@ import numpy as np
 
 from sim import opportunity
 from sim.containment import Containment
-from sim.driver import control, decide, fallback, plan, takeover
+from sim.driver import control, decide, plan
 from sim.driver.control import Steps, lane_of, lane_y
 from sim.driver.discretiser import discretise
 from sim.driver.monitor import Breach, BreachKind, Sighting
-from sim.driver.nearest import Nearest
 from sim.driver.paper import PaperDriver
 from sim.driver.readings import Reading
 from sim.driver.sound import SoundDriver
@@ -116,9 +115,6 @@ class Simulator:
         self.flagged = False  # the tracker flagged a contradiction at a decision of the manoeuvre under way
         self.steered: list[FaultEvent] = []  # steering faults under way during it
         self.sweep_every = max(1, round(1 / (SENSORS.sweep_hz * LOOP.physics_dt_s * LOOP.control_every_steps)))
-        #: what a take-over reads and moves each control step, whichever scene, car and executor are assembled now
-        self.cockpit = takeover.Cockpit(lambda: self.car.pose().along_mps, self.around, self._sense,
-                                        lambda: self.executor.reset_reference())
         self._assemble()
 
     def _assemble(self) -> None:
@@ -146,10 +142,6 @@ class Simulator:
         self.takeover: Takeover | None = None  # the fallback's take-over under way
         self.sweep: tuple[Reading, ...] | None = ()  # the last sweep the sensors delivered (None: it was dropped)
         self.swept_at = (0.0, 0.0)  # where the AV was when it was taken, along the road from the start (m), and when
-        # for the fallback: the nearest vehicles sensed ahead and behind in the left lane, ahead in the oncoming one
-        self.lead: Nearest | None = None
-        self.follower: Nearest | None = None
-        self.oncoming: Nearest | None = None
         # with tracking, the planner sees the tracker's vehicles (``sim.tracking``); bodies only for bookkeeping
         self.tracker = (Tracker(self.parts.bounds, speed_error_mps=self.parts.speed_error_mps)
                         if self.parts.tracking and self.parts.bounds is not None else None)
@@ -265,7 +257,7 @@ class Simulator:
     def _contain(self, pose: Pose, dt_s: float) -> None:
         """One control step's containment check against the truth (the simulator's bookkeeping); under the sound
         model a breach of the AV's own envelope (its odometry against its reference) ends the decision under way, a
-        vehicle's only once the AV senses it (``_sense_breach``)."""
+        vehicle's only once the AV senses it (``SoundDriver.on_sweep``)."""
         c, report = self.containment, self.summary.containment
         assert c is not None
         report.checked_s += dt_s
@@ -282,18 +274,6 @@ class Simulator:
         d = self.sound_driver
         if any(b.kind is BreachKind.AV_ENVELOPE for b in found) and d is not None and self.takeover is None:
             d.interrupt = True
-
-    def _sense_breach(self, pose: Pose) -> None:
-        """The AV's own monitor on this sweep's readings, as its planner gets them (``Monitor.sense``): a reading
-        the decision's sets cannot explain ends a sound decision (not a take-over under way: the next decision
-        ends at once instead)."""
-        c, d = self.containment, self.sound_driver
-        if c is None or d is None:
-            return
-        if c.sense(self.summary.sim_time_s, self.summary.km, pose.x_m, self._sense(), self.doing,
-                   self.followed()) is not None:
-            self.summary.sensed_breaches += 1
-            d.interrupt = d.interrupt or self.takeover is None
 
     def followed(self) -> bool:
         """``decide.only_followers_behind`` for the action under way."""
@@ -481,14 +461,10 @@ class Simulator:
             self.unresolved = view.unresolved
             if self.speed_log is not None:
                 self._log_speeds(view.planned)
-        self._sense_breach(pose)
+        if self.sound_driver is not None:
+            self.sound_driver.on_sweep(self.origin_km * 1000 + pose.x_m)  # the AV's own monitor, the fallback's view
         if self.takeover is not None:
             self._remember_faults()  # the fallback acts on every sweep, not only on a decision's
-        own = (self.origin_km * 1000 + pose.x_m, pose.along_mps)  # the AV's own travel and speed along the road
-        hz = SENSORS.sweep_hz
-        self.lead = Nearest.after(self.lead, self.sweep, hz, Lane.LEFT, False, *own)
-        self.follower = Nearest.after(self.follower, self.sweep, hz, Lane.LEFT, True, *own)
-        self.oncoming = Nearest.after(self.oncoming, self.sweep, hz, Lane.RIGHT, False, *own)
         self.executor.steer_offset_rad = self.steering.on_sweep()
         if self.steering.active is not None and self.steering.active not in self.steered:
             self.steered.append(self.steering.active)
@@ -595,10 +571,9 @@ class Simulator:
                                  broke)
         self.summary.takeovers.append(self.takeover)
 
-    def around(self) -> fallback.Around:
-        """What the fallback knows at the last sweep."""
-        return fallback.Around(self.lead, self.follower, self.oncoming, self.sweep is not None,
-                               None if self.watch is None else self.watch.bounds)
+    def taking_over(self) -> bool:
+        """Whether the fallback's take-over is under way."""
+        return self.takeover is not None
 
     def hand_back(self) -> None:
         """A decision found a plan or a safe step: the take-over under way (if any) ends here."""

@@ -20,6 +20,7 @@ from sim.driver import decide, fallback, takeover
 from sim.driver.control import Steps, lane_of, lane_y, resumed
 from sim.driver.host import Counts, Host, Odometry
 from sim.driver.monitor import Monitor
+from sim.driver.nearest import Nearest
 from sim.driver.plan import Planner
 from sim.driver.readings import Reading, snapshot
 from spec.actions import Action
@@ -31,7 +32,7 @@ from spec.kinds import FailureKind
 from spec.lanes import Lane
 from spec.models import ModelKind
 from spec.motion import SpeedProfile, plan_profiles
-from spec.physical import LOOP
+from spec.physical import LOOP, SENSORS
 from spec.scenario import Scenario, problem_for
 
 M = TypeVar("M", bound=Monitor)
@@ -48,6 +49,7 @@ class Tally(Counts, Protocol):
     escapes: int
     unsafe_starts: int
     shadowed: int
+    sensed_breaches: int
 
 
 class SoundHost(Host, Protocol[M]):
@@ -60,11 +62,6 @@ class SoundHost(Host, Protocol[M]):
 
     @property
     def containment(self) -> M | None: ...
-
-    @property
-    def cockpit(self) -> takeover.Cockpit: ...
-
-    def around(self) -> fallback.Around: ...
 
     def view_m(self, readings: tuple[Reading, ...], av_y_m: float) -> float | None: ...
 
@@ -79,6 +76,8 @@ class SoundHost(Host, Protocol[M]):
     def traced(self, step: int, action: Action | None, since_s: float) -> None: ...
 
     def take_over(self, cause: str, lane: Lane) -> None: ...
+
+    def taking_over(self) -> bool: ...  # a take-over is under way (a breach sensed then does not interrupt it)
 
     def hand_back(self) -> None: ...
 
@@ -99,6 +98,34 @@ class SoundDriver(Generic[M]):
         self.interrupt = False  # a breach asks the decision under way to end
         self._room = False  # whether the fallback opens the gap ahead (``room_needed``), and on which sweep
         self._room_sweep: tuple[Reading, ...] | None = None
+        # what the fallback reads: the nearest vehicles sensed ahead and behind in the left lane, ahead in the oncoming
+        # one, followed from sweep to sweep (``on_sweep``)
+        self.lead: Nearest | None = None
+        self.follower: Nearest | None = None
+        self.oncoming: Nearest | None = None
+        #: what a take-over reads and moves each control step
+        self.cockpit = takeover.Cockpit(lambda: host.pose().along_mps, self.around, lambda: host.sweep or (),
+                                        lambda: host.executor.reset_reference())
+
+    def on_sweep(self, travel_m: float) -> None:
+        """The sensors swept (``host.sweep``; the AV ``travel_m`` along the road from the drive's start): the AV's own
+        monitor reads the sweep against the sets of the decision under way (``Monitor.sense``), and a reading they
+        cannot explain ends a decision (not a take-over under way: the next decision ends at once instead); the
+        nearest vehicles the fallback reads follow the sweep."""
+        h = self.host
+        pose, c = h.pose(), h.containment
+        if c is not None and c.sense(h.summary.sim_time_s, h.summary.km, pose.x_m, h.sweep or (), h.doing,
+                                     h.followed()) is not None:
+            h.summary.sensed_breaches += 1
+            self.interrupt = self.interrupt or not h.taking_over()
+        own, hz = (travel_m, pose.along_mps), SENSORS.sweep_hz
+        self.lead = Nearest.after(self.lead, h.sweep, hz, Lane.LEFT, False, *own)
+        self.follower = Nearest.after(self.follower, h.sweep, hz, Lane.LEFT, True, *own)
+        self.oncoming = Nearest.after(self.oncoming, h.sweep, hz, Lane.RIGHT, False, *own)
+
+    def around(self) -> fallback.Around:
+        """What the fallback knows at the last sweep."""
+        return fallback.Around(self.lead, self.follower, self.oncoming, self.host.sweep is not None, self.bounds)
 
     def shift_x(self, dx_m: float) -> None:
         """The world was re-centred by ``dx_m``: the proved reference's place at its boundary moves with it (the
@@ -292,7 +319,7 @@ class SoundDriver(Generic[M]):
         h = self.host
         if not (self.interrupt and h.swept()):
             return False
-        if not fallback.reverses(h.around(), h.sweep or (), h.pose().along_mps, to_lane, done_s, left_s):
+        if not fallback.reverses(self.around(), h.sweep or (), h.pose().along_mps, to_lane, done_s, left_s):
             return False
         h.summary.reversed_moves += 1
         h.doing = h.doing.replace(" (", " reversed (", 1)
@@ -310,11 +337,11 @@ class SoundDriver(Generic[M]):
         since_s = h.summary.sim_time_s
         try:
             if lane is Lane.RIGHT:
-                if not (yield from takeover.awaiting_room(h.cockpit, lane_y(Lane.RIGHT), ex.dt_s)):
+                if not (yield from takeover.awaiting_room(self.cockpit, lane_y(Lane.RIGHT), ex.dt_s)):
                     return False
                 ex.reset_reference()
                 if not (yield from ex.acting(Action.LEFT_LANE_CHANGE,
-                                             fallback.return_profile(h.around(), h.pose().along_mps))):
+                                             fallback.return_profile(self.around(), h.pose().along_mps))):
                     return False
             self.pending, self.proved = (), None
             return (yield from self.brake_in_lane(emergency=True))
@@ -332,7 +359,7 @@ class SoundDriver(Generic[M]):
             low = h.containment.hold_floor_mps
         hold = fallback.in_lane_hold_mps(emergency, h.pose().along_mps, low)
         ex.lane_due = ex.lane
-        return (yield from takeover.braking_in_lane(h.cockpit, hold, lane_y(ex.lane), ex.dt_s, emergency,
+        return (yield from takeover.braking_in_lane(self.cockpit, hold, lane_y(ex.lane), ex.dt_s, emergency,
                                                     self.room_needed, lambda: self.interrupt and h.swept()))
 
     def room_needed(self, speed_mps: float) -> bool:

@@ -18,7 +18,6 @@ from sim.driver.fallback import Around, in_lane_hold_mps
 from sim.driver.monitor import Breach, BreachKind
 from sim.driver.readings import Reading
 from sim.driver.sound import SoundDriver
-from sim.driver.takeover import Cockpit
 from sim.summary import RunSummary
 from spec.actions import Action
 from spec.assumptions import PROFILES
@@ -85,7 +84,7 @@ class Monitor:
 @dataclass
 class Host:
     """A scripted world that runs the driver: a sweep every control step, the AV at 7 m/s in the left lane; at the
-    world's step ``breach_at`` the AV's monitor senses a breach (``Simulator._sense_breach``: the decision ends)."""
+    world's step ``breach_at`` the AV's monitor senses a breach (``SoundDriver.on_sweep``: the decision ends)."""
 
     executor: Controls = field(default_factory=Controls)
     summary: RunSummary = field(default_factory=lambda: RunSummary(seed=1))
@@ -98,18 +97,14 @@ class Host:
     commands: list[Command] = field(default_factory=list)
     log: list[tuple[str, object]] = field(default_factory=list)
 
-    @property
-    def cockpit(self) -> Cockpit:
-        return Cockpit(lambda: 7.0, self.around, lambda: self.sweep or (), self.executor.reset_reference)
-
     def pose(self) -> Any:
         return SimpleNamespace(x_m=0.0, y_m=1.75, along_mps=7.0)
 
     def swept(self) -> bool:
         return True
 
-    def around(self) -> Around:
-        return Around(None, None, None, self.sweep is not None, BOUNDS)
+    def taking_over(self) -> bool:
+        return bool(self.reported("take_over")) and not self.reported("hand_back")
 
     def view_m(self, readings: tuple[Reading, ...], av_y_m: float) -> float | None:
         return None
@@ -281,10 +276,10 @@ def test_a_move_sent_back_keeps_nothing_of_its_decisions_proof(interrupt: bool, 
     from sim.driver.nearest import Nearest
 
     oncoming = None if oncoming_m is None else Nearest(oncoming_m, 14.0)
-    host = SimpleNamespace(swept=lambda: swept, around=lambda: Around(None, None, oncoming, True, BOUNDS), sweep=(),
-                           pose=lambda: SimpleNamespace(along_mps=7.0), summary=RunSummary(seed=1),
-                           doing="right_lane_change (plan 7, step 1 of 3)")
+    host = SimpleNamespace(swept=lambda: swept, sweep=(), pose=lambda: SimpleNamespace(along_mps=7.0),
+                           summary=RunSummary(seed=1), doing="right_lane_change (plan 7, step 1 of 3)")
     driver = SoundDriver(host, None, PAPER_GRID, BOUNDS)  # type: ignore[arg-type]
+    driver.oncoming = oncoming
     rest = (Action.DRIVE, Action.LEFT_LANE_CHANGE)
     driver.interrupt, driver.pending, driver.pending_profiles = interrupt, rest, [SpeedProfile(7.0, ())] * 2
     driver.proved, driver.escape_pending = Monitor(), True  # type: ignore[assignment]
@@ -323,3 +318,25 @@ def test_no_action_runs_on_past_a_sensed_breach_and_what_is_left_is_the_proved_s
     profiles = plan_profiles(sequence, 7.0, PAPER_GRID, to_common=False)
     assert driver.pending == sequence[ran:] and driver.pending_profiles == profiles[ran:]
     assert not driver.enveloped
+
+
+@pytest.mark.parametrize("taking_over", [False, True])
+def test_a_sweep_the_decisions_sets_cannot_explain_is_counted_and_ends_the_decision_unless_the_fallback_acts(
+        taking_over: bool) -> None:
+    """``SoundDriver.on_sweep``: the AV's own monitor reads every sweep; a reading the sets of the decision under way
+    cannot explain is counted, and ends the decision, not a take-over under way (the next decision ends at once
+    instead: ``run_proved``). The nearest vehicles the fallback reads follow the sweep."""
+    host = Host(sweep=(Reading(Lane.LEFT, 3, 30.0), Reading(Lane.RIGHT, 4, 120.0)))
+    driver = driver_of(host)
+    if taking_over:
+        host.take_over("no plan", Lane.LEFT)
+    host.containment = Monitor(sensed=BREACH)  # its ``sense`` answers the breach it holds
+    driver.on_sweep(0.0)
+    assert host.summary.sensed_breaches == 1 and driver.interrupt is not taking_over
+    assert driver.lead is not None and driver.lead.dx_m == 30.0 and driver.oncoming is not None
+    assert driver.follower is None
+    host.containment = Monitor()
+    driver.interrupt = False
+    driver.on_sweep(1.0)
+    assert host.summary.sensed_breaches == 1 and not driver.interrupt
+    assert driver.around() == Around(driver.lead, None, driver.oncoming, True, BOUNDS)
