@@ -7,6 +7,8 @@ import math
 from dataclasses import replace
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from sim.driver import fallback
 from sim.driver.nearest import Nearest
@@ -452,3 +454,62 @@ def test_an_oncoming_vehicle_ends_the_wait_beside_a_left_lane_vehicle_only_once_
     # with nothing beside (the vehicle ahead too near to return behind, but not alongside) the time gap ends it
     far_lead = Nearest(MINIMAL_RISK.beside_m + 0.5, 7.57)
     assert not waits(between_m, far_lead, None, False) and waits(spec_m + 0.5, far_lead, None, False)
+
+
+def neighbour(behind: bool = False) -> st.SearchStrategy[Nearest | None]:
+    """A sensed neighbour in any state: none, not measured yet, or measured at any closing speed, at any distance
+    from touching to the sensors' range, fitted at the AV's speed of the last sweep (or without odometry)."""
+    measured = st.one_of(st.none(), st.floats(-15.0, 15.0))
+    return st.one_of(st.none(), st.builds(
+        lambda dx, closing, av: Nearest(dx, closing, (dx,), () if av is None else (0.0,), av, behind),
+        st.floats(CAR.length_m, 120.0), measured, st.one_of(st.none(), st.floats(0.0, 15.0))))
+
+
+@given(lead=neighbour(), follower=neighbour(behind=True), oncoming=neighbour(), swept=st.booleans(),
+       react=st.booleans(), speed=st.floats(0.0, 15.0), command=st.floats(0.0, 15.0), beside=st.booleans(),
+       waited=st.floats(0.0, 30.0))
+def test_the_waiting_fallbacks_command_is_never_negative_and_changes_at_most_as_fast_as_the_car_may_brake_or_speed_up(
+        lead: Nearest | None, follower: Nearest | None, oncoming: Nearest | None, swept: bool, react: bool,
+        speed: float, command: float, beside: bool, waited: float) -> None:
+    """``wait_command`` with any neighbours: it returns, or its next command is a speed (never below a standstill),
+    at most ``emergency_decel_mps2`` below and ``accel_mps2`` above the last one per control step."""
+    dt = 1 / 30
+    a = around(lead, follower, oncoming, swept=swept, react=react)
+    after = fallback.wait_command(a, speed, beside, command, waited, dt)
+    if after is None:
+        return
+    assert after >= 0.0
+    assert command - MINIMAL_RISK.emergency_decel_mps2 * dt - 1e-9 <= after
+    assert after <= command + MINIMAL_RISK.accel_mps2 * dt + 1e-9
+
+
+@given(lead=neighbour(), follower=neighbour(behind=True), speed=st.floats(0.0, 15.0), command=st.floats(0.0, 15.0),
+       hold=st.floats(0.0, 10.0), emergency=st.booleans(), room=st.booleans())
+def test_the_brake_in_lane_never_commands_below_a_standstill_and_speeds_up_only_as_the_fallback_towards_its_hold(
+        lead: Nearest | None, follower: Nearest | None, speed: float, command: float, hold: float, emergency: bool,
+        room: bool) -> None:
+    """``brake_command`` with any neighbours: never below a standstill, down by at most ``emergency_decel_mps2`` per
+    control step; up only as the fallback (``emergency``), at most ``accel_mps2``, never past the larger of its hold
+    speed and the speed it takes the vehicle ahead to have (a vehicle ahead nearer than the specification allows that
+    does not close: its speed, which may be above the hold speed); a proved continuation never speeds up."""
+    dt = 1 / 30
+    after = fallback.brake_command(around(lead, follower), speed, command, hold, emergency, lambda _: room, dt)
+    assert after >= 0.0 and after >= command - MINIMAL_RISK.emergency_decel_mps2 * dt - 1e-9
+    if emergency:
+        ceiling = hold if lead is None else max(hold, speed - lead.closing_mps(speed))
+        assert after <= max(command, min(ceiling, command + MINIMAL_RISK.accel_mps2 * dt)) + 1e-9
+    else:
+        assert after <= command + 1e-9
+
+
+@given(lead=neighbour(), speed=st.floats(0.0, 15.0), follower_mps=st.floats(MINIMAL_RISK.open_mps + 0.01, 15.0),
+       gap=st.floats(0.0, SAFETY.min_gap_m - 0.01), blocks=st.booleans())
+def test_beside_a_vehicle_faster_than_the_opening_speed_the_waiting_fallback_never_aims_for_a_standstill(
+        lead: Nearest | None, speed: float, follower_mps: float, gap: float, blocks: bool) -> None:
+    """``waiting_mps`` (``MinimalRisk``: "never a standstill beside a vehicle faster than ``open_mps``"): a measured
+    vehicle alongside behind, nearer than the least gap, faster than ``open_mps``, whatever is ahead (not near enough
+    to set a speed of its own): the target is the AV's to pass it or to drop back behind it, never zero."""
+    follower = Nearest(CAR.length_m + gap, follower_mps - speed, (CAR.length_m + gap,), (), None, True)
+    assert follower.own_mps(speed) == pytest.approx(follower_mps)
+    target = fallback.waiting_mps(around(lead, follower), speed, False, True, blocks)
+    assert target is not None and target > 0.0
