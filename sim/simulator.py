@@ -32,7 +32,7 @@ import numpy as np
 
 from sim import opportunity
 from sim.containment import Containment
-from sim.driver import control, decide, plan
+from sim.driver import control, plan
 from sim.driver.control import Steps, lane_of, lane_y
 from sim.driver.discretiser import discretise
 from sim.driver.monitor import Breach, BreachKind, Sighting
@@ -120,7 +120,7 @@ class Simulator:
     def _assemble(self) -> None:
         """A scene with the AV at the origin of its lane and traffic around it (at the start, and after a restart)."""
         self.scene = self.parts.scene()
-        self.car = self.parts.car(self.scene, 0.0, self.scene.lane_y(Lane.LEFT))
+        self.car = self.parts.car(self.scene, 0.0, lane_y(Lane.LEFT))
         self.traffic = self.parts.traffic(self.scene, self.rng, 0.0)
         self.sensor: SensorModel | FaultySensor = self.parts.sensor(self.scene, self.sensor_rng)
         if self.faults.sensing:
@@ -167,7 +167,7 @@ class Simulator:
         x = pose.x_m
         if self.containment is not None:
             self._contain(pose, dt_s)
-        self.safety.observe(pose, Executor.lane_of(pose.y_m), self.traffic.left, self.traffic.oncoming,
+        self.safety.observe(pose, lane_of(pose.y_m), self.traffic.left, self.traffic.oncoming,
                             self.summary.km, self.summary.sim_time_s, self.doing, self._implied_gap, self._attribution)
         lost = lost_control(pose.y_m, pose.yaw_rad)
         if lost is not None:
@@ -274,10 +274,6 @@ class Simulator:
         d = self.sound_driver
         if any(b.kind is BreachKind.AV_ENVELOPE for b in found) and d is not None and self.takeover is None:
             d.interrupt = True
-
-    def followed(self) -> bool:
-        """``decide.only_followers_behind`` for the action under way."""
-        return decide.only_followers_behind(self.executor.lane, self.executor.lane_due)
 
     def _sensed(self, car: KinematicCar) -> bool:
         """Whether ``car`` is sensed now (exact rays, whatever the drive's sensor model: a vehicle the sensors could
@@ -475,15 +471,11 @@ class Simulator:
         if self.tracker is None:
             return False
         pose = self.car.pose()
-        if not plan.refuses(bool(self.unresolved), actions, under_way, Executor.lane_of(pose.y_m), pose.along_mps,
+        if not plan.refuses(bool(self.unresolved), actions, under_way, lane_of(pose.y_m), pose.along_mps,
                             self.grid.speed):
             return False
         self.summary.refusals += 1
         return True
-
-    def _sense(self) -> tuple[Reading, ...]:
-        """The last sweep's readings (a dropped sweep: none)."""
-        return self.sweep or ()
 
     def sight(self, readings: tuple[Reading, ...], av_x_m: float, t_s: float | None = None) -> None:
         """The vehicles a plan is made knowing, for the paper's re-planning rule (``Sighting``), under the drive's
@@ -498,7 +490,7 @@ class Simulator:
         are placed from where the AV was when it was taken, at that time: an action may end after the sweep (a
         decision acts a control step after its snapshot, and actions on 5.25 m cells are not whole sweeps)."""
         assert self.sighted is not None
-        return self.sighted.new(self._sense(), *self.where_swept())
+        return self.sighted.new(self.sweep or (), *self.where_swept())
 
     def where_swept(self) -> tuple[float, float]:
         """Where the AV was when the last sweep was taken (in the road's frame now) and when."""

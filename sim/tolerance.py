@@ -182,8 +182,11 @@ class PlanCheck:
     def expecting(self, k: int | None) -> None:
         """The plan's action ``k`` (from 0) is under way: the gaps its predicted state implies (None: no action)."""
         self.implied = {} if k is None else implied_gaps(
-            {key: v for key, v in self.tracked.items()
-             if self.at_start[key[2]].respawns == self.generation[key[2]]}, self.states[k + 1], self.grid)
+            {key: v for key, v in self.tracked.items() if self._same(key[2])}, self.states[k + 1], self.grid)
+
+    def _same(self, body: int) -> bool:
+        """Whether ``body`` is still the vehicle the plan was made with (not respawned since)."""
+        return self.at_start[body].respawns == self.generation[body]
 
     def deviated(self, k: int, action: Action) -> bool:
         """After the plan's action ``k``: check every followed vehicle and tell the observers; whether any broke the
@@ -192,7 +195,7 @@ class PlanCheck:
         now = {car.body: car.x_m - self.av_x_m() for car in self.cars()}
         predicted = self.states[k + 1]
         for (lane, index, body), (start_dx, start_cell) in self.tracked.items():
-            if self.at_start[body].respawns != self.generation[body]:
+            if not self._same(body):
                 continue  # respawned ahead since the plan started: a different vehicle now
             cells = predicted.left_lane if lane is Lane.LEFT else predicted.right_lane
             self.deviation[(lane, index, body)] = self.report.check(

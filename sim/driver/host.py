@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Protocol
 
-from sim.driver.control import Steps
+from sim.driver.control import Steps, lane_of
 from sim.driver.readings import Reading
 from spec.actions import Action
 from spec.answers import Answer
@@ -100,3 +100,13 @@ class Host(Protocol):
     def fail(self, kind: FailureKind, cause: str, detail: str) -> None: ...
 
     def kept(self, kind: FailureKind, cause: str, detail: str) -> None: ...  # a plan under way kept without a plan
+
+
+def start_decision(host: Host) -> tuple[Odometry, Lane]:
+    """What every decision does first: the car's pose, and the lane it is in, where the controller's next action
+    starts; the host hears that a decision is taken there."""
+    pose = host.pose()
+    lane = lane_of(pose.y_m)
+    host.executor.lane = lane
+    host.decided(lane)
+    return pose, lane

@@ -14,7 +14,7 @@ from typing import Protocol
 
 from sim.driver import decide
 from sim.driver.control import Steps, held_reference, lane_of, lane_y, until_sweep
-from sim.driver.host import Counts, Host
+from sim.driver.host import Counts, Host, start_decision
 from sim.driver.plan import Planner, plan_in_frame
 from sim.driver.readings import Reading, snapshot
 from spec.actions import Action
@@ -60,10 +60,7 @@ class PaperDriver:
         in lane, or driving on."""
         h, ex = self.host, self.host.executor
         pending, self.pending = self.pending, ()
-        pose = h.pose()
-        lane = lane_of(pose.y_m)
-        ex.lane = lane
-        h.decided(lane)
+        pose, lane = start_decision(h)
         try:
             readings = snapshot(h.sweep)
         except ScenarioError as err:
@@ -79,11 +76,11 @@ class PaperDriver:
         h.planned(answer, scenario, lane)
         act = decide.paper_choice(answer.status, bool(answer.actions), bool(pending),
                                   refused=lambda: h.refused(answer.actions, pending))
-        no_plan = f"{answer.status.value} for {scenario}"
         if act is decide.PaperAct.KEEP:
-            return (yield from self.keep(pending, FailureKind.PLANNER, answer.status.value, no_plan))
+            return (yield from self.keep(pending, FailureKind.PLANNER, answer.status.value,
+                                         f"{answer.status.value} for {scenario}"))
         if act is decide.PaperAct.WAIT:
-            h.fail(FailureKind.PLANNER, answer.status.value, no_plan)
+            h.fail(FailureKind.PLANNER, answer.status.value, f"{answer.status.value} for {scenario}")
             h.doing = "waiting without a plan"
             return (yield from ex.holding(LOOP.wait_s, self.grid.speed))
         if act is decide.PaperAct.DRIVE:

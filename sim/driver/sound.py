@@ -18,7 +18,7 @@ from typing import Generic, Protocol, TypeVar
 from oracle.sound import keep_lane
 from sim.driver import decide, fallback, takeover
 from sim.driver.control import Steps, lane_of, lane_y, resumed
-from sim.driver.host import Counts, Host, Odometry
+from sim.driver.host import Counts, Host, Odometry, start_decision
 from sim.driver.monitor import Monitor
 from sim.driver.nearest import Nearest
 from sim.driver.plan import Planner
@@ -67,8 +67,6 @@ class SoundHost(Host, Protocol[M]):
 
     def where_swept(self) -> tuple[float, float]: ...
 
-    def followed(self) -> bool: ...  # ``decide.only_followers_behind`` for the action under way
-
     def check_snapshot(self) -> None: ...
 
     def resume(self, monitor: M) -> None: ...  # the decision under way goes on under an earlier decision's monitor
@@ -115,13 +113,17 @@ class SoundDriver(Generic[M]):
         h = self.host
         pose, c = h.pose(), h.containment
         if c is not None and c.sense(h.summary.sim_time_s, h.summary.km, pose.x_m, h.sweep or (), h.doing,
-                                     h.followed()) is not None:
+                                     self.followed()) is not None:
             h.summary.sensed_breaches += 1
             self.interrupt = self.interrupt or not h.taking_over()
         own, hz = (travel_m, pose.along_mps), SENSORS.sweep_hz
         self.lead = Nearest.after(self.lead, h.sweep, hz, Lane.LEFT, False, *own)
         self.follower = Nearest.after(self.follower, h.sweep, hz, Lane.LEFT, True, *own)
         self.oncoming = Nearest.after(self.oncoming, h.sweep, hz, Lane.RIGHT, False, *own)
+
+    def followed(self) -> bool:
+        """``decide.only_followers_behind`` for the action under way."""
+        return decide.only_followers_behind(self.host.executor.lane, self.host.executor.lane_due)
 
     def around(self) -> fallback.Around:
         """What the fallback knows at the last sweep."""
@@ -142,10 +144,7 @@ class SoundDriver(Generic[M]):
         while the AV's monitor holds; without one, a safe step in lane (``oracle.sound.keep_lane``); without that,
         the fallback (``spec.envelope.MinimalRisk``)."""
         h = self.host
-        pose = h.pose()
-        lane = lane_of(pose.y_m)
-        h.executor.lane = lane
-        h.decided(lane)
+        pose, lane = start_decision(h)
         try:
             readings = snapshot(h.sweep)
         except ScenarioError as err:
@@ -188,7 +187,7 @@ class SoundDriver(Generic[M]):
 
         def proved_holds() -> bool:
             return self.proved is not None and self.proved.sensed is None and self.proved.sense(
-                h.summary.sim_time_s, h.summary.km, pose.x_m, readings, h.doing, h.followed()) is None
+                h.summary.sim_time_s, h.summary.km, pose.x_m, readings, h.doing, self.followed()) is None
 
         choice = decide.choose(answer.status, bool(answer.actions), refused=refused,
                                step=lambda: keep_lane(problem_for(scenario, ModelKind.FINAL)),

@@ -112,9 +112,6 @@ class Host:
     def where_swept(self) -> tuple[float, float]:
         return 0.0, self.summary.sim_time_s
 
-    def followed(self) -> bool:
-        return True
-
     def contain_from(self, readings: tuple[Reading, ...], av_x_m: float, lane: Lane,
                      view_m: float | None = None) -> None:
         self.containment = self.next_monitor
