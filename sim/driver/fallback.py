@@ -153,8 +153,8 @@ def waiting_mps(a: Around, speed_mps: float, near: bool, beside: bool, blocks: b
             targets.append(max(speed_mps, f_own_mps + mr.open_mps))
         elif f.gap_m < SAFETY.min_gap_m and f_own_mps >= speed_mps - CLOSING_EPS_MPS:  # not passing: drop back
             targets.append(max(0.0, f_own_mps - mr.open_mps))
-        elif blocks:
-            targets.append(f_own_mps)
+        elif blocks:  # its speed, a standstill at the least (a fit may put a standing vehicle below one)
+            targets.append(max(0.0, f_own_mps))
     return min(targets) if targets else None
 
 

@@ -7,7 +7,7 @@ import math
 from dataclasses import replace
 
 import pytest
-from hypothesis import given
+from hypothesis import example, given
 from hypothesis import strategies as st
 
 from sim.driver import fallback
@@ -468,6 +468,8 @@ def neighbour(behind: bool = False) -> st.SearchStrategy[Nearest | None]:
 @given(lead=neighbour(), follower=neighbour(behind=True), oncoming=neighbour(), swept=st.booleans(),
        react=st.booleans(), speed=st.floats(0.0, 15.0), command=st.floats(0.0, 15.0), beside=st.booleans(),
        waited=st.floats(0.0, 30.0))
+@example(lead=None, follower=Nearest(5.0, -1.0, (5.0,), (), None, True), oncoming=None, swept=False, react=False,
+         speed=0.0, command=0.0, beside=False, waited=0.0)  # a follower whose fitted speed is below a standstill
 def test_the_waiting_fallbacks_command_is_never_negative_and_changes_at_most_as_fast_as_the_car_may_brake_or_speed_up(
         lead: Nearest | None, follower: Nearest | None, oncoming: Nearest | None, swept: bool, react: bool,
         speed: float, command: float, beside: bool, waited: float) -> None:
