@@ -248,7 +248,7 @@ class SoundEncoding:
             raise EngineError("z3: the identity check (the paper's cell rules on the sound model's code path) is "
                               "answered by the interpreter only")
         self.problem, self.sound, self.grid = problem, sound, problem.grid
-        self.table = table = sound_table(sound, problem.grid, hold_floor_mps(scenario))
+        self.table = table = sound_table(sound, problem.grid, hold_floor_mps(scenario), scenario.lane)
         b = sound.bounds
         self.low, self.high = b.same_mps.low_mps, b.same_mps.high_mps
         self.low_o, self.high_o = b.oncoming_mps.low_mps, b.oncoming_mps.high_mps
@@ -301,7 +301,7 @@ class SoundEncoding:
         takes the action's speed (or the start's) there. Those gains are 0 wherever the window is not early (no
         first ramp: the speeds are equal), which this checks."""
         table = self.table
-        for lane in Lane:
+        for lane in table.starts:
             for action in (*Action, None):
                 if action is not None and ACTION_RULES[action].from_lane not in (None, lane):
                     continue

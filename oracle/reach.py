@@ -126,6 +126,8 @@ class Path:
             self.lanes.append((t0, move, frozenset(Lane), rule.to_lane is Lane.LEFT))
             self.lanes.append((move, t1, frozenset({rule.to_lane}), False))
             current = rule.to_lane
+        if sound.sideways_s > 0:
+            self.lanes = _under_way(self.lanes, sound.sideways_s, lane)
         self.final_lane = current
         self.continuation_s = CONTINUATION_S
         if current is Lane.RIGHT:
@@ -176,6 +178,22 @@ class Path:
             out.update((t0, t1))
         out.update(t for r in self.ramps for t in (r.start_s, r.start_s + r.duration_s) if 0.0 <= t <= horizon)
         return sorted(out)
+
+
+def _under_way(lanes: list[tuple[float, float, frozenset[Lane], bool]], move_s: float, lane: Lane) -> list[
+        tuple[float, float, frozenset[Lane], bool]]:
+    """The AV's lanes with a sideways move under way at the start into ``lane`` for ``move_s``: in both lanes until
+    then (moving into the left one when that is ``lane``), however short the plan."""
+    out = []
+    for t0, t1, occupied, entering in lanes:
+        if t0 < move_s:
+            out.append((t0, min(t1, move_s), frozenset(Lane), entering or lane is Lane.LEFT))
+        if t1 > move_s:
+            out.append((max(t0, move_s), t1, occupied, entering))
+    reached = out[-1][1] if out else 0.0
+    if reached < move_s:
+        out.append((reached, move_s, frozenset(Lane), lane is Lane.LEFT))
+    return out
 
 
 def _gap_breach(sound: Sound, motion: str, conflict: Conflict, name: str, t_s: float, gap_m: float,
@@ -244,8 +262,10 @@ class _Walk:
         #: the fastest any margin changes anywhere in the plan
         self.rate = self.path.max_speed + fastest_vehicle + sound.safety.time_gap_s * (self.path.max_accel
                                                                                       + vehicle_accel)
-        #: at the start in the left lane, one short of ``spec.sound.follower_limit_m`` follows
-        self.first = {i for i, c in enumerate(self.cars) if scenario.lane is Lane.LEFT and c.lane is Lane.LEFT
+        #: at the start in the left lane (or moving sideways: partly in it), one short of
+        #: ``spec.sound.follower_limit_m`` follows
+        in_left = scenario.lane is Lane.LEFT or sound.sideways_s > 0
+        self.first = {i for i, c in enumerate(self.cars) if in_left and c.lane is Lane.LEFT
                       and c.hi_m <= follower_limit_m(0.0, sound) - TOLERANCE_M}
 
     def speeds(self, c: Vehicle, t: float) -> tuple[float, float]:
@@ -690,9 +710,10 @@ def run_motion(scenario: Scenario, actions: Sequence[Action], motion: Motion, go
     own = [motion.start_mps[i] if motion.start_mps and c.dynamics is not None else None for i, c in enumerate(cars)]
     dev, dev_k = 0.0, 0
     times = path.times(dt_s)
-    # at the start in the left lane: one short of ``follower_limit_m`` follows (one not, and not clear ahead with its
-    # gap, is an unsafe start)
-    followers = {i for i, c in enumerate(cars) if c.lane is Lane.LEFT and scenario.lane is Lane.LEFT
+    # at the start in the left lane (or moving sideways: partly in it): one short of ``follower_limit_m`` follows (one
+    # not, and not clear ahead with its gap, is an unsafe start)
+    in_left = scenario.lane is Lane.LEFT or sound.sideways_s > 0
+    followers = {i for i, c in enumerate(cars) if c.lane is Lane.LEFT and in_left
                  and pos[i] <= follower_limit_m(0.0, sound)}
     goal_checked, was_entering = goal is None, False
     windows = held_windows_s(sound, scenario.lane, actions)

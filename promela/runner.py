@@ -264,7 +264,8 @@ def table_file(problem: Problem) -> Path:
     """The sound model's table for ``problem`` (``promela.sound.table_text``), in the cache and named by the hash of
     its text: written once (atomically: a concurrent writer of the same text wins or loses whole), found whole
     after, rewritten when damaged. Its path goes to the verifier with the scenario."""
-    data, name = _table_data(sound_model.table_sound(problem), problem.grid, hold_floor_mps(problem.scenario))
+    sound, scenario = sound_model.table_sound(problem), problem.scenario
+    data, name = _table_data(sound, problem.grid, hold_floor_mps(scenario), scenario.lane if sound.sideways_s else None)
     path = cache_dir() / "sound-tables" / name
     if path in _WRITTEN:
         return path
@@ -285,10 +286,10 @@ def table_file(problem: Problem) -> Path:
 
 
 @lru_cache(maxsize=64)
-def _table_data(sound: Sound, grid: Grid, hold_floor_mps: float | None) -> tuple[bytes, str]:
+def _table_data(sound: Sound, grid: Grid, hold_floor_mps: float | None, lane: Lane | None) -> tuple[bytes, str]:
     """A sound model's table as bytes and its file's name (the hash of its text), made once per process: every
-    search of the closed loop asks again."""
-    data = sound_model.table_text(sound, grid, hold_floor_mps).encode()
+    search of the closed loop asks again. ``lane``: the start's, None unless a sideways move is under way there."""
+    data = sound_model.table_text(sound, grid, hold_floor_mps, lane).encode()
     return data, f"{hashlib.sha256(data).hexdigest()[:24]}.txt"
 
 

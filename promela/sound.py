@@ -181,7 +181,7 @@ def _action_code(action: Action | None) -> int:
 
 
 @functools.lru_cache(maxsize=64)
-def table_text(sound: Sound, grid: Grid, hold_floor_mps: float | None = None) -> str:
+def table_text(sound: Sound, grid: Grid, hold_floor_mps: float | None = None, lane: Lane | None = None) -> str:
     """Every number of the sound model a verifier reads when it starts (``sound_load_table``), from
     ``spec.windows.sound_table``: the bounds, the envelope, each window (shapes, early windows, start windows) with
     the gap required at each instant a condition binds (``SafetySpec.required_gap_m`` of the closing speed this
@@ -189,10 +189,10 @@ def table_text(sound: Sound, grid: Grid, hold_floor_mps: float | None = None) ->
     line names it; its second checks it against the verifier (format, road cells, actions, the phantoms' lanes), as
     do the grid's time unit and cell that open the third; a sentinel ends it. Doubles as Python's ``repr`` writes
     them: ``strtod`` reads each back exactly. ``hold_floor_mps``: the speed the minimal-risk manoeuvre brakes to in
-    the scenarios it serves (``spec.windows.sound_table``; None: the lane's slowest); the fourth line holds what a
+    the scenarios it serves, ``lane`` their start's (``spec.windows.sound_table``); the fourth line holds what a
     vehicle measured to move by its own dynamics is checked with (the specification's gaps, the speed error, its
     rates of speed change, whether followers react)."""
-    table = sound_table(sound, grid, hold_floor_mps)
+    table = sound_table(sound, grid, hold_floor_mps, lane)
     change = sound.speed_change
     b, s, tr = sound.bounds, sound.safety, sound.tracking
     start = "" if sound.start_mps is None else f", measured start speed {sound.start_mps:g} m/s"
@@ -211,7 +211,7 @@ def table_text(sound: Sound, grid: Grid, hold_floor_mps: float | None = None) ->
              " ".join(str(table.action_speed[a]) for a in ACTION_ORDER)]
     windows: list[list[str]] = []
     relative = [[[[-1] * 3 for _ in Lane] for _ in range(CONTINUATION + 1)] for _ in table.speeds_mps]
-    unstarted = replace(sound, start_mps=None)
+    unstarted = replace(sound, start_mps=None, sideways_s=0.0)
     shape_lines = [_shape_lines(unstarted, grid, v, i not in table.action_speed.values(), hold_floor_mps)
                    for i, v in enumerate(table.speeds_mps)]
     placed: dict[object, int] = {}  # each shape's and early window's index, for their cut windows

@@ -113,9 +113,14 @@ def escape_after(proofs: Proofs, lane: Lane, committed: Sequence[Action], allowe
 
 
 def enabled_firsts(problem: Problem) -> tuple[Action, ...]:
-    """The actions the paper's guards enable at the start (its lane, no lane change made yet)."""
+    """The actions the paper's guards enable at the start (its lane, no lane change made yet); while a sideways move
+    is under way there (``spec.sound.Sound.sideways_s``), only those in lane: the move is the AV's lane change, to
+    finish or to undo, never to start another over it."""
     start = State(problem.scenario.lane, (), (), 0, 0)
-    return tuple(a for a in Action if disabled_reason(start, a, problem.rules) is None)
+    sound = problem.scenario.sound
+    moving = sound is not None and sound.sideways_s > 0
+    return tuple(a for a in Action if disabled_reason(start, a, problem.rules) is None
+                 and not (moving and ACTION_RULES[a].changes_lane))
 
 
 def committable_in_order(problem: Problem, firsts: Container[Action]) -> tuple[Action, ...]:
@@ -131,10 +136,11 @@ class Firsts:
 
     def __init__(self, proofs: Proofs, problem: Problem) -> None:
         self.proofs, self.lane, self.allowed = proofs, problem.scenario.lane, commitment(problem)
+        self.enabled = enabled_firsts(problem)
         self.proved: dict[Action, Escape | None] = {}
 
     def __contains__(self, action: object) -> bool:
-        if not isinstance(action, Action):
+        if not isinstance(action, Action) or action not in self.enabled:
             return False
         if action not in self.proved:
             self.proved[action] = escape_after(self.proofs, self.lane, (action,), self.allowed)

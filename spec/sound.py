@@ -96,6 +96,11 @@ class Sound:
     #: what a measured same-direction vehicle may do while the AV is in the passing lane (``spec.dynamics``): speed
     #: up as physics allows, or, as a stated profile, not at all
     overtaken: Overtaken = Overtaken.PHYSICS
+    #: a sideways move under way at the snapshot, into the scenario's lane: the most time it may still keep the AV in
+    #: both lanes, s (0: none; at most ``Tracking.lateral_s``). Until then the AV is in both lanes, entering the left
+    #: one when that is the scenario's lane (``SoundRules.window``): what a decision taken during a move proves
+    #: finishing the move (the lane it goes to) or undoing it (the lane it left) against
+    sideways_s: float = 0.0
 
     def phantoms(self) -> tuple[Phantom, ...]:
         """The phantoms of this snapshot: the bounds' own, the oncoming one where the view of that lane ended; each
@@ -154,13 +159,15 @@ class Sound:
                    f", measured vehicles accelerate at most {self.speed_change.accel_mps2:g} and brake at most "
                    f"{self.speed_change.brake_mps2:g} m/s^2")
                 + ("" if self.overtaken is Overtaken.PHYSICS else
-                   ", measured same-direction vehicles do not speed up while the AV is in the passing lane"))
+                   ", measured same-direction vehicles do not speed up while the AV is in the passing lane")
+                + (f", a sideways move under way at the start (both lanes for up to {self.sideways_s:g} s)"
+                   if self.sideways_s else ""))
 
 
 #: The keys of a scenario file's ``bounds`` table (and the command line's options of the same names).
 BOUNDS_KEYS = ("profile", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
                "oncoming_view_m", "latency_s", "semantics", "commit_max", "escapes", "accel_mps2", "brake_mps2",
-               "overtaken")
+               "overtaken", "sideways_s")
 #: How near the AV an aged phantom may come (``Sound.phantoms``): never onto it (Spin reads a phantom at 0 as none).
 PHANTOM_NEAREST_M = 1e-3
 
@@ -170,7 +177,7 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
                where: str = "--", followers_react: bool | None = None, oncoming_view_m: object = None,
                latency_s: object = None, semantics: object = None, commit_max: object = None,
                escapes: object = None, accel_mps2: object = None, brake_mps2: object = None,
-               overtaken: object = None) -> Sound:
+               overtaken: object = None, sideways_s: object = None) -> Sound:
     """The sound model from a base (a file's, or None: the default profile, under the commitment semantics), a named
     profile and overrides of its numbers and semantics; every value is checked, and bad input names the option or
     key (``where`` + its name)."""
@@ -220,11 +227,19 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
     behaves = base.overtaken if base is not None else Overtaken.PHYSICS
     if overtaken is not None:
         behaves = parse_overtaken(overtaken, key("overtaken"))
+    moving_s = base.sideways_s if base is not None else 0.0
+    if sideways_s is not None:
+        moving_s = check_sideways_s(key("sideways_s"), sideways_s, base.tracking if base is not None else TRACKING)
     if base is None:
         return Sound(bounds, start_mps=start, oncoming_view_m=view, commitment=commitment, speed_change=change,
-                     overtaken=behaves)
+                     overtaken=behaves, sideways_s=moving_s)
     return replace(base, bounds=bounds, start_mps=start, oncoming_view_m=view, commitment=commitment,
-                   speed_change=change, overtaken=behaves)
+                   speed_change=change, overtaken=behaves, sideways_s=moving_s)
+
+
+def check_sideways_s(where: str, value: object, tracking: Tracking = TRACKING) -> float:
+    """A sideways move's time left at the snapshot: from 0 (none) to the whole move, ``Tracking.lateral_s``."""
+    return check_number(where, value, high=tracking.lateral_s)
 
 
 def _rates(change: SpeedChange) -> tuple[float, float]:
@@ -282,7 +297,7 @@ def sound_from_table(table: object, where: str = "bounds") -> Sound:
                       table.get("sensing_error_m"), table.get("phantoms"), table.get("av_speed_mps"), f"{where}.",
                       table.get("followers_react"), table.get("oncoming_view_m"), table.get("latency_s"),
                       table.get("semantics"), table.get("commit_max"), table.get("escapes"), table.get("accel_mps2"),
-                      table.get("brake_mps2"), table.get("overtaken"))
+                      table.get("brake_mps2"), table.get("overtaken"), table.get("sideways_s"))
 
 
 def sound_to_table(sound: Sound) -> dict[str, object]:
@@ -309,6 +324,8 @@ def sound_to_table(sound: Sound) -> dict[str, object]:
         table["accel_mps2"], table["brake_mps2"] = sound.speed_change.accel_mps2, sound.speed_change.brake_mps2
     if sound.overtaken is not Overtaken.PHYSICS:
         table["overtaken"] = sound.overtaken.value
+    if sound.sideways_s:
+        table["sideways_s"] = sound.sideways_s
     return table
 
 
@@ -576,6 +593,9 @@ class SoundRules:
         manoeuvre brakes to when not the vehicles' own (``slowest_ahead_mps``): the engines' tables, which hold no
         vehicle, ask it of scenarios whose vehicles may stop."""
         self.sound, self.grid, self.targets = sound, grid, targets
+        #: the lane the AV ends its sideways move under way at the start in, and until when it is in both lanes
+        #: (``Sound.sideways_s``; 0: no move under way)
+        self.lane, self.move_s = lane, sound.sideways_s
         self.vehicles = vehicles(lane, left, right, grid, sound, left_m, right_m, left_mps, right_mps) \
             if given is None else given
         self.same = tuple(v for v in self.vehicles if v.lane is Lane.LEFT)
@@ -699,14 +719,45 @@ class SoundRules:
         nominal position plus the first ramp's constant gain, plus the ramp at the boundary): it is computed
         once per (speed before, action) and moved in time and place."""
         ref = self.reference(state, action)
-        if early(ref):
-            return [(seg, [self._bounded(p) for p in ref.pieces(seg.t0_s, seg.t1_s)])
-                    for seg in self._segments(state.lane, ref, action, state.moved)]
+        if self.is_early(ref):
+            segments = self._segments(state.lane, ref, action, state.moved)
+            if self.move_s > 0:
+                segments = self._moving(segments, action is None)
+            return [(seg, [self._bounded(p) for p in ref.pieces(seg.t0_s, seg.t1_s)]) for seg in segments]
         shape = self.relative_window(ref.before_mps, action, state.lane, state.moved)
         dt, dx = ref.boundary_s, ref.nominal_m + ramp_gain_m(ref.start_mps, ref.first_mps)
         bounds = self.sound.bounds
         return [(Segment(seg.t0_s + dt, seg.t1_s + dt, seg.lanes, seg.entering_left),
                  [b.shifted(dt, dx, bounds) for b in pieces]) for seg, pieces in shape]
+
+    def is_early(self, ref: Reference) -> bool:
+        """Whether a window from ``ref`` is computed as it is, never moved from a shape: while the first ramp runs
+        (``early``), or while the sideways move under way at the start does (``Sound.sideways_s``)."""
+        return early(ref) or window_start_s(ref) < self.move_s
+
+    def start_segment(self) -> Segment:
+        """The start, an instant: in the scenario's lane, or in both while a sideways move is under way; a start in
+        the left lane (or moving into it) holds every vehicle of it ahead or a follower (``_check_entering``)."""
+        lanes = frozenset(Lane) if self.move_s > 0 else frozenset({self.lane})
+        return Segment(0.0, 0.0, lanes, self.lane is Lane.LEFT, at_start=True)
+
+    def _moving(self, segments: list[Segment], continuation: bool) -> list[Segment]:
+        """``segments`` with the sideways move under way at the start laid over them: until ``move_s`` the AV is in
+        both lanes, entering the left one when it moves into it (every vehicle there certainly ahead or certainly
+        behind, a cut-in's gap). A continuation (the plan's last window) runs on in its lane to the move's end, so
+        that every instant of the move is in some window."""
+        out: list[Segment] = []
+        for seg in segments:
+            if seg.t0_s >= self.move_s:
+                out.append(seg)
+                continue
+            out.append(Segment(seg.t0_s, min(seg.t1_s, self.move_s), frozenset(Lane),
+                               seg.entering_left or self.lane is Lane.LEFT))
+            if seg.t1_s > self.move_s:
+                out.append(replace(seg, t0_s=self.move_s))
+        if continuation and out[-1].t1_s < self.move_s:
+            out.append(Segment(out[-1].t1_s, self.move_s, frozenset(Lane), self.lane is Lane.LEFT))
+        return out
 
     def relative_window(self, before_mps: float, action: Action | None, lane: Lane, moved: Lane | None) -> list[
             tuple[Segment, list[Bounded]]]:
@@ -967,10 +1018,10 @@ class SoundRules:
         instant of every step and of the continuation asks the same: a start that breaks it has no plan because it
         is unsafe already, an answer of its own)."""
         ref = self.reference(state, None)
-        seg = Segment(0.0, 0.0, frozenset({state.lane}), state.lane is Lane.LEFT, at_start=True)
+        seg = self.start_segment()
         pieces = [self._bounded(p) for p in ref.pieces(0.0, 0.0)]
         found = self.check_segment(seg, pieces)
-        if found is None and state.lane is Lane.LEFT:
+        if found is None and Lane.LEFT in seg.lanes:
             found = self._check_ahead(pieces, self.followers(state, None))
         return found
 
@@ -1064,11 +1115,12 @@ class SoundRules:
 
     def _continuation(self, state: SoundState) -> Violation | None:
         followers = self.followers(state, None)
-        ((seg, pieces),) = self.window(state, None)
-        found = self.check_segment(seg, pieces, followers)
-        if found is not None:
-            return found
-        tail = pieces[-1].piece
+        window = self.window(state, None)
+        for seg, pieces in window:
+            found = self.check_segment(seg, pieces, followers)
+            if found is not None:
+                return found
+        tail = window[-1][1][-1].piece
         end_s, end_x, end_v = tail.t1_s, tail.x(tail.t1_s), tail.v(tail.t1_s)
         if state.lane is Lane.RIGHT:
             for v in self.oncoming:
@@ -1201,12 +1253,16 @@ class SoundRules:
         return False
 
 
+def window_start_s(ref: Reference) -> float:
+    """When a window from ``ref`` starts: at its boundary, or where the ramp into its action starts before it."""
+    return min([ref.boundary_s] + ([ref.ramp.start_s] if ref.ramp is not None else []))
+
+
 def early(ref: Reference) -> bool:
     """Whether the ramp into the first action still runs when a window from ``ref`` starts (its shape then depends
     on where the plan started, not only on the speed before it: computed as it is, never moved)."""
     first = ref.first
-    window_start = min([ref.boundary_s] + ([ref.ramp.start_s] if ref.ramp is not None else []))
-    return first is not None and first.start_s + first.duration_s > window_start
+    return first is not None and first.start_s + first.duration_s > window_start_s(ref)
 
 
 def _max_of(p: Piece, c1: float, b1: float, c2: float, b2: float, flip: bool = False) -> tuple[float, float]:

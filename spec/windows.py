@@ -47,7 +47,7 @@ from spec.envelope import Reference
 from spec.grid import Grid
 from spec.lanes import Lane
 from spec.motion import ramp_gain_m, ramp_s
-from spec.sound import Bounded, Segment, Sound, SoundRules, SoundState, advance, early
+from spec.sound import Bounded, Segment, Sound, SoundRules, SoundState, advance
 
 NO_SPEED = -1  # a state's first or last speed before any action (``SoundState.first_mps`` None)
 
@@ -135,6 +135,8 @@ class SoundTable:
     #: action of another speed starts (``SoundRules.step_violation``'s ``following``), by the following's speed index
     relative_cut: dict[tuple[ShapeKey, int], Window] = field(default_factory=dict)
     early_cut: dict[tuple[EarlyKey, int], Window] = field(default_factory=dict)
+    #: the start lanes its early windows serve: both, or the one a sideways move under way at the start goes to
+    starts: tuple[Lane, ...] = tuple(Lane)
 
     def speed_index(self, speed_mps: float | None) -> int:
         return NO_SPEED if speed_mps is None else self.speeds_mps.index(speed_mps)
@@ -180,17 +182,30 @@ def declared(window: list[tuple[Segment, list[Bounded]]], boundary: Instant) -> 
     return Window(stretches, boundary, Instant(tail.t1_s, tail.x(tail.t1_s), tail.v(tail.t1_s)))
 
 
-@functools.lru_cache(maxsize=16)
-def sound_table(sound: Sound, grid: Grid, hold_floor_mps: float | None = None) -> SoundTable:
+def sound_table(sound: Sound, grid: Grid, hold_floor_mps: float | None = None, lane: Lane | None = None) -> SoundTable:
     """The table of ``sound`` on ``grid``: every shape, every window while the first ramp runs (from either lane,
     every action order the lanes allow), the start. ``hold_floor_mps``: the speed the minimal-risk manoeuvre brakes to
     in the scenarios it serves (``spec.sound.slowest_ahead_mps``: a standstill where a same-direction vehicle's speed
-    was measured; None: the lane's slowest); the windows never read the vehicles otherwise."""
-    rules = _rules(sound, grid, hold_floor_mps)
+    was measured; None: the lane's slowest); the windows never read the vehicles otherwise. ``lane``: the start's,
+    read only while a sideways move is under way there (``Sound.sideways_s``: the windows it overlaps depend on the
+    lane it moves into): the table's early windows then start from that lane alone."""
+    if sound.sideways_s and lane is None:
+        raise ValueError("a table with a sideways move under way at the start serves one start lane: name it")
+    return _sound_table(sound, grid, hold_floor_mps, lane if sound.sideways_s else None)
+
+
+def forget_tables() -> None:
+    """Forget every table ``sound_table`` built (a benchmark's fresh start; the shapes stay)."""
+    _sound_table.cache_clear()
+
+
+@functools.lru_cache(maxsize=16)
+def _sound_table(sound: Sound, grid: Grid, hold_floor_mps: float | None, moving_to: Lane | None) -> SoundTable:
+    rules = _rules(sound, grid, hold_floor_mps, Lane.RIGHT if moving_to is None else moving_to)
     action_speeds = {a: rules.speeds[a] for a in Action}
     speeds = tuple(sorted({*action_speeds.values(), rules.start_mps}))
     index = {v: i for i, v in enumerate(speeds)}
-    unstarted = replace(sound, start_mps=None)
+    unstarted = replace(sound, start_mps=None, sideways_s=0.0)
     # after the start speed (when no action drives at it) only the continuation from the start is ever looked up
     relative: dict[ShapeKey, Window] = {
         (index[before], *key): w for before in speeds
@@ -203,18 +218,18 @@ def sound_table(sound: Sound, grid: Grid, hold_floor_mps: float | None = None) -
     early_cut: dict[tuple[EarlyKey, int], Window] = {}
     first_end_s = max(ramp_s(rules.start_mps, v) for v in speeds)
     half_ramp_s = max(ramp_s(a, b) for a in speeds for b in speeds) / 2
-    todo = [SoundState(lane, 0, 0, 0, 0, None, None) for lane in Lane]
+    todo = [SoundState(lane, 0, 0, 0, 0, None, None) for lane in (Lane if moving_to is None else (moving_to,))]
     seen: set[tuple[object, ...]] = set()
     while todo:
         state = todo.pop()
-        if state.key() in seen or state.t_units * rules.unit_s - half_ramp_s >= first_end_s:
+        if state.key() in seen or state.t_units * rules.unit_s - half_ramp_s >= max(first_end_s, sound.sideways_s):
             continue
         seen.add(state.key())
         for action in (*Action, None):
             if action is not None and ACTION_RULES[action].from_lane not in (None, state.lane):
                 continue
             ref = rules.reference(state, action)
-            if early(ref):
+            if rules.is_early(ref):
                 key = (state.lane, state.t_units, state.d_cells, _index(index, state.first_mps),
                        _index(index, state.last_mps), state.moved, action)
                 window, boundary = rules.window(state, action), _at_boundary(ref)
@@ -229,17 +244,18 @@ def sound_table(sound: Sound, grid: Grid, hold_floor_mps: float | None = None) -
     start = {}
     for lane in Lane:
         ref = rules.reference(SoundState(lane, 0, 0, 0, 0, None, None), None)
-        seg = Segment(0.0, 0.0, frozenset({lane}), lane is Lane.LEFT, at_start=True)
+        seg = _rules(sound, grid, hold_floor_mps, lane).start_segment()
         start[lane] = declared([(seg, [rules._bounded(p) for p in ref.pieces(0.0, 0.0)])], _at_boundary(ref))
     gains = tuple(ramp_gain_m(rules.start_mps, v) for v in speeds)
     return SoundTable(sound, grid, rules.unit_s, rules.cell_m, speeds, {a: index[v] for a, v in action_speeds.items()},
-                      index[rules.start_mps], gains, relative, early_windows, start, relative_cut, early_cut)
+                      index[rules.start_mps], gains, relative, early_windows, start, relative_cut, early_cut,
+                      tuple(Lane) if moving_to is None else (moving_to,))
 
 
-def _rules(sound: Sound, grid: Grid, hold_floor_mps: float | None) -> SoundRules:
+def _rules(sound: Sound, grid: Grid, hold_floor_mps: float | None, lane: Lane = Lane.RIGHT) -> SoundRules:
     """The rules the table asks its windows of: no vehicle, the minimal-risk manoeuvre's hold speed given (None: the
-    lane's slowest)."""
-    return SoundRules(sound, Lane.RIGHT, (), (), grid, (), hold_floor_mps=hold_floor_mps)
+    lane's slowest), from ``lane`` (only a sideways move under way at the start, ``Sound.sideways_s``, reads it)."""
+    return SoundRules(sound, lane, (), (), grid, (), hold_floor_mps=hold_floor_mps)
 
 
 @functools.lru_cache(maxsize=64)

@@ -53,7 +53,7 @@ TARGET_MEDIAN_MS, TARGET_P99_MS, TARGET_RATIO, TARGET_OVER = 20.0, 50.0, 100.0, 
 def _fresh_tables() -> None:
     """Forget every table a speed built (the shapes of the actions' speeds stay, as in a drive): the next plan
     builds its table as a new measured speed's is built in the loop."""
-    windows.sound_table.cache_clear()
+    windows.forget_tables()
     sound_model.table_text.cache_clear()
     runner._table_data.cache_clear()
 

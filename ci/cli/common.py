@@ -219,7 +219,8 @@ def abbrev(answer: Answer, compact: bool = False) -> str:
 #: The commitment semantics' options (the last of ``SOUND_OPTIONS``).
 COMMIT_OPTIONS = ("semantics", "commit_max", "escapes")
 SOUND_OPTIONS = ("bounds", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
-                 "oncoming_view_m", "latency_s", "accel_mps2", "brake_mps2", "overtaken", *COMMIT_OPTIONS)
+                 "oncoming_view_m", "latency_s", "accel_mps2", "brake_mps2", "overtaken", "sideways_s",
+                 *COMMIT_OPTIONS)
 
 
 def sound_options(command: Any) -> Any:
@@ -235,7 +236,7 @@ def whole_sound_options(command: Any) -> Any:
 
 
 def _sound_options(command: Any, commitment: bool) -> Any:
-    from ci.shared.options import ACCEL, LATENCY, METRES, SPEED
+    from ci.shared.options import ACCEL, LATENCY, METRES, SIDEWAYS, SPEED
     from spec.engines import under_semantics
     from spec.escapes import Semantics
 
@@ -278,6 +279,9 @@ def _sound_options(command: Any, commitment: bool) -> Any:
                      "measured may do while the AV is in the passing lane: physics (speed up at --accel-mps2, the "
                      "default) or no-acceleration (a stated profile: it does not speed up, as StVO section 5(6) "
                      "asks of a vehicle being overtaken). See docs/sound.md."),
+        click.option("--sideways-s", type=SIDEWAYS, default=None, help="Sound model: a sideways move under way at "
+                     "the snapshot, into the scenario's lane: the most time it may still keep the AV in both lanes, "
+                     "s (0 to the move's whole 2 s; default 0, none). See docs/sound.md."),
     ) + ((
         click.option("--semantics", default=None, help="Sound model: commit (committed actions with a proved "
                      "escape and a predicted continuation; the default) or whole (every plan proved to its end). "
@@ -296,14 +300,15 @@ def with_sound(scenario: Scenario, bounds: str | None, same_mps: str | None, onc
                followers_react: bool | None = None, oncoming_view_m: float | None = None,
                latency_s: float | None = None, semantics: str | None = None, commit_max: str | None = None,
                escapes: str | None = None, accel_mps2: float | None = None,
-               brake_mps2: float | None = None, overtaken: str | None = None) -> Scenario:
+               brake_mps2: float | None = None, overtaken: str | None = None,
+               sideways_s: float | None = None) -> Scenario:
     """``scenario`` under the sound model the options (over the file's ``bounds``) choose; unchanged without any."""
     if all(v is None for v in (bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
                                followers_react, oncoming_view_m, latency_s, semantics, commit_max, escapes,
-                               accel_mps2, brake_mps2, overtaken)):
+                               accel_mps2, brake_mps2, overtaken, sideways_s)):
         return scenario
     sound = sound_from(scenario.sound, bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
                        followers_react=followers_react, oncoming_view_m=oncoming_view_m, latency_s=latency_s,
                        semantics=semantics, commit_max=commit_max, escapes=escapes, accel_mps2=accel_mps2,
-                       brake_mps2=brake_mps2, overtaken=overtaken)
+                       brake_mps2=brake_mps2, overtaken=overtaken, sideways_s=sideways_s)
     return replace(scenario, sound=sound)

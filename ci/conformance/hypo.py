@@ -33,6 +33,7 @@ from spec.assumptions import Bounds, SpeedBounds
 from spec.constants import DEFAULT_HORIZON
 from spec.dynamics import Overtaken
 from spec.engines import get_engine
+from spec.envelope import TRACKING
 from spec.errors import ScenarioError
 from spec.escapes import ALL_KINDS, Commitment, EscapeKind
 from spec.files import scenario_from_dict
@@ -93,7 +94,7 @@ VIEWS_M = tuple(c * float(PAPER_GRID.cell) for c in VIEW_CELLS)  # the same, in 
 
 @st.composite
 def drawn_sound(draw: st.DrawFn) -> Sound:
-    """Bounds from the stated choices (shrinking towards the paper profile's)."""
+    """Bounds from the stated choices (shrinking towards the paper profile's), and a sideways move under way or none."""
     same, oncoming = draw(st.sampled_from(SPEED_CHOICES)), draw(st.sampled_from(SPEED_CHOICES))
     error, phantoms = draw(st.sampled_from(ERROR_CHOICES)), draw(st.sampled_from((True, False)))
     react, latency = draw(st.sampled_from((True, False))), draw(st.sampled_from(LATENCY_CHOICES))
@@ -101,7 +102,13 @@ def drawn_sound(draw: st.DrawFn) -> Sound:
             f"error {error:g} m, phantoms {'on' if phantoms else 'off'}, followers "
             f"{'react' if react else 'keep their speed'}, latency {latency:g} s")
     source = "drawn by the hypothesis source (ci.conformance.hypo.SPEED_CHOICES, ERROR_CHOICES, LATENCY_CHOICES)"
-    return Sound(Bounds(name, same, oncoming, error, phantoms, source, react, latency))
+    return Sound(Bounds(name, same, oncoming, error, phantoms, source, react, latency),
+                 sideways_s=draw(st.sampled_from(SIDEWAYS_CHOICES)))
+
+
+#: A sideways move under way at the start, as the hypothesis source draws it (``spec.sound.Sound.sideways_s``): none
+#: most of the time (shrinking towards none), a move just begun or about to end, a whole one.
+SIDEWAYS_CHOICES = (0.0, 0.0, 0.0, 0.5, TRACKING.lateral_s)
 
 
 #: The commitments the hypothesis source draws under the commitment semantics, stated: as many actions as are proved

@@ -24,6 +24,7 @@ import click
 
 from spec.assumptions import MAX_LATENCY_S
 from spec.constants import MAX_HORIZON
+from spec.envelope import TRACKING
 from spec.errors import OptionError, check_number
 from spec.physical import MAX_STOP_RATE_PER_H
 
@@ -139,6 +140,7 @@ DEGREES = Number(0.0, 90.0)  # a steering offset: past a right angle the wheels 
 SCALE = Number(0.0, 100.0)  # a factor on the bounds' widths: 0 is the rule's middle speed alone
 ACCEL = Number(0.0, 100.0, positive=True)  # m/s^2: an acceleration bound above 0 (about 10 g at the most)
 LATENCY = Number(0.0, MAX_LATENCY_S)  # seconds a snapshot ages before the plan acts (spec.assumptions.MAX_LATENCY_S)
+SIDEWAYS = Number(0.0, TRACKING.lateral_s)  # seconds a sideways move under way may still take (spec.envelope)
 
 
 def out_dir(option: str, path: str | Path) -> Path:

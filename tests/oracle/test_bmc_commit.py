@@ -22,6 +22,7 @@ from spec.engines import check_model, get_engine
 from spec.errors import OptionError
 from spec.escapes import COMMIT
 from spec.grid import grid_for
+from spec.lanes import Lane
 from spec.library import builtin
 from spec.models import ModelKind
 from spec.scenario import Scenario, make_scenario, measured_speeds, problem_for, sensed
@@ -36,7 +37,7 @@ from tests.oracle.test_sound_measured import _overtaking, _standing_ahead, measu
 ])
 def test_z3_holds_every_short_sequence_as_the_interpreter_does(lane: str, left: list[int], right: list[int],
                                                                bounds: str) -> None:
-    scenario = replace(make_scenario(lane, left, right, 1), sound=Sound(profile(bounds), commitment=COMMIT))
+    scenario = replace(make_scenario(lane, left, right, 0), sound=Sound(profile(bounds), commitment=COMMIT))
     problem = problem_for(scenario, ModelKind.FINAL)
     ours, theirs = commit.proofs(problem), Z3(problem)
     assert (theirs.start_violation() is None) == (ours.start_violation() is None)
@@ -201,3 +202,32 @@ def test_z3_refuses_measured_speeds_in_whole_plans_naming_the_semantics() -> Non
     with pytest.raises(OptionError, match=r"under --semantics whole .*answers them under --semantics commit"):
         scenario = _standing_ahead(16)
         check_model(get_engine("z3"), replace(scenario, sound=replace(scenario.sound, commitment=None)))
+
+
+@pytest.mark.parametrize(("lane", "left", "right", "moving_s", "read"), [
+    ("left", [], [12], 0.5, True), ("left", [12], [13], 2.0, True), ("left", [8], [13], 2.0, True),
+    ("right", [11], [14], 0.5, False), ("right", [12], [], 2.0, False),
+])
+def test_z3_holds_every_short_sequence_from_a_move_under_way_as_the_interpreter_does(
+        lane: str, left: list[int], right: list[int], moving_s: float, read: bool) -> None:
+    """A sideways move under way at the start (``Sound.sideways_s``): the same proofs, sequence by sequence; where
+    an oncoming vehicle is near, the move changes some of them (it is read)."""
+    scenario = replace(make_scenario(lane, left, right, 0),
+                       sound=Sound(profile("default"), commitment=COMMIT, sideways_s=moving_s))
+    problem = problem_for(scenario, ModelKind.FINAL)
+    ours, theirs = commit.proofs(problem), Z3(problem)
+    still = commit.proofs(problem_for(replace(scenario, sound=replace(scenario.sound, sideways_s=0.0)),
+                                      ModelKind.FINAL))
+    assert (theirs.start_violation() is None) == (ours.start_violation() is None)
+    changed = 0
+    for seq in _short_sequences(scenario.lane):
+        for goal in (False, True):
+            assert theirs.holds(seq, goal) == ours.holds(seq, goal), (seq, goal)
+            changed += ours.holds(seq, goal) != still.holds(seq, goal)
+    assert (changed > 0) == read
+
+
+def _short_sequences(lane: Lane) -> list[tuple[Action, ...]]:
+    """Every sequence of at most two actions the lane guards allow from ``lane``, the empty one first."""
+    return [seq for seq in [(), *((a,) for a in Action), *((a, b) for a in Action for b in Action)]
+            if guarded(lane, seq)]

@@ -19,6 +19,7 @@ from spec.answers import Limits, Status, Strategy
 from spec.assumptions import Bounds, SpeedBounds, profile
 from spec.cost import COST_TERMS, action_cost
 from spec.engines import check_model, load_engines
+from spec.envelope import TRACKING
 from spec.errors import OptionError, ScenarioError
 from spec.grid import PAPER_GRID, STANDARD_CELLS_M, Grid
 from spec.lanes import Lane
@@ -47,13 +48,15 @@ def bounds(draw: st.DrawFn) -> Bounds:
                   "drawn by the test", react, latency)
 
 
-def sound_scenarios(grid: Grid = PAPER_GRID) -> st.SearchStrategy[Scenario]:
+def sound_scenarios(grid: Grid = PAPER_GRID, moves_s: tuple[float, ...] = (0.0,)) -> st.SearchStrategy[Scenario]:
     """Scenarios under drawn bounds, the oncoming lane seen to the sensor's range or, as the hypothesis source draws
-    it, hidden from a nearer point on (``Sound.oncoming_view_m``)."""
+    it, hidden from a nearer point on (``Sound.oncoming_view_m``); a sideways move under way at the start for one of
+    ``moves_s`` (``Sound.sideways_s``)."""
     span = round(24 * PAPER_GRID.cell / grid.cell)
     views = st.sampled_from((None, None, None, *VIEWS_M))
-    return st.tuples(scenarios(span=span, grid=grid, max_left=4, max_right=2), bounds(), views).map(
-        lambda drawn: replace(drawn[0], sound=Sound(drawn[1], oncoming_view_m=drawn[2])))
+    return st.tuples(scenarios(span=span, grid=grid, max_left=4, max_right=2), bounds(), views,
+                     st.sampled_from(moves_s)).map(
+        lambda drawn: replace(drawn[0], sound=Sound(drawn[1], oncoming_view_m=drawn[2], sideways_s=drawn[3])))
 
 
 def _check(scenario: Scenario, strategy: Strategy, motions: int, rng: random.Random) -> int:
@@ -76,6 +79,15 @@ def _check(scenario: Scenario, strategy: Strategy, motions: int, rng: random.Ran
        st.sampled_from(list(Strategy)), st.integers(0, 2**32 - 1))
 def test_every_sound_plan_survives_every_motion_within_its_bounds(scenario: Scenario, strategy: Strategy,
                                                                  seed: int) -> None:
+    _check(scenario, strategy, 4, random.Random(seed))
+
+
+@settings(max_examples=100 if CI_PROFILE else 25)
+@given(st.sampled_from(STANDARD_CELLS_M).flatmap(lambda c: sound_scenarios(Grid(c), (0.5, 1.0, TRACKING.lateral_s))),
+       st.sampled_from(list(Strategy)), st.integers(0, 2**32 - 1))
+def test_every_sound_plan_from_a_move_under_way_survives_every_motion_within_its_bounds(
+        scenario: Scenario, strategy: Strategy, seed: int) -> None:
+    """A decision taken during a sideways move (``Sound.sideways_s``): the AV in both lanes until the move ends."""
     _check(scenario, strategy, 4, random.Random(seed))
 
 

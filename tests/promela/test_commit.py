@@ -11,12 +11,14 @@ from pathlib import Path
 
 import pytest
 
+from oracle import commit
 from oracle.planner import plan, solve
 from promela import runner
 from promela import sound as sound_model
+from promela.commit import Spin
 from promela.render import Probe, Query, shape_of
 from spec.actions import Action
-from spec.answers import Answer, Status, Strategy
+from spec.answers import Answer, Limits, Status, Strategy
 from spec.assumptions import profile
 from spec.commitment import guarded
 from spec.escapes import COMMIT, Commitment, EscapeKind
@@ -175,3 +177,21 @@ def test_a_start_too_near_a_follower_that_keeps_its_speed_is_unsafe_in_every_eng
     if unsafe:
         found = plan(scenario, Strategy.SENSIBLE)
         assert "behind" in (found.detail or "")
+
+
+@pytest.mark.parametrize(("lane", "left", "right", "moving_s"), [
+    ("left", [], [12], 0.5), ("left", [12], [13], 2.0), ("right", [11], [14], 0.5),
+])
+def test_spin_holds_every_short_sequence_from_a_move_under_way_as_the_interpreter_does(
+        lane: str, left: list[int], right: list[int], moving_s: float) -> None:
+    """A sideways move under way at the start (``Sound.sideways_s``, a table of its own start lane): Spin's
+    proofs, sequence by sequence, are the interpreter's."""
+    scenario = replace(make_scenario(lane, left, right, 0),
+                       sound=Sound(profile("default"), commitment=COMMIT, sideways_s=moving_s))
+    problem = problem_for(scenario, ModelKind.FINAL)
+    ours, theirs = commit.proofs(problem), Spin(problem, Limits())
+    assert (theirs.start_violation() is None) == (ours.start_violation() is None)
+    asked = [(seq, goal) for seq in [(), *((a,) for a in Action), *((a, b) for a in Action for b in Action)]
+             if guarded(scenario.lane, seq) for goal in (False, True)]
+    theirs.prefetch(asked)
+    assert [theirs.holds(*q) for q in asked] == [ours.holds(*q) for q in asked]

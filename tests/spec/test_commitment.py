@@ -7,10 +7,10 @@ from __future__ import annotations
 from collections.abc import Container, Sequence
 from dataclasses import replace
 
-from spec.actions import Action
+from spec.actions import ACTION_RULES, Action
 from spec.answers import Limits, SearchResult, Status, Strategy
 from spec.assumptions import profile
-from spec.commitment import Firsts, ProofIncomplete, answer, split
+from spec.commitment import Firsts, ProofIncomplete, answer, enabled_firsts, split
 from spec.escapes import COMMIT, Commitment, EscapeKind
 from spec.lanes import Lane
 from spec.models import ModelKind
@@ -118,3 +118,28 @@ def test_a_proof_that_hits_its_limit_makes_the_answer_incomplete_never_a_refusal
 
     found = answer(_problem(), Strategy.SENSIBLE, Limits(), Limited(set(), (A, R, L)))
     assert found.status is Status.INCOMPLETE and "time limit" in found.detail
+
+
+def test_while_a_sideways_move_is_under_way_no_lane_change_is_a_first_action() -> None:
+    """The move under way is the AV's lane change, to finish or to undo: ``enabled_firsts`` and ``Firsts`` keep to the
+    lane, for every engine (each composes its answer here)."""
+    for lane in Lane:
+        scenario = replace(make_scenario(lane.value, [], [], 0), sound=Sound(profile("default"), commitment=COMMIT))
+        moving = replace(scenario, sound=replace(scenario.sound, sideways_s=1.0))
+        still, under_way = (enabled_firsts(problem_for(s, ModelKind.FINAL)) for s in (scenario, moving))
+        assert any(ACTION_RULES[a].changes_lane for a in still)
+        assert under_way == tuple(a for a in still if not ACTION_RULES[a].changes_lane)
+        proofs = _Anything()
+        firsts = Firsts(proofs, problem_for(moving, ModelKind.FINAL))  # type: ignore[arg-type]
+        assert [a for a in Action if a in firsts] == list(under_way) and set(proofs.asked) <= set(under_way)
+
+
+class _Anything:
+    """Proofs that hold every sequence, and remember each one's first action."""
+
+    def __init__(self) -> None:
+        self.asked: list[Action] = []
+
+    def holds(self, actions: Sequence[Action], goal: bool) -> bool:
+        self.asked.append(actions[0])
+        return True

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from spec.actions import Action
+from spec.actions import ACTION_RULES, Action
 from spec.assumptions import MAX_LATENCY_S, Bounds, SpeedBounds, check_bounds, profile
 from spec.envelope import TRACKING, Piece
 from spec.errors import OptionError
@@ -28,6 +28,7 @@ from spec.sound import (
     sound_to_table,
     vehicles,
 )
+from spec.windows import sound_table
 
 DEFAULT = Sound(profile("default"))
 finite = st.floats(-50.0, 50.0)
@@ -257,3 +258,76 @@ def test_a_latency_reads_back_from_a_file_and_is_bad_input_out_of_range() -> Non
         sound_from_table({"latency_s": "soon"})
     with pytest.raises(OptionError, match="--latency-s"):
         sound_from(None, "default", latency_s=math.inf)
+
+
+@pytest.mark.parametrize("moving_s", [-0.1, TRACKING.lateral_s + 0.01, math.nan, "soon"])
+def test_a_bad_sideways_move_is_bad_input_naming_the_option_or_key(moving_s: object) -> None:
+    with pytest.raises(OptionError, match="--sideways-s"):
+        sound_from(None, "default", sideways_s=moving_s)
+    with pytest.raises(OptionError, match=r"bounds\.sideways_s"):
+        sound_from_table({"sideways_s": moving_s})
+
+
+def test_a_sideways_move_reads_back_from_a_file_and_is_stated() -> None:
+    moving = sound_from(None, "default", sideways_s=1.25)
+    assert moving.sideways_s == 1.25 and sound_from_table(sound_to_table(moving)) == moving
+    assert "both lanes for up to 1.25 s" in moving.describe()
+    assert "sideways_s" not in sound_to_table(DEFAULT)
+
+
+def _windows_along(rules: SoundRules, actions: tuple[Action, ...]) -> list[tuple[float, float, frozenset[Lane], bool]]:
+    """Every segment a sequence's proof checks: each step's window, then the continuation's."""
+    state, out = SoundState(rules.lane, 0, 0, 0, 0, None, None), []
+    for action in (*actions, None):
+        out += [(seg.t0_s, seg.t1_s, seg.lanes, seg.entering_left) for seg, _ in rules.window(state, action)]
+        if action is not None:
+            state = rules.after(state, action)
+    return out
+
+
+@given(st.lists(st.sampled_from(list(Action)), max_size=3), st.sampled_from(list(Lane)),
+       st.floats(0.05, TRACKING.lateral_s), st.sampled_from((None, 3.0, 9.5)))
+def test_every_instant_of_a_move_under_way_is_checked_in_both_lanes_and_nothing_after_it_changes(
+        actions: list[Action], lane: Lane, moving_s: float, start_mps: float | None) -> None:
+    """A sideways move under way at the start puts the AV in both lanes at every instant until it ends, moving into
+    the left lane when that is the one it goes to, whatever the plan and however short; from its end on every
+    window is the one without the move."""
+    still = Sound(profile("default"), start_mps=start_mps)
+    moving = replace(still, sideways_s=moving_s)
+    if not all(ACTION_RULES[a].from_lane in (None, lane_) for a, lane_ in zip(actions, _lanes(lane, actions),
+                                                                               strict=True)):
+        return
+    with_move = _windows_along(_rules(moving, lane), tuple(actions))
+    without = _windows_along(_rules(still, lane), tuple(actions))
+    samples = [moving_s * k / 20 for k in range(20)]
+    for t in samples:
+        covering = [w for w in with_move if w[0] <= t <= w[1] and (w[0] < w[1] or t == w[0])]
+        assert covering and all(w[2] == frozenset(Lane) and w[3] == (lane is Lane.LEFT or w[3]) for w in covering)
+        assert any(w[3] for w in covering) == (lane is Lane.LEFT or any(
+            w[3] for w in without if w[0] <= t <= w[1]))
+    end_s = max(w[1] for w in without)
+    for t in (moving_s + max(0.0, end_s - moving_s) * (k + 1) / 20 for k in range(20) if end_s > moving_s):
+        assert {w[2:] for w in with_move if w[0] <= t <= w[1] and w[0] >= moving_s} == \
+            {w[2:] for w in without if w[0] <= t <= w[1]}
+
+
+def _lanes(lane: Lane, actions: list[Action]) -> list[Lane]:
+    """The lane each of ``actions`` starts from."""
+    out = []
+    for a in actions:
+        out.append(lane)
+        lane = ACTION_RULES[a].to_lane or lane
+    return out
+
+
+def test_a_start_with_a_move_under_way_is_in_both_lanes_and_a_table_of_it_serves_one_start_lane() -> None:
+    moving = Sound(profile("default"), sideways_s=1.0)
+    assert _rules(moving, Lane.RIGHT).start_segment().lanes == frozenset(Lane)
+    assert _rules(DEFAULT, Lane.RIGHT).start_segment().lanes == frozenset({Lane.RIGHT})
+    with pytest.raises(ValueError, match="one start lane"):
+        sound_table(moving, PAPER_GRID)
+    table = sound_table(moving, PAPER_GRID, lane=Lane.LEFT)
+    assert table.starts == (Lane.LEFT,) and {key[0] for key in table.early} <= set(Lane)
+    start = table.start[Lane.LEFT].stretches[0]
+    assert (start.left, start.right, start.entering) == (True, True, True)
+    assert sound_table(DEFAULT, PAPER_GRID, lane=Lane.LEFT) is sound_table(DEFAULT, PAPER_GRID)

@@ -168,6 +168,8 @@ def sound_options(command: str, *extra: str, commitment: bool = True) -> list[Ca
               for value in (*NOT_NUMBERS, "0", "-3")),  # an acceleration bound is above 0
             *(_case(command, *extra, f"--overtaken={value}", named="--overtaken")
               for value in ("sometimes", "", "PHYSICS ")),  # one of the profiles, spelt as stated
+            *(_case(command, *extra, f"--sideways-s={value}", named="--sideways-s")
+              for value in (*NOT_NUMBERS, "-0.5", "2.5")),  # a move takes at most its 2 s
             *(commitment_options(command, *extra) if commitment else ())]
 
 
@@ -191,7 +193,8 @@ BOUNDS_FILES = {"bounds_reversed.toml": "bounds.same_mps", "bounds_key.json": "b
                 "bounds_semantics.toml": "bounds.semantics", "bounds_accel.toml": "bounds.accel_mps2",
                 "bounds_brake.json": "bounds.brake_mps2", "speeds_length.json": "left_mps",
                 "speeds_reversed.toml": "left_mps[0]", "speeds_negative.json": "left_mps[0]",
-                "speeds_nan.json": "right_mps[0]", "bounds_overtaken.toml": "bounds.overtaken"}
+                "speeds_nan.json": "right_mps[0]", "bounds_overtaken.toml": "bounds.overtaken",
+                "bounds_sideways.toml": "bounds.sideways_s"}
 
 
 def out_dirs(command: str, option: str = "--out") -> list[Case]:
@@ -275,6 +278,7 @@ def _hostile_files(folder: Path) -> None:
         "bounds_accel.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\naccel_mps2 = 0\n',
         "bounds_brake.json": "{" + good + ', "bounds": {"brake_mps2": -9}}',
         "bounds_overtaken.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\novertaken = true\n',
+        "bounds_sideways.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nsideways_s = 3\n',
         "speeds_length.json": "{" + good + ', "left_mps": [[5, 6], [7, 8]], "bounds": {}}',
         "speeds_reversed.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\nleft_mps = [[6, 5]]\n[bounds]\n',
         "speeds_negative.json": "{" + good + ', "left_mps": [[-1, 5]], "bounds": {}}',
