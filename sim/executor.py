@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from sim.driver.control import CarState, Command, Steps, control_law, cosine_move, lane_of, perform
+from sim.driver.control import CarState, Command, Sideways, Steps, control_law, cosine_move, lane_of, perform
 from sim.scene import Scene
 from sim.vehicle import WheeledCar
 from spec.actions import ACTION_RULES, Action
@@ -35,6 +35,9 @@ class Executor:
         self.lane_due: Lane | None = lane  # the lane the car must be wholly in now (None: a sideways move under way)
         self.dt_s = scene.dt_s * LOOP.control_every_steps
         self.steer_offset_rad = 0.0  # a steering fault's offset on every command (``sim.faults.SteeringFault``)
+        #: a sideways move a decision took over mid-way: every control step's lateral reference until it is over
+        #: (``hand_over``); a lane change begun meanwhile starts where it stands
+        self.sideways: Sideways | None = None
         self._speed_before_mps = car.pose().speed_mps
 
     def reset_reference(self, ahead_m: float = 0.0) -> None:
@@ -43,19 +46,23 @@ class Executor:
 
     def run(self, action: Action, tick: Callable[[float], bool], profile: SpeedProfile | None = None,
             stop: Callable[[], bool] | None = None, skip_s: float = 0.0,
-            reverse: Callable[[Lane, float, float], bool] | None = None) -> bool:
+            reverse: Callable[[Lane, float, float], bool] | None = None,
+            hand_over: Callable[[Lane, float, float], Lane | None] | None = None) -> bool:
         """``perform`` the ``action``'s control steps (``acting``)."""
-        return self.perform(self.acting(action, profile, stop, skip_s, reverse), tick)
+        return self.perform(self.acting(action, profile, stop, skip_s, reverse, hand_over), tick)
 
     def acting(self, action: Action, profile: SpeedProfile | None = None, stop: Callable[[], bool] | None = None,
-               skip_s: float = 0.0, reverse: Callable[[Lane, float, float], bool] | None = None) -> Steps:
+               skip_s: float = 0.0, reverse: Callable[[Lane, float, float], bool] | None = None,
+               hand_over: Callable[[Lane, float, float], Lane | None] | None = None) -> Steps:
         """Execute ``action`` for its duration along ``profile`` (default: its speed throughout); False as soon
         as a step does not go on. ``stop`` is asked after every control step once any sideways move is over
         (an action in lane has none: from its first step); when it says so the action ends there, the AV in the
-        action's lane. ``reverse(to_lane, done_s, left_s)`` is asked after every control step of a sideways move
-        (seconds of it done and left); when it says so the move goes back (``reverse_move``) and the action ends
-        there, the AV in the lane it started in. ``skip_s``: the action's first seconds have gone by already (its
-        reference goes on from there, on the action's clock)."""
+        action's lane. After every control step of a sideways move (seconds of it done and left):
+        ``hand_over(to_lane, done_s, left_s)`` first, whose lane (the one the move goes to, or the one it left) ends
+        the action there with the rest of the move, finished or undone, under the next decision (``sideways``);
+        then ``reverse(to_lane, done_s, left_s)``: when it says so the move goes back (``reverse_move``) and the
+        action ends there, the AV in the lane it started in. ``skip_s``: the action's first seconds have gone by
+        already (its reference goes on from there, on the action's clock)."""
         rule = ACTION_RULES[action]
         if rule.from_lane is not None and rule.from_lane is not self.lane:
             raise EngineError(f"simulator: {action.value} asked of an AV in the {self.lane.value} lane "
@@ -63,6 +70,8 @@ class Executor:
         speed = action_speed_mps(action, self.grid)
         profile = profile or SpeedProfile(speed, ())
         y_from = self.scene.lane_y(self.lane)
+        if self.sideways is not None and rule.to_lane is not None:  # a lane change starts where the move stands
+            y_from, self.sideways = self.sideways.now()[0], None
         to_lane = rule.to_lane or self.lane
         y_to = self.scene.lane_y(to_lane)
         duration_s = float(rule.duration_s)
@@ -75,8 +84,14 @@ class Executor:
             if not (yield profile.at(k * self.dt_s), y_ref, vy_ref):
                 return False
             done_s = (k + 1) * self.dt_s
-            if reverse is not None and phase < 1 and to_lane is not self.lane and \
-                    reverse(to_lane, done_s, lateral_s - done_s):
+            moving = phase < 1 and to_lane is not self.lane
+            handed = hand_over(to_lane, done_s, lateral_s - done_s) if hand_over is not None and moving else None
+            if handed is not None:
+                self.sideways = Sideways(y_from, y_to, lateral_s, done_s) if handed is to_lane else \
+                    Sideways(y_ref, y_from, done_s, 0.0)
+                self.lane, self.lane_due = handed, None
+                return True
+            if reverse is not None and moving and reverse(to_lane, done_s, lateral_s - done_s):
                 return (yield from self.reverse_move(y_ref, y_from, done_s, profile, k + 1))
             if stop is not None and (phase >= 1 or to_lane is self.lane) and stop():
                 break
@@ -121,6 +136,9 @@ class Executor:
     def control(self, speed_mps: float, y_ref: float, vy_ref: float) -> None:
         """One control step towards the references (the position reference advances at ``speed_mps``): the
         controller's commands (``sim.driver.control.control_law``) applied to the car through the physics steps."""
+        if self.sideways is not None:  # a move handed over goes on whatever the step asks sideways
+            y_ref, vy_ref, self.sideways = self.sideways.step(self.dt_s)
+            self.lane_due = None if self.sideways is not None else self.lane
         pose = self.car.pose()
         self.x_ref_m += speed_mps * self.dt_s
         self.v_ref_mps = speed_mps

@@ -70,6 +70,10 @@ class RunSummary:
     containment: ContainmentReport = field(default_factory=ContainmentReport)
     breach_replans: int = 0  # sound decisions ended by a breach
     reversed_moves: int = 0  # sideways moves a breach sent back (``MinimalRisk``'s cut-short move)
+    #: sideways moves a breach ended whose rest a decision proved and took over: finished, or undone
+    moves_finished: int = 0
+    moves_undone: int = 0
+    moves_unproved: int = 0  # sideways moves a breach ended with neither way proved (the fallback's rule decides)
     sensed_breaches: int = 0  # sound decisions whose readings the AV's own monitor could not explain
     unseen_breaches: int = 0  # sound decisions that went on past a vehicle's breach the AV never sensed
     keep_lane_steps: int = 0  # sound decisions without an overtake: one safe step in lane
@@ -140,7 +144,8 @@ class RunSummary:
                 "snapshots": self.snapshots, "restarts": self.restarts, "opportunities": self.opportunities.to_json(),
                 "decisions": self.decisions, "containment": self.containment.to_json(),
                 "breach_replans": self.breach_replans, "reversed_moves": self.reversed_moves,
-                "sensed_breaches": self.sensed_breaches,
+                "moves_finished": self.moves_finished, "moves_undone": self.moves_undone,
+                "moves_unproved": self.moves_unproved, "sensed_breaches": self.sensed_breaches,
                 "unseen_breaches": self.unseen_breaches, "keep_lane_steps": self.keep_lane_steps,
                 "minimal_risk_steps": self.minimal_risk_steps, "committed_parts": self.committed_parts,
                 "escapes": self.escapes, "unsafe_starts": self.unsafe_starts, "shadowed": self.shadowed,
@@ -161,7 +166,8 @@ class RunSummary:
                    else OpportunityReport(), decisions=data.get("decisions", 0),
                    containment=ContainmentReport.from_json(data["containment"]) if "containment" in data
                    else ContainmentReport(), breach_replans=data.get("breach_replans", 0),
-                   reversed_moves=data.get("reversed_moves", 0),
+                   reversed_moves=data.get("reversed_moves", 0), moves_finished=data.get("moves_finished", 0),
+                   moves_undone=data.get("moves_undone", 0), moves_unproved=data.get("moves_unproved", 0),
                    sensed_breaches=data.get("sensed_breaches", 0), unseen_breaches=data.get("unseen_breaches", 0),
                    keep_lane_steps=data.get("keep_lane_steps", 0), minimal_risk_steps=data.get("minimal_risk_steps", 0),
                    committed_parts=data.get("committed_parts", 0), escapes=data.get("escapes", 0),

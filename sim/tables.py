@@ -50,7 +50,9 @@ def totals_table(results: list[RunSummary]) -> Table:
             *sorted((f"  {kind}", str(n)) for kind, n in sum((Counter(r.containment.by_kind) for r in results),
                                                             Counter()).items()),
             ("sound model: decisions ended by a breach", str(sum(r.breach_replans for r in results))),
-            ("sound model: sideways moves sent back on a breach", str(sum(r.reversed_moves for r in results))),
+            ("sound model: sideways moves a breach ended: finished, undone (proved), sent back (the fallback's rule)",
+             f"{sum(r.moves_finished for r in results)}, {sum(r.moves_undone for r in results)}, "
+             f"{sum(r.reversed_moves for r in results)}"),
             ("sound model: decisions past a breach never sensed", str(sum(r.unseen_breaches for r in results))),
             ("sound model: decisions with the oncoming lane hidden behind a left-lane vehicle",
              str(sum(r.shadowed for r in results))),

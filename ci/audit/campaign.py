@@ -199,6 +199,10 @@ class Row:
     blocked: int = 0  # episodes given up because the AV stood (``sim.simulator.BLOCKED_S``; a stop, never a failure)
     semantics: str = Semantics.WHOLE.value  # how the sound model decided (``spec.escapes.Semantics``)
     reversed_moves: int = 0  # sideways moves a breach sent back (``MinimalRisk``'s cut-short move)
+    #: sideways moves a breach ended that a decision proved and took over: finished, undone; and with neither proved
+    moves_finished: int = 0
+    moves_undone: int = 0
+    moves_unproved: int = 0
     unsafe_starts: int = 0  # sound decisions whose snapshot already broke the safety specification (no failure)
 
     def per_1000_km(self, count: float) -> float:
@@ -267,7 +271,8 @@ class Row:
                 "decisions": self.decisions, "attributed": self.attributed, "breaches": self.breaches,
                 "breaches_per_1000_km": _num(self.per_1000_km(sum(self.breaches.values()))),
                 "breached_share": self.breached_share, "breach_replans": self.breach_replans,
-                "reversed_moves": self.reversed_moves,
+                "reversed_moves": self.reversed_moves, "moves_finished": self.moves_finished,
+                "moves_undone": self.moves_undone, "moves_unproved": self.moves_unproved,
                 "keep_lane_steps": self.keep_lane_steps, "minimal_risk_steps": self.minimal_risk_steps,
                 "takeovers": self.takeovers, "takeovers_after_breach": self.takeovers_after_breach,
                 "waits_without_plan": self.waits_without_plan, "losses_of_control": self.losses_of_control,
@@ -339,7 +344,14 @@ def _row(key: Key, runs: list[RunSummary]) -> Row:
                sum(len(r.of_kind(FailureKind.SENSING)) for r in runs), _fault_counts(runs),
                late_plans=sum(m > 1000 * LOOP.plan_budget_s for m in plan_ms),
                blocked=sum(len(r.of_kind(FailureKind.BLOCKED)) for r in runs), semantics=key[5],
-               unsafe_starts=sum(r.unsafe_starts for r in runs), reversed_moves=sum(r.reversed_moves for r in runs))
+               unsafe_starts=sum(r.unsafe_starts for r in runs), reversed_moves=sum(r.reversed_moves for r in runs),
+               moves_finished=sum(r.moves_finished for r in runs), moves_undone=sum(r.moves_undone for r in runs),
+               moves_unproved=sum(r.moves_unproved for r in runs))
+
+
+def moves(r: Row) -> str:
+    """The sideways moves a breach ended: finished and undone by a proved decision, sent back by the fallback's rule."""
+    return f"{r.moves_finished}, {r.moves_undone}, {r.reversed_moves}"
 
 
 def _at_most(edge: float | None, largest: float) -> float | None:
@@ -559,8 +571,8 @@ def models_markdown(audit_rows: list[Row]) -> list[str]:
              "step is left).", "",
              "| cell m | traffic | sensing | model | km | overtakes /km | collisions inside / after per 1,000 km | "
              "near misses inside / after per 1,000 km | breaches /1,000 km (by kind) | time after a breach | "
-             "decisions | re-plans on a breach | moves sent back | keep-lane steps | minimal-risk | "
-             "take-overs (after a breach) | "
+             "decisions | re-plans on a breach | moves a breach ended: finished, undone (proved), sent back (the "
+             "fallback's rule) | keep-lane steps | minimal-risk | take-overs (after a breach) | "
              "waits without a plan | starts breaking the specification | delayed /1,000 km (est.) |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in audit_rows:
@@ -571,7 +583,7 @@ def models_markdown(audit_rows: list[Row]) -> list[str]:
             f"{figure(r.per_1000_km(r.overtakes) / 1000, 2)} | "
             f"{r.inside_after('contact')} | {r.inside_after('near_miss')} | "
             f"{figure(r.per_1000_km(sum(r.breaches.values())))} ({kinds}) | {share} | {r.decisions} | "
-            f"{r.breach_replans} | {r.reversed_moves} | {r.keep_lane_steps} | {r.minimal_risk_steps} | "
+            f"{r.breach_replans} | {moves(r)} | {r.keep_lane_steps} | {r.minimal_risk_steps} | "
             f"{r.takeovers} ({r.takeovers_after_breach}) | {r.waits_without_plan} | {r.unsafe_starts} | "
             f"{figure(r.delayed_per_1000_km)} |")
     return lines

@@ -140,7 +140,17 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sem
           scheduler: str | None, out_dir: str, fresh: bool, faults: str, steering_offset_deg: float,
           tracking: bool, vehicle_speeds: VehicleSpeeds, overtaken: Overtaken, as_json: bool) -> None:
     """Audit the grid abstraction: cell size x traffic model x sensing model x seeds, driven closed-loop."""
-    from ci.audit.campaign import AuditPlan, decider, figure, label, planning_cost, rows, run_audit, write_reports
+    from ci.audit.campaign import (
+        AuditPlan,
+        decider,
+        figure,
+        label,
+        moves,
+        planning_cost,
+        rows,
+        run_audit,
+        write_reports,
+    )
     from ci.shared.progress import km_progress
     from sim.parts import PLANNING_MODELS, SENSOR_MODELS, TRAFFIC_MODELS, DriveConfig
     from spec.engines import get_engine
@@ -196,7 +206,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sem
         models = Table(title="the models side by side: safety inside / after the assumptions, containment, price")
         for col in ("cell m", "traffic", "sensing", "model", "overtakes /km", "collisions in / after /1000 km",
                     "near misses in / after /1000 km", "breaches /1000 km", "re-plans on a breach",
-                    "moves sent back", "keep-lane",
+                    "moves finished, undone, sent back", "keep-lane",
                     "minimal-risk", "take-overs (after breach)", "waits without plan", "unsafe starts"):
             models.add_column(col, justify="right")
         for r in audit_rows:
@@ -204,7 +214,7 @@ def audit(cells: str, traffic_text: str, sensing_text: str, model_text: str, sem
                            figure(r.per_1000_km(r.overtakes) / 1000, 2),
                            r.inside_after("contact"), r.inside_after("near_miss"),
                            figure(r.per_1000_km(sum(r.breaches.values()))), str(r.breach_replans),
-                           str(r.reversed_moves), str(r.keep_lane_steps), str(r.minimal_risk_steps),
+                           moves(r), str(r.keep_lane_steps), str(r.minimal_risk_steps),
                            f"{r.takeovers} ({r.takeovers_after_breach})", str(r.waits_without_plan),
                            str(r.unsafe_starts))
         print_table(models, 4, "audit.md and audit.json")

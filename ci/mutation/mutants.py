@@ -146,6 +146,17 @@ MUTANTS: tuple[Mutant, ...] = (
            'since=self.boundary))', 'since=None))',
            "a kept escape starts from its own beginning wherever the reference stands, not where and when the proof "
            "has it after the steps since the last action ended"),
+    Mutant("driver-hand-over-forgets-the-move", "sim/driver/sound.py",
+           "scenario = self.moving(self.planner.scenario(readings, lane, pose.along_mps, view_m), moving_s)",
+           "scenario = self.planner.scenario(readings, lane, pose.along_mps, view_m)",
+           "a decision taken during a sideways move plans as if the AV were wholly in the lane it names: finishing "
+           "or undoing the move is proved without the time the AV still spends in both lanes"),
+    Mutant("executor-handed-move-jumps", "sim/executor.py",
+           "                self.sideways = Sideways(y_from, y_to, lateral_s, done_s) if handed is to_lane else \\\n"
+           "                    Sideways(y_ref, y_from, done_s, 0.0)\n",
+           "                self.sideways = None\n",
+           "a sideways move handed over is dropped: the lateral reference jumps to the lane's centre instead of going "
+           "on along the move the decision proved", ("tests/sim/test_physics.py",)),
     Mutant("fallback-reverse-ignores-oncoming", "sim/driver/fallback.py",
            "    return blocked and oncoming_leaves_time(a, speed_mps, done_s + RETURN_S)",
            "    return blocked",
@@ -212,6 +223,11 @@ MUTANTS: tuple[Mutant, ...] = (
            "return (Phase(0.0, stop_s, 0.0, low_mps, -brake_mps2),",
            "return (Phase(0.0, stop_s, 0.0, low_mps, -brake_mps2 / 2),",
            "a measured vehicle's least travel taken braking at half b_max: one braking hard is behind its bound"),
+    Mutant("sound-move-under-way-ignored", "spec/sound.py",
+           "            if self.move_s > 0:\n                segments = self._moving(segments, action is None)\n",
+           "",
+           "a sideways move under way at the start is not laid over the windows: the AV is proved as if wholly in "
+           "the lane it moves into from the first instant"),
     Mutant("sound-measured-ahead-never-brakes", "spec/sound.py",
            "for ph in (d.slowest if conflict is Conflict.AHEAD else d.fastest):",
            "for ph in (d.fastest if conflict is Conflict.AHEAD else d.fastest):",

@@ -81,6 +81,35 @@ def cosine_move(y_from_m: float, y_to_m: float, phase: float, seconds: float) ->
             (y_to_m - y_from_m) * math.pi * math.sin(math.pi * phase) / (2 * seconds))
 
 
+@dataclass(frozen=True, slots=True)
+class Sideways:
+    """A sideways move a decision took over mid-way (``Executor.acting``'s ``hand_over``): the lateral reference goes
+    on along a cosine from ``y_from_m`` to ``y_to_m`` over ``seconds``, ``done_s`` of it run, whatever the speed
+    reference does meanwhile. Finished, the original move goes on where it was; undone, it goes back on a cosine of
+    the time it had taken (``MinimalRisk``'s cut-short move)."""
+
+    y_from_m: float
+    y_to_m: float
+    seconds: float
+    done_s: float
+
+    @property
+    def left_s(self) -> float:
+        """How long it still keeps the AV moving sideways."""
+        return max(0.0, self.seconds - self.done_s)
+
+    def now(self) -> tuple[float, float]:
+        """The lateral reference and its rate where the move stands."""
+        return cosine_move(self.y_from_m, self.y_to_m, min(1.0, self.done_s / self.seconds), self.seconds)
+
+    def step(self, dt_s: float) -> tuple[float, float, Sideways | None]:
+        """One control step of it: the lateral reference and its rate, and what is left (None: it is over)."""
+        done_s = self.done_s + dt_s
+        phase = min(1.0, done_s / self.seconds)
+        y_m, vy_mps = cosine_move(self.y_from_m, self.y_to_m, phase, self.seconds)
+        return y_m, vy_mps, None if phase >= 1.0 - 1e-9 else Sideways(self.y_from_m, self.y_to_m, self.seconds, done_s)
+
+
 def resumed(action: Action, profile: SpeedProfile, due_s: float, ref_then_m: float, now_s: float,
             dt_s: float) -> tuple[float, float]:
     """A proved ``action`` resumed late: it was due at ``due_s`` with its position reference at ``ref_then_m``, and the

@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Protocol
 
-from sim.driver.control import Steps, lane_of
+from sim.driver.control import Sideways, Steps, lane_of
 from sim.driver.readings import Reading
 from spec.actions import Action
 from spec.answers import Answer
@@ -36,6 +36,7 @@ class Controls(Protocol):
     lane: Lane  # the lane the action under way started in
     lane_due: Lane | None  # the lane the car must be wholly in now (None: a sideways move under way)
     x_ref_m: float  # the position reference
+    sideways: Sideways | None  # a sideways move a decision took over mid-way, until it is over
 
     @property
     def v_ref_mps(self) -> float: ...
@@ -46,7 +47,8 @@ class Controls(Protocol):
     def reset_reference(self, ahead_m: float = 0.0) -> None: ...
 
     def acting(self, action: Action, profile: SpeedProfile | None = None, stop: Callable[[], bool] | None = None,
-               skip_s: float = 0.0, reverse: Callable[[Lane, float, float], bool] | None = None) -> Steps: ...
+               skip_s: float = 0.0, reverse: Callable[[Lane, float, float], bool] | None = None,
+               hand_over: Callable[[Lane, float, float], Lane | None] | None = None) -> Steps: ...
 
     def holding(self, seconds: float, speed_mps: float) -> Steps: ...
 
@@ -104,9 +106,10 @@ class Host(Protocol):
 
 def start_decision(host: Host) -> tuple[Odometry, Lane]:
     """What every decision does first: the car's pose, and the lane it is in, where the controller's next action
-    starts; the host hears that a decision is taken there."""
+    starts (during a sideways move a decision took over, the lane the move goes to); the host hears that a decision
+    is taken there."""
     pose = host.pose()
-    lane = lane_of(pose.y_m)
+    lane = host.executor.lane if host.executor.sideways is not None else lane_of(pose.y_m)
     host.executor.lane = lane
     host.decided(lane)
     return pose, lane

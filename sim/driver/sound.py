@@ -1,7 +1,8 @@
 """The sound model's driver (``SoundDriver``): a decision from the sensors' last sweep (its snapshot, its plan, what it
 chooses), the execution of a proved sequence (a committed part and its escape, or a whole plan) while the AV's own
-monitor holds, the last decision's proof kept when a decision proves nothing, a sideways move sent back once a breach
-ends its decision, and the fallback's take-over.
+monitor holds, the last decision's proof kept when a decision proves nothing, a decision taken during a sideways move
+once a breach ends the decision under way (finishing or undoing the move, proved), the move sent back by the
+fallback's rule when neither is, and the fallback's take-over.
 
 The driver holds what one decision leaves the next: the rest of the proved sequence, its reference's speed profiles
 and clock, whether it ends in an escape, the proof kept, whether a breach ends the decision under way. It reads and
@@ -12,6 +13,7 @@ without a physics engine. A decision is the control steps it yields (``sim.drive
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from functools import partial
 from typing import Generic, Protocol, TypeVar
 
@@ -23,9 +25,10 @@ from sim.driver.monitor import Monitor
 from sim.driver.nearest import Nearest
 from sim.driver.plan import Planner
 from sim.driver.readings import Reading, snapshot
-from spec.actions import Action
+from spec.actions import ACTION_RULES, Action
 from spec.answers import Answer, Status
 from spec.assumptions import Bounds
+from spec.envelope import MINIMAL_RISK
 from spec.errors import ScenarioError
 from spec.grid import Grid
 from spec.kinds import FailureKind
@@ -41,8 +44,12 @@ M = TypeVar("M", bound=Monitor)
 class Tally(Counts, Protocol):
     """The counters a sound decision adds to besides every decision's (``sim.summary.RunSummary``)."""
 
+    plan_ms: list[float]
     breach_replans: int
     reversed_moves: int
+    moves_finished: int
+    moves_undone: int
+    moves_unproved: int
     keep_lane_steps: int
     minimal_risk_steps: int
     committed_parts: int
@@ -94,6 +101,9 @@ class SoundDriver(Generic[M]):
         self.unsafe_before = False  # the last decision found its start breaking the safety specification
         self.enveloped = False  # a decision's action is under way: the AV is held to its envelope
         self.interrupt = False  # a breach asks the decision under way to end
+        #: what a decision taken during a sideways move chose (``hand_over``): it acts once the move is handed over
+        self.taken: Callable[[], Steps] | None = None
+        self._unproved_move = False  # this move's decisions during it have proved neither way (counted once)
         self._room = False  # whether the fallback opens the gap ahead (``room_needed``), and on which sweep
         self._room_sweep: tuple[Reading, ...] | None = None
         # what the fallback reads: the nearest vehicles sensed ahead and behind in the left lane, ahead in the oncoming
@@ -156,7 +166,7 @@ class SoundDriver(Generic[M]):
         self._watch(readings, pose.x_m, lane, view_m)
         h.check_snapshot()  # the snapshot itself: sensed farther off than the error bound, or unknown
         try:
-            scenario = self.planner.scenario(readings, lane, pose.along_mps, view_m)
+            scenario = self.moving(self.planner.scenario(readings, lane, pose.along_mps, view_m))
         except ScenarioError as err:
             h.fail(FailureKind.SENSING, err.reason, str(err))
             return (yield from self.fallback(f"sensing: {err.reason}"))
@@ -166,6 +176,15 @@ class SoundDriver(Generic[M]):
         if not (yield from self.while_planning()):
             return False
         return (yield from act())
+
+    def moving(self, scenario: Scenario, left_s: float | None = None) -> Scenario:
+        """``scenario`` with the sideways move under way stated (``Sound.sideways_s``): ``left_s`` of it, or what is
+        left of the one a decision took over (``Controls.sideways``); unchanged without one."""
+        if left_s is None:
+            left_s = 0.0 if self.host.executor.sideways is None else self.host.executor.sideways.left_s
+        if not left_s or scenario.sound is None:
+            return scenario
+        return replace(scenario, sound=replace(scenario.sound, sideways_s=left_s))
 
     def choice(self, answer: Answer, scenario: Scenario, readings: tuple[Reading, ...],
                pose: Odometry) -> Callable[[], Steps]:
@@ -290,11 +309,15 @@ class SoundDriver(Generic[M]):
                 self.pending, self.pending_profiles = sequence[k + 1:], profiles[k + 1:]
                 since_s = h.summary.sim_time_s
                 reversed_before = h.summary.reversed_moves
+                self._unproved_move = False
                 ran = yield from ex.acting(action, profiles[k], stop=lambda: self.interrupt and h.swept(),
-                                           skip_s=skip_s if k == 0 else 0.0, reverse=self.reverses)
+                                           skip_s=skip_s if k == 0 else 0.0, reverse=self.reverses,
+                                           hand_over=self.hand_over)
                 h.traced(k + 1, action, since_s)
                 if not ran:
                     return False
+                if self.taken is not None:  # a move handed over is no action done: the decision taken acts
+                    break
                 if h.summary.reversed_moves == reversed_before:  # a move sent back is no action done
                     h.summary.actions += 1
                     self.boundary = (h.summary.sim_time_s, ex.x_ref_m)
@@ -305,10 +328,60 @@ class SoundDriver(Generic[M]):
                     return True
         finally:
             self.enveloped = False
+        if self.taken is not None:
+            taken, self.taken = self.taken, None
+            h.summary.breach_replans += 1
+            if not (yield from self.while_planning()):
+                return False
+            return (yield from taken())
         if not self.interrupt:
             return True
         h.summary.breach_replans += 1
         return True
+
+    def hand_over(self, to_lane: Lane, done_s: float, left_s: float) -> Lane | None:
+        """A decision taken during a sideways move (``done_s`` of it done, ``left_s`` left) once a breach has ended
+        the decision under way, on a sweep: a plan proved from the snapshot with the move under way, finishing it
+        (into ``to_lane``, for what is left of it) or undoing it (back, for as long as it has taken: only within
+        ``MinimalRisk.reverse_within_s``, where the executor's move back is measured), in that order. The lane it
+        goes to (the move's rest is the executor's, ``Controls.sideways``; the plan acts after the planner's
+        time), or None: neither is proved, and the fallback's rule decides (``reverses``, counted)."""
+        h = self.host
+        if not (self.interrupt and h.swept()):
+            return None
+        pose = h.pose()
+        try:
+            readings = snapshot(h.sweep)
+        except ScenarioError:
+            return None
+        view_m = h.view_m(readings, pose.y_m)
+        back = Lane.LEFT if to_lane is Lane.RIGHT else Lane.RIGHT
+        ways = [(to_lane, left_s)] + ([(back, done_s)] if done_s <= MINIMAL_RISK.reverse_within_s + 1e-9 else [])
+        for lane, moving_s in ways:
+            try:
+                scenario = self.moving(self.planner.scenario(readings, lane, pose.along_mps, view_m), moving_s)
+            except ScenarioError:
+                break
+            answer = self.planner.plan(scenario)
+            h.summary.plans += 1
+            h.summary.plan_ms.append(answer.elapsed_ms)
+            if answer.status is not Status.PLAN or (answer.actions and ACTION_RULES[answer.actions[0]].changes_lane):
+                continue
+            h.decided(lane)
+            self._watch(readings, pose.x_m, lane, view_m)
+            h.sight(readings, pose.x_m)
+            finished = lane is to_lane
+            h.summary.moves_finished += int(finished)
+            h.summary.moves_undone += int(not finished)
+            escape = answer.commit.escape if answer.commit is not None else None
+            h.summary.committed_parts += int(escape is not None)
+            self.taken = partial(self.execute, answer.actions, pose.along_mps,
+                                 f"plan {h.summary.plans} (the move {'finished' if finished else 'undone'})",
+                                 escape=escape.actions if escape else ())
+            return lane
+        h.summary.moves_unproved += int(not self._unproved_move)
+        self._unproved_move = True
+        return None
 
     def reverses(self, to_lane: Lane, done_s: float, left_s: float) -> bool:
         """Whether the sideways move under way goes back to the lane it left: only once a breach (sensed, or of the
@@ -330,7 +403,7 @@ class SoundDriver(Generic[M]):
         back to the left lane from the right one, then brake in lane to the hold speed, and down to the sensed
         vehicle ahead's speed while it is nearer than the safety specification allows (``brake_in_lane``)."""
         h, ex = self.host, self.host.executor
-        lane = lane_of(h.pose().y_m)
+        lane = ex.lane if ex.sideways is not None else lane_of(h.pose().y_m)
         h.take_over(cause, lane)
         h.doing = f"fallback ({cause})"
         since_s = h.summary.sim_time_s
@@ -373,7 +446,8 @@ class SoundDriver(Generic[M]):
             return self._room
         self._room_sweep, self._room = sweep, False
         try:
-            scenario = self.planner.scenario(sweep, h.executor.lane, speed_mps, h.view_m(sweep, h.pose().y_m))
+            scenario = self.moving(self.planner.scenario(sweep, h.executor.lane, speed_mps,
+                                                         h.view_m(sweep, h.pose().y_m)))
         except ScenarioError:
             return False
         self._room = keep_lane(problem_for(scenario, ModelKind.FINAL)) is None

@@ -20,9 +20,9 @@ from spec.errors import OptionError
 from spec.escapes import Semantics
 from spec.motion import SpeedProfile, action_speed_mps, plan_profiles
 
-#: The paper's world with noisy sensing, seed 4: within its first 3 km a committed part is followed by a decision
+#: The paper's world with noisy sensing, seed 33: within its first 3 km a committed part is followed by a decision
 #: that proves nothing, and the rest of the committed part and its escape are kept.
-SEED = 35
+SEED = 33
 KEPT = DriveConfig(3.0, model="sound", sensor="noisy", semantics=Semantics.COMMIT, restart_after_collision=True)
 
 
@@ -156,13 +156,13 @@ def test_the_loops_semantics_is_part_of_a_drives_configuration_and_bad_input_nam
 
 
 def test_a_start_that_breaks_the_specification_is_left_not_held() -> None:
-    """The paper's world, exact sensing, seed 28: a start that breaks the specification is rare (2 in 7 km) and
+    """The paper's world, exact sensing, seed 8: a start that breaks the specification is rare (2 in 7 km) and
     never held: the decision leaves it (``decide.choose``: where the last start broke it too and nothing of the last
     plan is left, the fallback opens the gap instead of the minimal-risk manoeuvre keeping it; tests/sim/driver), the
     AV overtakes on, and nothing is hit inside the assumptions."""
     from sim.simulator import run_drive
 
-    summary = run_drive(28, DriveConfig(7.0, model="sound"))
+    summary = run_drive(8, DriveConfig(7.0, model="sound"))
     assert 1 <= summary.unsafe_starts <= 3 and not summary.failures
     assert summary.takeovers and summary.overtakes > 20
     assert summary.safety.count("contact", True) == 0 and summary.safety.count("near_miss", True) == 0

@@ -7,6 +7,7 @@ import itertools
 import numpy as np
 import pytest
 
+from sim.driver.control import Sideways
 from sim.executor import Executor
 from sim.scene import Scene
 from sim.vehicle import KinematicCar, WheeledCar, first_contact
@@ -323,3 +324,93 @@ def test_the_emergency_brake_from_the_trigger_gap_stops_short_of_a_standing_vehi
     left_m = standing.x_m - car.pose().x_m - CAR.length_m
     predicted_m = trigger_gap_m - speed_mps * mr.reaction_s - speed_mps**2 / (2 * mr.emergency_decel_mps2)
     assert left_m > 0.0 and left_m == pytest.approx(predicted_m, abs=0.5)  # 1.66 m measured, 1.56 m predicted
+
+
+@pytest.mark.parametrize("start_mps", [3.5, 14.0])
+@pytest.mark.parametrize("done_share", [0.1, 0.25, 0.75])
+@pytest.mark.parametrize("action", [Action.RIGHT_LANE_CHANGE, Action.LEFT_LANE_CHANGE])
+def test_a_move_handed_over_and_finished_keeps_the_original_moves_envelope(world, start_mps: float,
+                                                                           done_share: float, action: Action) -> None:
+    """A sideways move a decision takes over mid-way and finishes (``hand_over``; the next decision's action in lane
+    speeds up on its ramp from the speed the AV has): the lateral reference goes on along the original cosine, the
+    action ends there with the AV in the lane the move goes to, and by the move's original end
+    (``TRACKING.lateral_s``: what the sound model's windows hold a move under way to) its body is clear of the lane it
+    left, on the road, near its lane's centre after. Speeding up while turned from 3.5 m/s can carry the body past
+    its lane's outer line (measured: 0.21 m, a move into the left lane handed over 0.5 s in), away from every lane."""
+    scene, car, executor = world
+    if action is Action.LEFT_LANE_CHANGE:
+        executor.hold(1.0, COMMON_MPS, no_traffic)
+        assert executor.run(Action.RIGHT_LANE_CHANGE, no_traffic)
+    settle(executor, start_mps)
+    to_lane = ACTION_RULES[action].to_lane
+    done_s = done_share * LOOP.lane_change_lateral_s
+    ys: list[float] = []
+
+    def record(_dt: float) -> bool:
+        ys.append(car.pose().y_m)
+        return True
+
+    def hand_over(to: Lane, done: float, left: float) -> Lane | None:
+        return to if done >= done_s - 1e-9 else None
+
+    [own] = plan_profiles((action,), start_mps, PAPER_GRID, to_common=False)
+    assert executor.run(action, record, own, hand_over=hand_over)
+    moved = len(ys)
+    assert executor.lane is to_lane and executor.lane_due is None and executor.sideways is not None
+    assert executor.sideways.left_s == pytest.approx(LOOP.lane_change_lateral_s - moved * executor.dt_s)
+    # the rest of the move goes on under the next decision's action, on its ramp from the speed the AV has
+    [profile] = plan_profiles((Action.ACCELERATE,), car.pose().along_mps, PAPER_GRID, to_common=False)
+    assert executor.run(Action.ACCELERATE, record, profile)
+    executor.hold(5.0, executor.v_ref_mps, record)
+    end = round(TRACKING.lateral_s / executor.dt_s)
+    assert executor.sideways is None and executor.lane_due is to_lane
+    centre, side = scene.lane_y(to_lane), 1.0 if to_lane is Lane.LEFT else -1.0
+    assert all(side * y >= CAR.width_m / 2 for y in ys[end:])  # clear of the lane it left (the centre line at 0)
+    assert all(lost_control(y, 0.0) is None for y in ys) and abs(ys[-1] - centre) < 0.3
+
+
+@pytest.mark.parametrize("start_mps", [3.5, 14.0])
+@pytest.mark.parametrize("share", [0.2, 1.0])
+@pytest.mark.parametrize("action", [Action.RIGHT_LANE_CHANGE, Action.LEFT_LANE_CHANGE])
+def test_a_move_handed_over_and_undone_goes_back_wholly_into_its_lane_as_long_as_it_had_taken(
+        world, start_mps: float, share: float, action: Action) -> None:
+    """Undone within ``MinimalRisk.reverse_within_s`` (``hand_over`` answering the lane left): back on a cosine of
+    the time the move had taken, under the next action, the car wholly in the lane it left from then on (what the
+    sound model's windows hold an undone move to: both lanes for as long as the move had taken)."""
+    scene, car, executor = world
+    if action is Action.LEFT_LANE_CHANGE:
+        executor.hold(1.0, COMMON_MPS, no_traffic)
+        assert executor.run(Action.RIGHT_LANE_CHANGE, no_traffic)
+    settle(executor, start_mps)
+    start_lane = executor.lane
+    done_s = share * MINIMAL_RISK.reverse_within_s
+    ys: list[float] = []
+
+    def record(_dt: float) -> bool:
+        ys.append(car.pose().y_m)
+        return True
+
+    def hand_over(to: Lane, done: float, left: float) -> Lane | None:
+        return start_lane if done >= done_s - 1e-9 else None
+
+    assert executor.run(action, record, SpeedProfile(start_mps, ()), hand_over=hand_over)
+    moved = len(ys)
+    assert executor.lane is start_lane and executor.sideways is not None
+    assert executor.run(Action.DRIVE, record)
+    executor.hold(3.0, start_mps, record)
+    assert executor.sideways is None and executor.lane_due is start_lane
+    centre, half = scene.lane_y(start_lane), (ROAD.lane_width_m - CAR.width_m) / 2
+    assert all(Executor.lane_of(y) is start_lane for y in ys)
+    assert all(abs(y - centre) <= half for y in ys[2 * moved - 1:])
+    assert abs(ys[-1] - centre) < 0.2
+
+
+def test_a_lane_change_begun_over_a_move_handed_over_starts_where_the_move_stands(world) -> None:
+    """No jump of the lateral reference: the lane change's cosine starts at the handed-over move's place."""
+    _, _, executor = world
+    settle(executor, COMMON_MPS)
+    executor.sideways = Sideways(1.75, -1.75, 2.0, 1.0)
+    executor.lane = Lane.RIGHT
+    steps = executor.acting(Action.LEFT_LANE_CHANGE)
+    _, y_ref, _ = next(steps)
+    assert executor.sideways is None and abs(y_ref - 0.0) < 0.01

@@ -5,7 +5,7 @@ the drive's clock advanced by the test's own world step; no physics engine."""
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from types import SimpleNamespace
 from typing import Any
 
@@ -13,20 +13,25 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from sim.driver.control import Command, Steps, perform, resumed
+from sim.driver.control import Command, Sideways, Steps, perform, resumed
 from sim.driver.fallback import Around, in_lane_hold_mps
 from sim.driver.monitor import Breach, BreachKind
 from sim.driver.readings import Reading
 from sim.driver.sound import SoundDriver
 from sim.summary import RunSummary
-from spec.actions import Action
+from spec.actions import ACTION_RULES, Action
+from spec.answers import Answer, Commit, Status, Strategy
 from spec.assumptions import PROFILES
 from spec.envelope import MINIMAL_RISK
 from spec.errors import ScenarioError
+from spec.escapes import ESCAPES
 from spec.grid import PAPER_GRID
 from spec.kinds import FailureKind
 from spec.lanes import Lane
+from spec.models import ModelKind
 from spec.motion import SpeedProfile, plan_profiles
+from spec.scenario import Scenario, make_scenario
+from spec.sound import Sound
 
 DT = 0.05  # the scripted controller's control step (s)
 STEPS = 4  # its control steps per action
@@ -43,13 +48,15 @@ class Controls:
         self.x_ref_m, self.v_ref_mps, self.dt_s = 0.0, 7.0, DT
         self.acted: list[tuple[Action, SpeedProfile | None, float]] = []  # each action asked: profile, skip_s
         self.resets = 0
+        self.sideways: Sideways | None = None
 
     def reset_reference(self, ahead_m: float = 0.0) -> None:
         self.resets += 1
         self.x_ref_m = ahead_m
 
     def acting(self, action: Action, profile: SpeedProfile | None = None, stop: Callable[[], bool] | None = None,
-               skip_s: float = 0.0, reverse: Callable[[Lane, float, float], bool] | None = None) -> Steps:
+               skip_s: float = 0.0, reverse: Callable[[Lane, float, float], bool] | None = None,
+               hand_over: Callable[[Lane, float, float], Lane | None] | None = None) -> Steps:
         self.acted.append((action, profile, skip_s))
         for _ in range(STEPS):
             self.x_ref_m += 1.0
@@ -337,3 +344,121 @@ def test_a_sweep_the_decisions_sets_cannot_explain_is_counted_and_ends_the_decis
     driver.on_sweep(1.0)
     assert host.summary.sensed_breaches == 1 and not driver.interrupt
     assert driver.around() == Around(driver.lead, None, driver.oncoming, True, BOUNDS)
+
+
+class Mover(Controls):
+    """The scripted controller, moving sideways too: a lane change's control steps are its sideways move, 0.5 s of it
+    each (``MOVE_S`` in ``STEPS``), and after each it asks ``hand_over`` then ``reverse`` as the executor does; a
+    move handed over goes on as ``sideways``, what a decision taken during it reads."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.sideways: Sideways | None = None
+        self.reversed = False
+
+    def acting(self, action: Action, profile: SpeedProfile | None = None, stop: Callable[[], bool] | None = None,
+               skip_s: float = 0.0, reverse: Callable[[Lane, float, float], bool] | None = None,
+               hand_over: Callable[[Lane, float, float], Lane | None] | None = None) -> Steps:
+        self.acted.append((action, profile, skip_s))
+        to_lane = ACTION_RULES[action].to_lane
+        for k in range(STEPS):
+            self.x_ref_m += 1.0
+            if not (yield 7.0, 1.75, 0.0):
+                return False
+            done_s = (k + 1) * MOVE_S / STEPS
+            if to_lane is not None and to_lane is not self.lane and done_s < MOVE_S:
+                handed = hand_over(to_lane, done_s, MOVE_S - done_s) if hand_over is not None else None
+                if handed is not None:
+                    self.sideways = Sideways(1.75, -1.75, MOVE_S, done_s) if handed is to_lane else \
+                        Sideways(0.0, 1.75, done_s, 0.0)
+                    self.lane = handed
+                    return True
+                if reverse is not None and reverse(to_lane, done_s, MOVE_S - done_s):
+                    self.reversed = True
+                    return True
+            if stop is not None and stop() and (to_lane is None or done_s >= MOVE_S):
+                break
+        self.lane = to_lane or self.lane
+        return True
+
+
+MOVE_S = 2.0  # the scripted sideways move
+
+
+class MovePlanner:
+    """A scripted planner: every snapshot the same scenario under the sound model; a plan of ``plan`` where the scenario
+    is ``proved_lane`` with a move under way, no plan anywhere else; each question remembered (lane, move left)."""
+
+    def __init__(self, proved_lane: Lane | None, plan: tuple[Action, ...] = (Action.DRIVE,)) -> None:
+        self.proved_lane, self.actions = proved_lane, plan
+        self.asked: list[tuple[Lane, float]] = []
+
+    def scenario(self, readings: tuple[Reading, ...], lane: Lane, speed_mps: float | None = None,
+                 oncoming_view_m: float | None = None) -> Scenario:
+        return replace(make_scenario(lane.value, [], [], 0), sound=Sound(BOUNDS, start_mps=speed_mps))
+
+    def plan(self, scenario: Scenario) -> Answer:
+        assert scenario.sound is not None
+        self.asked.append((scenario.lane, scenario.sound.sideways_s))
+        proved = scenario.lane is self.proved_lane and scenario.sound.sideways_s > 0
+        escape = next(e for e in ESCAPES if e.from_lane is scenario.lane)
+        return Answer(Status.PLAN if proved else Status.NO_PLAN, ModelKind.FINAL, "scripted", Strategy.SENSIBLE,
+                      self.actions if proved else (), (), 1, 0.5,
+                      commit=Commit(self.actions, escape) if proved else None)
+
+
+def _overtaking(planner: MovePlanner, breach_at: int) -> tuple[Host, SoundDriver[Any]]:
+    """A committed lane change out into the right lane, a breach sensed ``breach_at`` control steps into it."""
+    host = Host(executor=Mover(), breach_at=breach_at)
+    driver = driver_of(host, planner)
+    host.contain_from((), 0.0, Lane.LEFT)
+    host.next_monitor = Monitor()  # the sets of a decision taken during the move: its own
+    assert perform(driver.execute((Action.RIGHT_LANE_CHANGE,), 7.0, "plan 1"), host.step)
+    return host, driver
+
+
+def test_a_breach_during_a_sideways_move_hands_its_rest_to_a_plan_proved_from_the_move_under_way() -> None:
+    """#61 point 2: the decision the breach ends leaves a move under way; a decision from that sweep proves a plan
+    with the move stated (the lane it goes to, what is left of it), takes the move over there and acts after the
+    planner's time, under its own sets; nothing is sent back by the fallback's rule."""
+    planner = MovePlanner(Lane.RIGHT)
+    host, _ = _overtaking(planner, breach_at=2)
+    assert planner.asked == [(Lane.RIGHT, MOVE_S - 2 * MOVE_S / STEPS)]  # finishing, proved: asked first
+    mover = host.executor
+    assert isinstance(mover, Mover) and mover.lane is Lane.RIGHT and not mover.reversed
+    assert mover.sideways == Sideways(1.75, -1.75, MOVE_S, 2 * MOVE_S / STEPS)
+    assert [a for a, _, _ in mover.acted] == [Action.RIGHT_LANE_CHANGE, Action.DRIVE]
+    assert host.summary.moves_finished == 1 and host.summary.moves_undone == 0 and host.summary.reversed_moves == 0
+    assert host.summary.breach_replans == 1 and host.summary.plans == 1 and host.summary.actions == 1
+    assert host.reported("decided") == [(Lane.RIGHT,)] and host.containment is host.next_monitor
+    assert len(host.commands) == 2 + 1 + STEPS  # the move to the breach, the planner's time, the plan's action
+
+
+@pytest.mark.parametrize(("breach_at", "undone"), [(1, True), (2, False)])
+def test_a_move_is_undone_only_within_the_first_quarter_where_the_move_back_is_measured(breach_at: int,
+                                                                                         undone: bool) -> None:
+    """Finishing unproved: undoing is asked (back into the lane left, for as long as the move had taken) only up to
+    ``MinimalRisk.reverse_within_s`` into it; past that, with neither proved, the fallback's rule decides, counted
+    once per move however many sweeps ask."""
+    planner = MovePlanner(Lane.LEFT)
+    host, _ = _overtaking(planner, breach_at=breach_at)
+    done_s = breach_at * MOVE_S / STEPS
+    assert done_s <= MINIMAL_RISK.reverse_within_s + 1e-9 or not undone
+    assert planner.asked[:2] == [(Lane.RIGHT, MOVE_S - done_s)] + ([(Lane.LEFT, done_s)] if undone else [
+        (Lane.RIGHT, MOVE_S - done_s - MOVE_S / STEPS)])
+    assert host.summary.moves_undone == int(undone) and host.summary.moves_finished == 0
+    assert host.summary.moves_unproved == int(not undone)
+    assert isinstance(host.executor, Mover) and (host.executor.sideways is not None) == undone
+
+
+def test_a_decision_during_a_move_taken_over_plans_with_what_is_left_of_it() -> None:
+    host = Host(executor=Mover())
+    driver = driver_of(host, MovePlanner(None))
+    host.executor.sideways = Sideways(1.75, -1.75, MOVE_S, 1.5)  # type: ignore[attr-defined]
+    host.executor.lane = Lane.RIGHT
+    scenario = driver.moving(MovePlanner(None).scenario((), Lane.RIGHT, 7.0))
+    assert scenario.sound is not None and scenario.sound.sideways_s == pytest.approx(0.5)
+    still = MovePlanner(None).scenario((), Lane.RIGHT, 7.0)
+    assert driver.moving(still, 0.25).sound.sideways_s == 0.25  # type: ignore[union-attr]
+    host.executor.sideways = None  # type: ignore[attr-defined]
+    assert driver.moving(still) is still
