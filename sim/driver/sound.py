@@ -343,7 +343,8 @@ class SoundDriver(Generic[M]):
         """A decision taken during a sideways move (``done_s`` of it done, ``left_s`` left) once a breach has ended
         the decision under way, on a sweep: a plan proved from the snapshot with the move under way, finishing it
         (into ``to_lane``, for what is left of it) or undoing it (back, for as long as it has taken: only within
-        ``MinimalRisk.reverse_within_s``, where the executor's move back is measured), in that order. The lane it
+        ``MinimalRisk.reverse_within_s``, where the executor's move back is measured), in that order; a plan with no
+        action left to take (the goal holds) takes a safe step in lane, proved with the move too. The lane it
         goes to (the move's rest is the executor's, ``Controls.sideways``; the plan acts after the planner's
         time), or None: neither is proved, and the fallback's rule decides (``reverses``, counted)."""
         h = self.host
@@ -367,15 +368,22 @@ class SoundDriver(Generic[M]):
             h.summary.plan_ms.append(answer.elapsed_ms)
             if answer.status is not Status.PLAN or (answer.actions and ACTION_RULES[answer.actions[0]].changes_lane):
                 continue
+            escape = answer.commit.escape if answer.commit is not None else None
+            actions = answer.actions
+            if not actions:  # the goal holds already: a safe step in lane, as a decision's plan without actions takes
+                step = keep_lane(problem_for(scenario, ModelKind.FINAL))
+                if step is None:
+                    continue
+                actions, escape = (step,), None
+                h.summary.keep_lane_steps += 1
             h.decided(lane)
             self._watch(readings, pose.x_m, lane, view_m)
             h.sight(readings, pose.x_m)
             finished = lane is to_lane
             h.summary.moves_finished += int(finished)
             h.summary.moves_undone += int(not finished)
-            escape = answer.commit.escape if answer.commit is not None else None
             h.summary.committed_parts += int(escape is not None)
-            self.taken = partial(self.execute, answer.actions, pose.along_mps,
+            self.taken = partial(self.execute, actions, pose.along_mps,
                                  f"plan {h.summary.plans} (the move {'finished' if finished else 'undone'})",
                                  escape=escape.actions if escape else ())
             return lane

@@ -462,3 +462,18 @@ def test_a_decision_during_a_move_taken_over_plans_with_what_is_left_of_it() -> 
     assert driver.moving(still, 0.25).sound.sideways_s == 0.25  # type: ignore[union-attr]
     host.executor.sideways = None  # type: ignore[attr-defined]
     assert driver.moving(still) is still
+
+
+def test_a_decision_during_a_move_whose_goal_already_holds_takes_a_safe_step_in_lane_proved_with_the_move() -> None:
+    """A plan without actions (the goal holds at the start) leaves nothing to execute: the decision takes the step in
+    lane a decision without a plan takes (``oracle.sound.keep_lane``), on the scenario with the move stated."""
+    host = Host(executor=Mover(), breach_at=2)
+    driver = driver_of(host, MovePlanner(Lane.LEFT, plan=()))
+    host.executor.lane = Lane.RIGHT  # on the way back into the left lane, on an empty road
+    host.contain_from((), 0.0, Lane.RIGHT)
+    host.next_monitor = Monitor()
+    assert perform(driver.execute((Action.LEFT_LANE_CHANGE,), 7.0, "plan 1"), host.step)
+    mover = host.executor
+    assert isinstance(mover, Mover) and mover.lane is Lane.LEFT and mover.sideways is not None
+    assert [a for a, _, _ in mover.acted] == [Action.LEFT_LANE_CHANGE, Action.DRIVE]
+    assert host.summary.moves_finished == 1 and host.summary.keep_lane_steps == 1
