@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 from spec.actions import ACTION_RULES, Action
 from spec.constants import MAX_HORIZON
+from spec.envelope import MINIMAL_RISK
 from spec.errors import OptionError, parse_choice
 from spec.lanes import Lane
 
@@ -120,6 +121,26 @@ def unsafe_start_escape(lane: Lane) -> Escape:
     ahead from the first instant; in the right lane leaving it at once ends every oncoming conflict soonest. Nothing
     is proved from such a start."""
     return next(e for e in ESCAPES if e.from_lane is lane)
+
+
+class MoveWay(enum.Enum):
+    """How a decision taken during a lane change's sideways move (a breach sensed during it) may take the move."""
+
+    FINISH = "finish"  # on into the lane it goes to, for what is left of it
+    UNDO = "undo"  # back into the lane it left, on a cosine of the time it has taken (``MinimalRisk``'s move back)
+
+
+def move_ways(to_lane: Lane, done_s: float, left_s: float) -> tuple[tuple[MoveWay, Lane, float], ...]:
+    """The ways a decision taken ``done_s`` into a sideways move towards ``to_lane`` (``left_s`` left) proves, in the
+    order they are tried, each with the lane its start is in and how long the move keeps the AV in both lanes from
+    it (``spec.sound.Sound.sideways_s``): finishing it, then undoing it, only within ``MinimalRisk.reverse_within_s``
+    (where the executor's move back is measured: from half-way a car at 3.5 m/s runs on into the other lane before
+    it turns back)."""
+    back = Lane.LEFT if to_lane is Lane.RIGHT else Lane.RIGHT
+    ways = [(MoveWay.FINISH, to_lane, left_s)]
+    if done_s <= MINIMAL_RISK.reverse_within_s + 1e-9:
+        ways.append((MoveWay.UNDO, back, done_s))
+    return tuple(ways)
 
 
 ALL_KINDS = tuple(EscapeKind)

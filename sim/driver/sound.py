@@ -28,8 +28,8 @@ from sim.driver.readings import Reading, snapshot
 from spec.actions import ACTION_RULES, Action
 from spec.answers import Answer, Status
 from spec.assumptions import Bounds
-from spec.envelope import MINIMAL_RISK
 from spec.errors import ScenarioError
+from spec.escapes import MoveWay, move_ways
 from spec.grid import Grid
 from spec.kinds import FailureKind
 from spec.lanes import Lane
@@ -341,10 +341,9 @@ class SoundDriver(Generic[M]):
 
     def hand_over(self, to_lane: Lane, done_s: float, left_s: float) -> Lane | None:
         """A decision taken during a sideways move (``done_s`` of it done, ``left_s`` left) once a breach has ended
-        the decision under way, on a sweep: a plan proved from the snapshot with the move under way, finishing it
-        (into ``to_lane``, for what is left of it) or undoing it (back, for as long as it has taken: only within
-        ``MinimalRisk.reverse_within_s``, where the executor's move back is measured), in that order; a plan with no
-        action left to take (the goal holds) takes a safe step in lane, proved with the move too. The lane it
+        the decision under way, on a sweep: a plan proved from the snapshot with the move under way, each way in the
+        order ``spec.escapes.move_ways`` states (finishing it into ``to_lane``, undoing it early enough); a plan with
+        no action left to take (the goal holds) takes a safe step in lane, proved with the move too. The lane it
         goes to (the move's rest is the executor's, ``Controls.sideways``; the plan acts after the planner's
         time), or None: neither is proved, and the fallback's rule decides (``reverses``, counted)."""
         h = self.host
@@ -356,9 +355,7 @@ class SoundDriver(Generic[M]):
         except ScenarioError:
             return None
         view_m = h.view_m(readings, pose.y_m)
-        back = Lane.LEFT if to_lane is Lane.RIGHT else Lane.RIGHT
-        ways = [(to_lane, left_s)] + ([(back, done_s)] if done_s <= MINIMAL_RISK.reverse_within_s + 1e-9 else [])
-        for lane, moving_s in ways:
+        for way, lane, moving_s in move_ways(to_lane, done_s, left_s):
             try:
                 scenario = self.moving(self.planner.scenario(readings, lane, pose.along_mps, view_m), moving_s)
             except ScenarioError:
@@ -379,7 +376,7 @@ class SoundDriver(Generic[M]):
             h.decided(lane)
             self._watch(readings, pose.x_m, lane, view_m)
             h.sight(readings, pose.x_m)
-            finished = lane is to_lane
+            finished = way is MoveWay.FINISH
             h.summary.moves_finished += int(finished)
             h.summary.moves_undone += int(not finished)
             h.summary.committed_parts += int(escape is not None)

@@ -8,6 +8,7 @@ from dataclasses import replace
 import pytest
 
 from spec.actions import ACTION_RULES, Action
+from spec.envelope import MINIMAL_RISK
 from spec.errors import OptionError
 from spec.escapes import (
     COMMIT,
@@ -15,12 +16,15 @@ from spec.escapes import (
     Commitment,
     Escape,
     EscapeKind,
+    MoveWay,
     check_escapes,
+    move_ways,
     parse_escape_kinds,
     parse_most_actions,
     unsafe_start_escape,
 )
 from spec.lanes import Lane
+from spec.physical import LOOP
 from spec.sound import sound_from, sound_from_table, sound_to_table
 
 
@@ -93,3 +97,15 @@ def test_a_commitment_option_with_whole_plans_names_the_option() -> None:
     with pytest.raises(OptionError, match=r"bounds\.commit_max"):
         sound_from_table({"semantics": "whole", "commit_max": 2})
     assert replace(sound_from(None, "paper"), commitment=None) == sound_from(None, "paper", semantics="whole")
+
+
+@pytest.mark.parametrize("to_lane", list(Lane))
+def test_a_move_under_way_is_finished_first_and_undone_only_within_its_first_quarter(to_lane: Lane) -> None:
+    """``move_ways``: finishing (the lane it goes to, what is left of the move), then undoing (the lane it left, as
+    long as the move has taken) up to ``MinimalRisk.reverse_within_s`` and not a control step after."""
+    within = MINIMAL_RISK.reverse_within_s
+    back = Lane.LEFT if to_lane is Lane.RIGHT else Lane.RIGHT
+    assert move_ways(to_lane, within, 2.0 - within) == ((MoveWay.FINISH, to_lane, 2.0 - within),
+                                                        (MoveWay.UNDO, back, within))
+    late = within + LOOP.physics_dt_s * LOOP.control_every_steps
+    assert move_ways(to_lane, late, 2.0 - late) == ((MoveWay.FINISH, to_lane, 2.0 - late),)
