@@ -737,9 +737,11 @@ class SoundRules:
 
     def start_segment(self) -> Segment:
         """The start, an instant: in the scenario's lane, or in both while a sideways move is under way; a start in
-        the left lane (or moving into it) holds every vehicle of it ahead or a follower (``_check_entering``)."""
-        lanes = frozenset(Lane) if self.move_s > 0 else frozenset({self.lane})
-        return Segment(0.0, 0.0, lanes, self.lane is Lane.LEFT, at_start=True)
+        the left lane, or partly in it during a move either way, holds every vehicle of it clear ahead or a follower
+        (``_check_entering``): none beside the AV."""
+        moving = self.move_s > 0
+        lanes = frozenset(Lane) if moving else frozenset({self.lane})
+        return Segment(0.0, 0.0, lanes, self.lane is Lane.LEFT or moving, at_start=True)
 
     def _moving(self, segments: list[Segment], continuation: bool) -> list[Segment]:
         """``segments`` with the sideways move under way at the start laid over them: until ``move_s`` the AV is in

@@ -27,7 +27,7 @@ from spec.library import BUILTINS
 from spec.models import ModelKind
 from spec.physical import LOOP, SENSORS
 from spec.scenario import Problem, Scenario, make_scenario, problem_for, sensed
-from spec.sound import Sound, sensed_extents
+from spec.sound import Sound, SoundRules, SoundState, sensed_extents
 from tests.conftest import CI_PROFILE, scenarios
 
 #: Plan/motion pairs the campaign below drives: the issue's 10,000 in CI's profile.
@@ -410,3 +410,17 @@ def test_what_the_snapshot_measured_lets_the_av_start_where_its_cells_do_not() -
     assert measured.left_m is not None
     for strategy in (Strategy.SENSIBLE, Strategy.SHORTEST):
         assert _check(measured, strategy, 40, random.Random(7)) > 40  # a plan, driven by the corners and 40 more
+
+
+def test_a_start_partly_in_the_left_lane_with_a_vehicle_beside_the_av_is_unsafe() -> None:
+    """Moving out into the right lane (``Sound.sideways_s``), the AV is still partly in the left lane: a vehicle of
+    that lane beside it is neither clear ahead nor a follower (a hypothesis draw of the move property, a vehicle in
+    the AV's own cell, planned on before the start held it)."""
+    bounds = Bounds("drawn", SpeedBounds(7.0, 7.0), SpeedBounds(7.0, 7.0), 0.0, False, "drawn by the test", False)
+    beside = replace(make_scenario("right", [0, 10], [], 0, horizon=3), sound=Sound(bounds, sideways_s=0.5))
+    found = plan(beside, Strategy.SHORTEST)
+    assert found.status is Status.NO_PLAN and "left_lane[1] (cell 10) at t = 0.00 s" in found.detail
+    start = SoundState(Lane.RIGHT, 0, 0, 0, 0, None, None)
+    assert SoundRules(Sound(bounds, sideways_s=0.5), Lane.RIGHT, (0, 10), (), PAPER_GRID, ()).start_violation(
+        start) is not None
+    assert SoundRules(Sound(bounds), Lane.RIGHT, (0, 10), (), PAPER_GRID, ()).start_violation(start) is None
