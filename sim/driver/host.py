@@ -104,12 +104,18 @@ class Host(Protocol):
     def kept(self, kind: FailureKind, cause: str, detail: str) -> None: ...  # a plan under way kept without a plan
 
 
+def lane_now(executor: Controls, pose: Odometry) -> Lane:
+    """The lane the AV is in for a decision: the one its centre is in, or during a sideways move a decision took
+    over, the lane the move goes to."""
+    return executor.lane if executor.sideways is not None else lane_of(pose.y_m)
+
+
 def start_decision(host: Host) -> tuple[Odometry, Lane]:
     """What every decision does first: the car's pose, and the lane it is in, where the controller's next action
     starts (during a sideways move a decision took over, the lane the move goes to); the host hears that a decision
     is taken there."""
     pose = host.pose()
-    lane = host.executor.lane if host.executor.sideways is not None else lane_of(pose.y_m)
+    lane = lane_now(host.executor, pose)
     host.executor.lane = lane
     host.decided(lane)
     return pose, lane

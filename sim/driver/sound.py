@@ -19,8 +19,8 @@ from typing import Generic, Protocol, TypeVar
 
 from oracle.sound import keep_lane
 from sim.driver import decide, fallback, takeover
-from sim.driver.control import Steps, lane_of, lane_y, resumed
-from sim.driver.host import Counts, Host, Odometry, start_decision
+from sim.driver.control import Steps, lane_y, resumed
+from sim.driver.host import Counts, Host, Odometry, lane_now, start_decision
 from sim.driver.monitor import Monitor
 from sim.driver.nearest import Nearest
 from sim.driver.plan import Planner
@@ -408,7 +408,7 @@ class SoundDriver(Generic[M]):
         back to the left lane from the right one, then brake in lane to the hold speed, and down to the sensed
         vehicle ahead's speed while it is nearer than the safety specification allows (``brake_in_lane``)."""
         h, ex = self.host, self.host.executor
-        lane = ex.lane if ex.sideways is not None else lane_of(h.pose().y_m)
+        lane = lane_now(ex, h.pose())
         h.take_over(cause, lane)
         h.doing = f"fallback ({cause})"
         since_s = h.summary.sim_time_s
