@@ -104,10 +104,9 @@ class Sideways:
 
     def step(self, dt_s: float) -> tuple[float, float, Sideways | None]:
         """One control step of it: the lateral reference and its rate, and what is left (None: it is over)."""
-        done_s = self.done_s + dt_s
-        phase = min(1.0, done_s / self.seconds)
-        y_m, vy_mps = cosine_move(self.y_from_m, self.y_to_m, phase, self.seconds)
-        return y_m, vy_mps, None if phase >= 1.0 - 1e-9 else Sideways(self.y_from_m, self.y_to_m, self.seconds, done_s)
+        later = Sideways(self.y_from_m, self.y_to_m, self.seconds, self.done_s + dt_s)
+        y_m, vy_mps = later.now()
+        return y_m, vy_mps, None if later.done_s >= self.seconds * (1.0 - 1e-9) else later
 
 
 def resumed(action: Action, profile: SpeedProfile, due_s: float, ref_then_m: float, now_s: float,
