@@ -134,11 +134,12 @@ class MinimalRisk:
       of a vehicle it is passing (``sim.driver.nearest.pass_first_s``).
     - **In lane**, it brakes at ``decel_mps2`` to the hold speed (``fallback_hold_mps``) and, while the sensed
       vehicle ahead is nearer than the specification allows at the closing speed (``fallback_closing_mps``), at
-      ``emergency_decel_mps2`` down to that vehicle's speed (a standstill when it is not known), and on below it
-      while the measured gap still closes (the car may run above its command). Where the gap ahead is within the
-      specification but a decision from the last sweep would find no safe step in lane, and it is the smaller of
-      the two gaps in the lane, it drives ``open_mps`` below the vehicle ahead while the vehicle behind stays
-      farther than the specification allows at that closing speed, towards the middle of its slot.
+      ``emergency_decel_mps2`` down to that vehicle's speed (a standstill when it is not known), never up (the
+      speed of a vehicle that does not close, above the command the car runs over, keeps the gap as near), and on
+      below it while the measured gap still closes (the car may run above its command). Where the gap ahead is
+      within the specification but a decision from the last sweep would find no safe step in lane, and it is the
+      smaller of the two gaps in the lane, it drives ``open_mps`` below the vehicle ahead while the vehicle behind
+      stays farther than the specification allows at that closing speed, towards the middle of its slot.
     - It holds for ``takeover_s``, then hands back to a new decision (which may take over again).
 
     One rule acts before a take-over, when a breach (sensed, or of the AV's own envelope) ends a sound decision

@@ -138,6 +138,11 @@ MUTANTS: tuple[Mutant, ...] = (
            "        closing = lead.closing_mps(hold_mps)\n        if lead.too_near_after(closing, 0.0):",
            "the fallback's emergency brake reads the closing speed on the vehicle ahead at the hold speed, not at the "
            "car's own: behind a vehicle slower than the hold speed it brakes on below that vehicle's speed"),
+    Mutant("fallback-emergency-brake-speeds-up", "sim/driver/fallback.py",
+           "target, decel = min(command_mps, max(0.0, speed_mps - closing)), mr.emergency_decel_mps2",
+           "target, decel = max(0.0, speed_mps - closing), mr.emergency_decel_mps2",
+           "the fallback's emergency brake takes the speed of a too-near vehicle that does not close as its target: "
+           "the car running above its command at the hold speed raises the command past it, and the gap stays"),
     Mutant("driver-breach-ends-no-committed-part", "sim/driver/sound.py",
            "stop=lambda: self.interrupt and h.swept(),", "stop=None,",
            "a breach the AV senses does not end the proved action under way: the decision runs on past it to the "

@@ -232,17 +232,19 @@ def brake_command(a: Around, speed_mps: float, command_mps: float, hold_mps: flo
     """One control step of braking in lane: towards ``hold_mps`` at ``MinimalRisk.decel_mps2``; with ``emergency``
     (the fallback) also up to it at ``accel_mps2``, and, while the sensed vehicle ahead is nearer than the safety
     specification allows at the closing speed at the car's own ``speed_mps`` (``Nearest.closing_mps``), down to that
-    vehicle's speed at the car's braking limit, and on below it while the measured gap still closes (the car may run
-    above its command); where the fallback may open the gap ahead (``may_open_gap``) and a decision at the hand-back
-    speed would find no safe step in lane (``room_needed``, asked only then), ``open_mps`` below the vehicle ahead's
-    speed."""
+    vehicle's speed at the car's braking limit, never up, and on below it while the measured gap still closes (the
+    car may run above its command); where the fallback may open the gap ahead (``may_open_gap``) and a decision at
+    the hand-back speed would find no safe step in lane (``room_needed``, asked only then), ``open_mps`` below the
+    vehicle ahead's speed."""
     mr = MINIMAL_RISK
     target, decel = hold_mps, mr.decel_mps2
     lead = a.lead
     if emergency and lead is not None:
         closing = lead.closing_mps(speed_mps)
         if lead.too_near_after(closing, 0.0):
-            target, decel = max(0.0, speed_mps - closing), mr.emergency_decel_mps2
+            # never up while it is too near: the command the car runs above, or the speed of a vehicle that does not
+            # close, would keep the gap as near as it is
+            target, decel = min(command_mps, max(0.0, speed_mps - closing)), mr.emergency_decel_mps2
             if (now_mps := lead.closing_now_mps(speed_mps)) is not None and now_mps > CLOSING_EPS_MPS:
                 target = min(target, max(0.0, command_mps - decel * dt_s))  # it still closes
         elif (lead_own_mps := lead.own_mps(speed_mps)) is not None and may_open_gap(a) and \

@@ -272,6 +272,20 @@ def test_the_emergency_brake_reads_the_closing_speed_at_the_cars_own_speed_not_t
     assert first == pytest.approx(6.0 - MINIMAL_RISK.emergency_decel_mps2 * DT_S)  # at the car's braking limit
 
 
+def test_the_emergency_brake_never_raises_its_command_while_the_vehicle_ahead_is_nearer_than_the_specification_allows(
+        ) -> None:
+    """The car at 6 m/s, above its command at the hold speed (4.9 m/s), 1 m behind a vehicle that does not close on
+    it: the gap breaks the specification, and the command stays where it is (taking the vehicle's speed as the target
+    raised it towards 6 m/s, past the hold speed, and kept the gap as near as it was); once the gap is wide enough the
+    fallback brakes on towards the hold speed as ever."""
+    hold = 4.9
+    near = around(Nearest(CAR.length_m + 1.0, 0.0, av_mps=6.0))
+    assert SAFETY.violated(1.0, 0.0)
+    assert fallback.brake_command(near, 6.0, hold, hold, True, never, DT_S) == pytest.approx(hold)
+    far = around(Nearest(CAR.length_m + 40.0, 0.0, av_mps=6.0))
+    assert fallback.brake_command(far, 6.0, hold, hold, True, never, DT_S) == pytest.approx(hold)
+
+
 def test_the_emergency_brake_brakes_for_a_standstill_when_the_vehicle_aheads_speed_is_not_measured() -> None:
     """Its speed not fitted yet (its first sweeps), the vehicle ahead too near may stand: the target is a standstill,
     whatever the hold speed; far enough, the hold speed, came back up to from below at ``accel_mps2``."""
