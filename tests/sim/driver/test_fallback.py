@@ -284,6 +284,8 @@ def test_the_emergency_brake_never_raises_its_command_while_the_vehicle_ahead_is
     assert fallback.brake_command(near, 6.0, hold, hold, True, never, DT_S) == pytest.approx(hold)
     far = around(Nearest(CAR.length_m + 40.0, 0.0, av_mps=6.0))
     assert fallback.brake_command(far, 6.0, hold, hold, True, never, DT_S) == pytest.approx(hold)
+    assert fallback.brake_command(far, 6.0, 6.0, hold, True, never, DT_S) == pytest.approx(
+        6.0 - MINIMAL_RISK.decel_mps2 * DT_S)  # on towards the hold speed
 
 
 def test_the_emergency_brake_brakes_for_a_standstill_when_the_vehicle_aheads_speed_is_not_measured() -> None:
