@@ -116,12 +116,12 @@ def full_words(grid: Grid, sound: Sound) -> int:
 
 
 def table_sound(problem: Problem) -> Sound:
-    """The sound model a verifier's table holds for ``problem``: its own, less the snapshot's view (the phantoms'
-    edges are read with the scenario)."""
+    """The sound model a verifier's table holds for ``problem``: its own, less the snapshot's view and where its
+    sensors stood (the phantoms' edges are read with the scenario)."""
     sound = problem.scenario.sound
     if sound is None:
         raise ValueError("the problem's scenario has no sound model")
-    return replace(sound, oncoming_view_m=None)
+    return replace(sound, oncoming_view_m=None, sensors_ahead_m=0.0)
 
 
 def shape_of(problem: Problem) -> SoundShape:

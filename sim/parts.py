@@ -19,7 +19,7 @@ import numpy as np
 
 from oracle.planner import plan
 from sim.driver.discretiser import discretise
-from sim.driver.readings import Reading
+from sim.driver.readings import Reading, seen_from
 from sim.observers import Observer
 from sim.scene import Scene
 from sim.sensors import NoisySensor, RaySensor, SensorModel
@@ -81,14 +81,17 @@ class Planner:
                               f"(the sound model is answered by: {able})")
 
     def scenario(self, readings: tuple[Reading, ...], lane: Lane, speed_mps: float | None = None,
-                 oncoming_view_m: float | None = None) -> Scenario:
+                 oncoming_view_m: float | None = None, sensors_ahead_m: float = 0.0) -> Scenario:
         """The snapshot as a scenario on this planner's grid (ScenarioError when it is inconsistent); under the
-        sound model, with the AV's measured speed as the plan's start and the oncoming phantom where the snapshot's
-        view of that lane ended (``sim.sensors.oncoming_view_m``; None: the sensor's range)."""
-        scenario = discretise(readings, lane, self.grid, measured=self.sound is not None)
+        sound model, with ``speed_mps`` as the plan's start, the oncoming phantom where the snapshot's view of that
+        lane ended (``sim.sensors.oncoming_view_m``; None: the sensor's range), and the plan's AV ``sensors_ahead_m``
+        behind the car the readings were taken from (``spec.sound.Sound.sensors_ahead_m``: the proved reference the
+        car runs on; 0, the car itself)."""
         if self.sound is None:
-            return scenario
-        return replace(scenario, sound=replace(self.sound, start_mps=speed_mps, oncoming_view_m=oncoming_view_m))
+            return discretise(readings, lane, self.grid)
+        scenario = discretise(seen_from(readings, sensors_ahead_m), lane, self.grid, measured=True)
+        return replace(scenario, sound=replace(self.sound, start_mps=speed_mps, oncoming_view_m=oncoming_view_m,
+                                               sensors_ahead_m=sensors_ahead_m))
 
     def plan(self, scenario: Scenario) -> Answer:
         return plan(scenario, self.strategy, engine=self.engine)

@@ -81,6 +81,9 @@ class RunSummary:
     committed_parts: int = 0  # sound decisions (commitment semantics) that executed a committed part with an escape
     escapes: int = 0  # sound decisions that proved nothing and kept the last one's rest and its proved escape
     unsafe_starts: int = 0  # sound decisions whose snapshot already broke the safety specification (no failure)
+    #: of the sound decisions whose start at the car broke it, those planned again from the proved reference the car
+    #: runs on (``SoundDriver.from_reference``); an unsafe start from there too is among ``unsafe_starts``
+    reference_starts: int = 0
     shadowed: int = 0  # sound decisions whose snapshot had the oncoming lane hidden behind a left-lane vehicle
     takeovers: list[Takeover] = field(default_factory=list)
     sweeps: int = 0  # the sensors' sweeps (``spec.physical.SENSORS.sweep_hz``)
@@ -148,7 +151,8 @@ class RunSummary:
                 "moves_unproved": self.moves_unproved, "sensed_breaches": self.sensed_breaches,
                 "unseen_breaches": self.unseen_breaches, "keep_lane_steps": self.keep_lane_steps,
                 "minimal_risk_steps": self.minimal_risk_steps, "committed_parts": self.committed_parts,
-                "escapes": self.escapes, "unsafe_starts": self.unsafe_starts, "shadowed": self.shadowed,
+                "escapes": self.escapes, "unsafe_starts": self.unsafe_starts,
+                "reference_starts": self.reference_starts, "shadowed": self.shadowed,
                 "takeovers": [asdict(t) for t in self.takeovers], "sweeps": self.sweeps, "faults": self.faults,
                 "refusals": self.refusals}
 
@@ -171,7 +175,7 @@ class RunSummary:
                    sensed_breaches=data.get("sensed_breaches", 0), unseen_breaches=data.get("unseen_breaches", 0),
                    keep_lane_steps=data.get("keep_lane_steps", 0), minimal_risk_steps=data.get("minimal_risk_steps", 0),
                    committed_parts=data.get("committed_parts", 0), escapes=data.get("escapes", 0),
-                   unsafe_starts=data.get("unsafe_starts", 0),
+                   unsafe_starts=data.get("unsafe_starts", 0), reference_starts=data.get("reference_starts", 0),
                    takeovers=[Takeover(**t) for t in data.get("takeovers", [])], sweeps=data.get("sweeps", 0),
                    refusals=data.get("refusals", 0), shadowed=data.get("shadowed", 0),
                    faults={k: dict(v) for k, v in data.get("faults", {}).items()})

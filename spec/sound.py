@@ -101,17 +101,26 @@ class Sound:
     #: one when that is the scenario's lane (``SoundRules.window``): what a decision taken during a move proves
     #: finishing the move (the lane it goes to) or undoing it (the lane it left) against
     sideways_s: float = 0.0
+    #: how far ahead of the AV's reference, where the plan starts, the car and its sensors stood at the snapshot, m
+    #: (negative: behind it; at most the envelope's position error either way). A plan made from the proved reference
+    #: the car runs on (``sim.driver.decide.plan_start``) reads its vehicles from there, and every phantom, at an edge
+    #: of what the sensors saw, stands that much farther ahead of the reference. 0: the plan starts at the car
+    sensors_ahead_m: float = 0.0
 
     def phantoms(self) -> tuple[Phantom, ...]:
         """The phantoms of this snapshot: the bounds' own, the oncoming one where the view of that lane ended; each
-        nearer by ``age_m`` (a vehicle beyond the view at the snapshot may have come that much closer by the plan's
-        start), never past the AV (an oncoming vehicle that has passed it is behind it, out of the plan's way)."""
-        age = self.age_m
+        moved by ``sensors_ahead_m`` (their edges are the sensors', the plan's AV is the reference) and nearer by
+        ``age_m`` (a vehicle beyond the view at the snapshot may have come that much closer by the plan's start), never
+        past the AV (an oncoming vehicle that has passed it is behind it, out of the plan's way)."""
+        age, ahead = self.age_m, self.sensors_ahead_m
         found = self.bounds.phantom_vehicles(self.oncoming_view_m)
-        if age == 0:
+        if age == 0 and ahead == 0:
             return found
-        return tuple(replace(p, dx_m=math.copysign(max(abs(p.dx_m) - age, PHANTOM_NEAREST_M), p.dx_m),
-                             why=f"{p.why}, aged {age:g} m") for p in found)
+        why = "".join(((f", the sensors {ahead:g} m ahead of the reference" if ahead else ""),
+                       (f", aged {age:g} m" if age else "")))
+        return tuple(replace(p, dx_m=math.copysign(max(abs(p.dx_m) + (ahead if p.dx_m > 0 else -ahead) - age,
+                                                       PHANTOM_NEAREST_M), p.dx_m), why=f"{p.why}{why}")
+                     for p in found)
 
     @property
     def closing_mps(self) -> float:
@@ -161,13 +170,15 @@ class Sound:
                 + ("" if self.overtaken is Overtaken.PHYSICS else
                    ", measured same-direction vehicles do not speed up while the AV is in the passing lane")
                 + (f", a sideways move under way at the start (both lanes for up to {self.sideways_s:g} s)"
-                   if self.sideways_s else ""))
+                   if self.sideways_s else "")
+                + (f", planned from the reference the car stood {self.sensors_ahead_m:g} m ahead of"
+                   if self.sensors_ahead_m else ""))
 
 
 #: The keys of a scenario file's ``bounds`` table (and the command line's options of the same names).
 BOUNDS_KEYS = ("profile", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
                "oncoming_view_m", "latency_s", "semantics", "commit_max", "escapes", "accel_mps2", "brake_mps2",
-               "overtaken", "sideways_s")
+               "overtaken", "sideways_s", "sensors_ahead_m")
 #: How near the AV an aged phantom may come (``Sound.phantoms``): never onto it (Spin reads a phantom at 0 as none).
 PHANTOM_NEAREST_M = 1e-3
 
@@ -177,7 +188,7 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
                where: str = "--", followers_react: bool | None = None, oncoming_view_m: object = None,
                latency_s: object = None, semantics: object = None, commit_max: object = None,
                escapes: object = None, accel_mps2: object = None, brake_mps2: object = None,
-               overtaken: object = None, sideways_s: object = None) -> Sound:
+               overtaken: object = None, sideways_s: object = None, sensors_ahead_m: object = None) -> Sound:
     """The sound model from a base (a file's, or None: the default profile, under the commitment semantics), a named
     profile and overrides of its numbers and semantics; every value is checked, and bad input names the option or
     key (``where`` + its name)."""
@@ -230,16 +241,26 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
     moving_s = base.sideways_s if base is not None else 0.0
     if sideways_s is not None:
         moving_s = check_sideways_s(key("sideways_s"), sideways_s, base.tracking if base is not None else TRACKING)
+    ahead_m = base.sensors_ahead_m if base is not None else 0.0
+    if sensors_ahead_m is not None:
+        ahead_m = check_sensors_ahead_m(key("sensors_ahead_m"), sensors_ahead_m,
+                                        base.tracking if base is not None else TRACKING)
     if base is None:
         return Sound(bounds, start_mps=start, oncoming_view_m=view, commitment=commitment, speed_change=change,
-                     overtaken=behaves, sideways_s=moving_s)
+                     overtaken=behaves, sideways_s=moving_s, sensors_ahead_m=ahead_m)
     return replace(base, bounds=bounds, start_mps=start, oncoming_view_m=view, commitment=commitment,
-                   speed_change=change, overtaken=behaves, sideways_s=moving_s)
+                   speed_change=change, overtaken=behaves, sideways_s=moving_s, sensors_ahead_m=ahead_m)
 
 
 def check_sideways_s(where: str, value: object, tracking: Tracking = TRACKING) -> float:
     """A sideways move's time left at the snapshot: from 0 (none) to the whole move, ``Tracking.lateral_s``."""
     return check_number(where, value, high=tracking.lateral_s)
+
+
+def check_sensors_ahead_m(where: str, value: object, tracking: Tracking = TRACKING) -> float:
+    """How far the sensors stood ahead of the plan's reference: within the envelope's position error either way
+    (a car farther off its reference is planned from where it is)."""
+    return check_number(where, value, low=-tracking.position_m, high=tracking.position_m)
 
 
 def _rates(change: SpeedChange) -> tuple[float, float]:
@@ -297,7 +318,8 @@ def sound_from_table(table: object, where: str = "bounds") -> Sound:
                       table.get("sensing_error_m"), table.get("phantoms"), table.get("av_speed_mps"), f"{where}.",
                       table.get("followers_react"), table.get("oncoming_view_m"), table.get("latency_s"),
                       table.get("semantics"), table.get("commit_max"), table.get("escapes"), table.get("accel_mps2"),
-                      table.get("brake_mps2"), table.get("overtaken"), table.get("sideways_s"))
+                      table.get("brake_mps2"), table.get("overtaken"), table.get("sideways_s"),
+                      table.get("sensors_ahead_m"))
 
 
 def sound_to_table(sound: Sound) -> dict[str, object]:
@@ -326,6 +348,8 @@ def sound_to_table(sound: Sound) -> dict[str, object]:
         table["overtaken"] = sound.overtaken.value
     if sound.sideways_s:
         table["sideways_s"] = sound.sideways_s
+    if sound.sensors_ahead_m:
+        table["sensors_ahead_m"] = sound.sensors_ahead_m
     return table
 
 

@@ -22,6 +22,7 @@ from oracle.render import FRAME_CHARS, LEGEND, PRECEDENCE, cells_per_char, draw
 from spec.actions import Action
 from spec.answers import Answer, Status, Strategy
 from spec.constants import DEFAULT_HORIZON
+from spec.envelope import TRACKING
 from spec.errors import ScenarioError
 from spec.files import load_scenario
 from spec.library import builtin
@@ -220,7 +221,7 @@ def abbrev(answer: Answer, compact: bool = False) -> str:
 COMMIT_OPTIONS = ("semantics", "commit_max", "escapes")
 SOUND_OPTIONS = ("bounds", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
                  "oncoming_view_m", "latency_s", "accel_mps2", "brake_mps2", "overtaken", "sideways_s",
-                 *COMMIT_OPTIONS)
+                 "sensors_ahead_m", *COMMIT_OPTIONS)
 
 
 def sound_options(command: Any) -> Any:
@@ -236,7 +237,7 @@ def whole_sound_options(command: Any) -> Any:
 
 
 def _sound_options(command: Any, commitment: bool) -> Any:
-    from ci.shared.options import ACCEL, LATENCY, METRES, SIDEWAYS, SPEED
+    from ci.shared.options import ACCEL, AHEAD, LATENCY, METRES, SIDEWAYS, SPEED
     from spec.engines import under_semantics
     from spec.escapes import Semantics
 
@@ -282,6 +283,10 @@ def _sound_options(command: Any, commitment: bool) -> Any:
         click.option("--sideways-s", type=SIDEWAYS, default=None, help="Sound model: a sideways move under way at "
                      "the snapshot, into the scenario's lane: the most time it may still keep the AV in both lanes, "
                      "s (0 to the move's whole 2 s; default 0, none). See docs/sound.md."),
+        click.option("--sensors-ahead-m", type=AHEAD, default=None, help="Sound model: how far ahead of the AV's "
+                     "reference, where the plan starts, the car and its sensors stood at the snapshot (negative: "
+                     f"behind; within the envelope's {TRACKING.position_m:g} m; default 0, the plan starts at the "
+                     "car): the phantoms stand that much farther ahead. See docs/sound.md."),
     ) + ((
         click.option("--semantics", default=None, help="Sound model: commit (committed actions with a proved "
                      "escape and a predicted continuation; the default) or whole (every plan proved to its end). "
@@ -301,14 +306,15 @@ def with_sound(scenario: Scenario, bounds: str | None, same_mps: str | None, onc
                latency_s: float | None = None, semantics: str | None = None, commit_max: str | None = None,
                escapes: str | None = None, accel_mps2: float | None = None,
                brake_mps2: float | None = None, overtaken: str | None = None,
-               sideways_s: float | None = None) -> Scenario:
+               sideways_s: float | None = None, sensors_ahead_m: float | None = None) -> Scenario:
     """``scenario`` under the sound model the options (over the file's ``bounds``) choose; unchanged without any."""
     if all(v is None for v in (bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
                                followers_react, oncoming_view_m, latency_s, semantics, commit_max, escapes,
-                               accel_mps2, brake_mps2, overtaken, sideways_s)):
+                               accel_mps2, brake_mps2, overtaken, sideways_s, sensors_ahead_m)):
         return scenario
     sound = sound_from(scenario.sound, bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
                        followers_react=followers_react, oncoming_view_m=oncoming_view_m, latency_s=latency_s,
                        semantics=semantics, commit_max=commit_max, escapes=escapes, accel_mps2=accel_mps2,
-                       brake_mps2=brake_mps2, overtaken=overtaken, sideways_s=sideways_s)
+                       brake_mps2=brake_mps2, overtaken=overtaken, sideways_s=sideways_s,
+                       sensors_ahead_m=sensors_ahead_m)
     return replace(scenario, sound=sound)

@@ -94,7 +94,8 @@ VIEWS_M = tuple(c * float(PAPER_GRID.cell) for c in VIEW_CELLS)  # the same, in 
 
 @st.composite
 def drawn_sound(draw: st.DrawFn) -> Sound:
-    """Bounds from the stated choices (shrinking towards the paper profile's), and a sideways move under way or none."""
+    """Bounds from the stated choices (shrinking towards the paper profile's), a sideways move under way or none, and
+    the sensors at the plan's reference or off it."""
     same, oncoming = draw(st.sampled_from(SPEED_CHOICES)), draw(st.sampled_from(SPEED_CHOICES))
     error, phantoms = draw(st.sampled_from(ERROR_CHOICES)), draw(st.sampled_from((True, False)))
     react, latency = draw(st.sampled_from((True, False))), draw(st.sampled_from(LATENCY_CHOICES))
@@ -103,12 +104,16 @@ def drawn_sound(draw: st.DrawFn) -> Sound:
             f"{'react' if react else 'keep their speed'}, latency {latency:g} s")
     source = "drawn by the hypothesis source (ci.conformance.hypo.SPEED_CHOICES, ERROR_CHOICES, LATENCY_CHOICES)"
     return Sound(Bounds(name, same, oncoming, error, phantoms, source, react, latency),
-                 sideways_s=draw(st.sampled_from(SIDEWAYS_CHOICES)))
+                 sideways_s=draw(st.sampled_from(SIDEWAYS_CHOICES)),
+                 sensors_ahead_m=draw(st.sampled_from(SENSORS_AHEAD_CHOICES)))
 
 
 #: A sideways move under way at the start, as the hypothesis source draws it (``spec.sound.Sound.sideways_s``): none
 #: most of the time (shrinking towards none), a move just begun or about to end, a whole one.
 SIDEWAYS_CHOICES = (0.0, 0.0, 0.0, 0.5, TRACKING.lateral_s)
+#: Where the car's sensors stood ahead of the plan's reference (``spec.sound.Sound.sensors_ahead_m``): at it most of
+#: the time (shrinking towards it), or at either edge of the envelope's position error.
+SENSORS_AHEAD_CHOICES = (0.0, 0.0, 0.0, -TRACKING.position_m, TRACKING.position_m)
 
 
 #: The commitments the hypothesis source draws under the commitment semantics, stated: as many actions as are proved

@@ -143,6 +143,14 @@ MUTANTS: tuple[Mutant, ...] = (
            "target, decel = max(0.0, speed_mps - closing), mr.emergency_decel_mps2",
            "the fallback's emergency brake takes the speed of a too-near vehicle that does not close as its target: "
            "the car running above its command at the hold speed raises the command past it, and the gap stays"),
+    Mutant("driver-reference-start-chases-the-reference", "sim/driver/decide.py",
+           "> tracking.speed_mps - SPEED_LAG_MPS:", "> tracking.speed_mps:",
+           "a plan starts on the reference whenever the car is within the envelope's speed error of it, the pull back "
+           "towards the reference included: a car a metre behind chases a reference that brakes, past the envelope"),
+    Mutant("sound-phantoms-follow-the-sensors-one-way", "spec/sound.py",
+           "(ahead if p.dx_m > 0 else -ahead)", "ahead",
+           "a plan from the reference moves the phantoms behind the AV as far away as those ahead: a vehicle from "
+           "beyond the rear sensor's range may be that much nearer than the plan assumes"),
     Mutant("driver-breach-ends-no-committed-part", "sim/driver/sound.py",
            "stop=lambda: self.interrupt and h.swept(),", "stop=None,",
            "a breach the AV senses does not end the proved action under way: the decision runs on past it to the "

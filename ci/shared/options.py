@@ -141,6 +141,8 @@ SCALE = Number(0.0, 100.0)  # a factor on the bounds' widths: 0 is the rule's mi
 ACCEL = Number(0.0, 100.0, positive=True)  # m/s^2: an acceleration bound above 0 (about 10 g at the most)
 LATENCY = Number(0.0, MAX_LATENCY_S)  # seconds a snapshot ages before the plan acts (spec.assumptions.MAX_LATENCY_S)
 SIDEWAYS = Number(0.0, TRACKING.lateral_s)  # seconds a sideways move under way may still take (spec.envelope)
+#: metres the sensors stood ahead of the plan's reference: within the envelope's position error either way
+AHEAD = Number(-TRACKING.position_m, TRACKING.position_m)
 
 
 def out_dir(option: str, path: str | Path) -> Path:

@@ -9,8 +9,10 @@ import enum
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from sim.driver.control import K_X
 from spec.actions import Action
 from spec.answers import Status
+from spec.envelope import Tracking
 from spec.lanes import Lane
 
 #: The final model's answers that refuse an overtake (no failure of the planner).
@@ -66,6 +68,29 @@ def choose(status: Status, planned: bool, *, refused: Callable[[], bool], step: 
     if not unsafe_again and proved_holds():
         return Choice(Act.KEEP, why)
     return Choice(Act.FALLBACK, f"{why}, and no safe step in lane")
+
+
+#: The car's lag behind a reference that brakes or speeds up, m/s: the 99.9th percentile of |v - v_ref| with the
+#: reference restarted at the car at every plan, paper traffic (docs/sound.md, "The AV's envelope"; 0.64 in spread).
+SPEED_LAG_MPS = 0.87
+
+
+def plan_start(car_x_m: float, car_mps: float, ref_x_m: float, ref_mps: float,
+               tracking: Tracking) -> tuple[float, float] | None:
+    """Where and how fast a sound decision's plan starts: on the proved reference the car runs on (its place and
+    speed), so that the next proof covers the car wherever the envelope (``tracking``) lets it be about that reference,
+    as the last proof did, and the reference runs on unbroken: replanning from the planned state, as Pek and Althoff's
+    online verification does. A start at the car instead restarts the reference there, and puts the envelope about
+    where the car is and its measured speed, where the last proof put it about the reference: a plan that left the
+    reference at its least gap then finds the next start unsafe.
+
+    Only while the controller's pull back towards the reference (``K_X`` per metre off it) and the car's speed error
+    leave, within the envelope's speed error, the car's measured lag behind a reference that changes speed
+    (``SPEED_LAG_MPS``): a car that a slow lane change left a metre behind would otherwise chase the reference while it
+    brakes, past the envelope. None: at the car, its reference restarted there."""
+    if K_X * abs(car_x_m - ref_x_m) + abs(car_mps - ref_mps) > tracking.speed_mps - SPEED_LAG_MPS:
+        return None
+    return ref_x_m, ref_mps
 
 
 class PaperAct(enum.Enum):

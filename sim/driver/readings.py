@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from spec.errors import ScenarioError
 from spec.lanes import Lane
@@ -24,6 +24,14 @@ class Reading:
     @property
     def interval_m(self) -> tuple[float, float]:
         return self.dx_m - self.spread_m[0], self.dx_m + self.spread_m[1]
+
+
+def seen_from(readings: tuple[Reading, ...], ahead_m: float) -> tuple[Reading, ...]:
+    """The readings, taken from the car, as a point ``ahead_m`` behind it sees them (the plan's reference:
+    ``sim.driver.decide.plan_start``)."""
+    if not ahead_m:
+        return readings
+    return tuple(replace(r, dx_m=r.dx_m + ahead_m) for r in readings)
 
 
 def snapshot(sweep: tuple[Reading, ...] | None) -> tuple[Reading, ...]:

@@ -55,6 +55,7 @@ class Tally(Counts, Protocol):
     committed_parts: int
     escapes: int
     unsafe_starts: int
+    reference_starts: int
     shadowed: int
     sensed_breaches: int
 
@@ -101,6 +102,9 @@ class SoundDriver(Generic[M]):
         self.unsafe_before = False  # the last decision found its start breaking the safety specification
         self.enveloped = False  # a decision's action is under way: the AV is held to its envelope
         self.interrupt = False  # a breach asks the decision under way to end
+        #: the executor's position reference is a proved one (a plan's, or a proved minimal-risk manoeuvre's) that the
+        #: next plan may start from (``decide.plan_start``); a take-over or a move sent back restarts it at the car
+        self.on_reference = False
         #: what a decision taken during a sideways move chose (``hand_over``): it acts once the move is handed over
         self.taken: Callable[[], Steps] | None = None
         self._unproved_move = False  # this move's decisions during it have proved neither way (counted once)
@@ -165,17 +169,32 @@ class SoundDriver(Generic[M]):
         h.summary.shadowed += int(view_m is not None)
         self._watch(readings, pose.x_m, lane, view_m)
         h.check_snapshot()  # the snapshot itself: sensed farther off than the error bound, or unknown
+        start = self.reference_start(readings, pose)
+        ahead_m, speed_mps = (0.0, pose.along_mps) if start is None else (pose.x_m - start[0], start[1])
         try:
-            scenario = self.moving(self.planner.scenario(readings, lane, pose.along_mps, view_m))
+            scenario = self.moving(self.planner.scenario(readings, lane, speed_mps, view_m, ahead_m))
         except ScenarioError as err:
             h.fail(FailureKind.SENSING, err.reason, str(err))
             return (yield from self.fallback(f"sensing: {err.reason}"))
+        h.summary.reference_starts += int(start is not None)
         answer = self.planner.plan(scenario)
         h.planned(answer, scenario, lane)
-        act = self.choice(answer, scenario, readings, pose)
+        act = self.choice(answer, scenario, readings, pose, speed_mps, start is not None)
         if not (yield from self.while_planning()):
             return False
         return (yield from act())
+
+    def reference_start(self, readings: tuple[Reading, ...], pose: Odometry) -> tuple[float, float] | None:
+        """Where and how fast this decision's plan starts on the proved reference the car runs on
+        (``decide.plan_start``), while the last decision's proof holds on this snapshot (its monitor has sensed no
+        breach, nor does this sweep show one); None: at the car."""
+        h, ex = self.host, self.host.executor
+        if self.proved is None or not self.on_reference or self.proved.sensed is not None:
+            return None
+        if self.proved.sense(h.summary.sim_time_s, h.summary.km, pose.x_m, readings, h.doing,
+                             self.followed()) is not None:
+            return None
+        return decide.plan_start(pose.x_m, pose.along_mps, ex.x_ref_m, ex.v_ref_mps, self.proved.sound.tracking)
 
     def moving(self, scenario: Scenario, left_s: float | None = None) -> Scenario:
         """``scenario`` with the sideways move under way stated (``Sound.sideways_s``): ``left_s`` of it, or what is
@@ -186,8 +205,8 @@ class SoundDriver(Generic[M]):
             return scenario
         return replace(scenario, sound=replace(scenario.sound, sideways_s=left_s))
 
-    def choice(self, answer: Answer, scenario: Scenario, readings: tuple[Reading, ...],
-               pose: Odometry) -> Callable[[], Steps]:
+    def choice(self, answer: Answer, scenario: Scenario, readings: tuple[Reading, ...], pose: Odometry,
+               speed_mps: float, on_reference: bool) -> Callable[[], Steps]:
         """What a decision does, chosen when its snapshot (``readings``, the AV at ``pose``) was taken
         (``decide.choose``): the plan, a step in lane, what the last decision proved, or the fallback; it acts once
         the planner's time is over (``while_planning``)."""
@@ -216,13 +235,14 @@ class SoundDriver(Generic[M]):
             escape = answer.commit.escape if answer.commit is not None else None
             if escape is not None:
                 h.summary.committed_parts += 1
-            return partial(self.execute, answer.actions, pose.along_mps, f"plan {h.summary.plans}",
-                           escape=escape.actions if escape else ())
+            return partial(self.execute, answer.actions, speed_mps, f"plan {h.summary.plans}",
+                           escape=escape.actions if escape else (), on_reference=on_reference)
         if choice.act is decide.Act.STEP:
             assert choice.step is not None
             h.summary.keep_lane_steps += 1
             h.sight(readings, pose.x_m)
-            return partial(self.execute, (choice.step,), pose.along_mps, f"keeping the lane ({choice.why})")
+            return partial(self.execute, (choice.step,), speed_mps, f"keeping the lane ({choice.why})",
+                           on_reference=on_reference)
         if choice.act is decide.Act.KEEP:
             return partial(self.keep_proved, choice.why)
         return partial(self.fallback, choice.why)
@@ -267,7 +287,7 @@ class SoundDriver(Generic[M]):
             h.traced(0, None, since_s)
 
     def execute(self, actions: tuple[Action, ...], speed_mps: float, what: str,
-                escape: tuple[Action, ...] = ()) -> Steps:
+                escape: tuple[Action, ...] = (), on_reference: bool = False) -> Steps:
         """Execute a decision's actions from the speed it planned with (the reference starts at the car), while its
         monitor holds as the AV senses it; a sensed breach ends it at once (after any sideways move), and the next
         decision re-plans from a fresh snapshot. The decision has sighted what it knew (``Host.sight``). Under the
@@ -277,7 +297,9 @@ class SoundDriver(Generic[M]):
         h = self.host
         if h.containment is not None:
             h.containment.passing((*actions, *escape))
-        h.executor.reset_reference()
+        if not on_reference:
+            h.executor.reset_reference()
+        self.on_reference = True
         self.escape_pending = bool(escape)
         sequence = (*actions, *escape)
         return (yield from self.run_proved(sequence, plan_profiles(sequence, speed_mps, self.grid, to_common=False),
@@ -401,6 +423,7 @@ class SoundDriver(Generic[M]):
         h.summary.reversed_moves += 1
         h.doing = h.doing.replace(" (", " reversed (", 1)
         self.pending, self.pending_profiles, self.proved, self.escape_pending = (), [], None, False
+        self.on_reference = False
         return True
 
     def fallback(self, cause: str) -> Steps:
@@ -411,6 +434,7 @@ class SoundDriver(Generic[M]):
         lane = lane_now(ex, h.pose())
         h.take_over(cause, lane)
         h.doing = f"fallback ({cause})"
+        self.on_reference = False
         since_s = h.summary.sim_time_s
         try:
             if lane is Lane.RIGHT:

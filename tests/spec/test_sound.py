@@ -19,6 +19,7 @@ from spec.motion import action_speed_mps
 from spec.safety import Conflict
 from spec.sound import (
     EPS_M,
+    PHANTOM_NEAREST_M,
     Sound,
     SoundRules,
     SoundState,
@@ -273,6 +274,37 @@ def test_a_sideways_move_reads_back_from_a_file_and_is_stated() -> None:
     assert moving.sideways_s == 1.25 and sound_from_table(sound_to_table(moving)) == moving
     assert "both lanes for up to 1.25 s" in moving.describe()
     assert "sideways_s" not in sound_to_table(DEFAULT)
+
+
+@pytest.mark.parametrize("ahead_m", [-TRACKING.position_m - 0.01, TRACKING.position_m + 0.01, math.nan, "near"])
+def test_sensors_off_the_reference_beyond_the_envelope_is_bad_input_naming_the_option_or_key(ahead_m: object) -> None:
+    with pytest.raises(OptionError, match="--sensors-ahead-m"):
+        sound_from(None, "default", sensors_ahead_m=ahead_m)
+    with pytest.raises(OptionError, match=r"bounds\.sensors_ahead_m"):
+        sound_from_table({"sensors_ahead_m": ahead_m})
+
+
+@pytest.mark.parametrize("ahead_m", [-TRACKING.position_m, -0.4, 0.7, TRACKING.position_m])
+def test_a_plan_from_the_reference_puts_every_phantom_where_the_sensors_view_ended(ahead_m: float) -> None:
+    """The phantoms stand at the edges of what the sensors saw: with the sensors ``ahead_m`` ahead of the plan's
+    AV (its reference), each is that much farther ahead of it (a phantom behind, that much nearer), aged as before;
+    the file reads it back and the model states it."""
+    for view in (None, 23.5):
+        at_car = sound_from(None, "default", oncoming_view_m=view, latency_s=0.1)
+        moved = sound_from(None, "default", oncoming_view_m=view, latency_s=0.1, sensors_ahead_m=ahead_m)
+        assert [p.dx_m for p in moved.phantoms()] == pytest.approx([p.dx_m + ahead_m for p in at_car.phantoms()])
+        assert [p.lane for p in moved.phantoms()] == [p.lane for p in at_car.phantoms()]
+        assert sound_from_table(sound_to_table(moved)) == moved
+        assert f"the car stood {ahead_m:g} m ahead of" in moved.describe()
+    assert "sensors_ahead_m" not in sound_to_table(DEFAULT)
+
+
+def test_a_phantom_moved_onto_the_av_stays_on_its_side() -> None:
+    """An oncoming view ending right ahead of the car, the reference ahead of the car by more: the phantom stays
+    ahead of the AV, at the nearest a phantom may be (never past it, never at 0, which Spin reads as none)."""
+    moved = sound_from(None, "default", oncoming_view_m=1.0, sensors_ahead_m=-TRACKING.position_m)
+    oncoming = [p for p in moved.phantoms() if p.lane is Lane.RIGHT]
+    assert [p.dx_m for p in oncoming] == [PHANTOM_NEAREST_M]
 
 
 def _windows_along(rules: SoundRules, actions: tuple[Action, ...]) -> list[tuple[float, float, frozenset[Lane], bool]]:

@@ -170,6 +170,8 @@ def sound_options(command: str, *extra: str, commitment: bool = True) -> list[Ca
               for value in ("sometimes", "", "PHYSICS ")),  # one of the profiles, spelt as stated
             *(_case(command, *extra, f"--sideways-s={value}", named="--sideways-s")
               for value in (*NOT_NUMBERS, "-0.5", "2.5")),  # a move takes at most its 2 s
+            *(_case(command, *extra, f"--sensors-ahead-m={value}", named="--sensors-ahead-m")
+              for value in ("nan", "inf", "1e308", "ten", "-1.6", "1.6")),  # within the envelope's 1.5 m either way
             *(commitment_options(command, *extra) if commitment else ())]
 
 
@@ -194,7 +196,7 @@ BOUNDS_FILES = {"bounds_reversed.toml": "bounds.same_mps", "bounds_key.json": "b
                 "bounds_brake.json": "bounds.brake_mps2", "speeds_length.json": "left_mps",
                 "speeds_reversed.toml": "left_mps[0]", "speeds_negative.json": "left_mps[0]",
                 "speeds_nan.json": "right_mps[0]", "bounds_overtaken.toml": "bounds.overtaken",
-                "bounds_sideways.toml": "bounds.sideways_s"}
+                "bounds_sideways.toml": "bounds.sideways_s", "bounds_sensors_ahead.json": "bounds.sensors_ahead_m"}
 
 
 def out_dirs(command: str, option: str = "--out") -> list[Case]:
@@ -279,6 +281,7 @@ def _hostile_files(folder: Path) -> None:
         "bounds_brake.json": "{" + good + ', "bounds": {"brake_mps2": -9}}',
         "bounds_overtaken.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\novertaken = true\n',
         "bounds_sideways.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nsideways_s = 3\n',
+        "bounds_sensors_ahead.json": "{" + good + ', "bounds": {"sensors_ahead_m": -2}}',
         "speeds_length.json": "{" + good + ', "left_mps": [[5, 6], [7, 8]], "bounds": {}}',
         "speeds_reversed.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\nleft_mps = [[6, 5]]\n[bounds]\n',
         "speeds_negative.json": "{" + good + ', "left_mps": [[-1, 5]], "bounds": {}}',

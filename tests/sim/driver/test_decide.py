@@ -7,9 +7,21 @@ from collections.abc import Callable
 
 import pytest
 
-from sim.driver.decide import Act, Choice, PaperAct, choose, only_followers_behind, paper_choice, planner_failed
+from sim.driver.control import K_X
+from sim.driver.decide import (
+    SPEED_LAG_MPS,
+    Act,
+    Choice,
+    PaperAct,
+    choose,
+    only_followers_behind,
+    paper_choice,
+    plan_start,
+    planner_failed,
+)
 from spec.actions import Action
 from spec.answers import Status
+from spec.envelope import EXACT_AV, TRACKING
 from spec.lanes import Lane
 
 
@@ -95,3 +107,28 @@ def test_a_paper_decision_executes_keeps_waits_or_drives_on_as_its_answer_says(
 def test_a_vehicle_behind_is_only_a_follower_while_the_action_started_in_the_left_lane_keeps_the_av_out_of_the_right(
         lane: Lane, due: Lane | None, only: bool) -> None:
     assert only_followers_behind(lane, due) is only
+
+
+#: What the envelope's speed error leaves above the car's lag: the most the pull back and the speed error may take.
+ROOM_MPS = TRACKING.speed_mps - SPEED_LAG_MPS
+
+
+@pytest.mark.parametrize(("off_m", "off_mps", "on_reference"), [
+    (0.0, 0.0, True),
+    (ROOM_MPS / K_X, 0.0, True),  # at the edge: the whole room taken by the pull back
+    (-ROOM_MPS / K_X, 0.0, True),
+    (0.0, -ROOM_MPS, True),
+    (ROOM_MPS / K_X / 2, ROOM_MPS / 2, True),
+    (ROOM_MPS / K_X + 1e-6, 0.0, False),
+    (0.0, ROOM_MPS + 1e-6, False),
+    (ROOM_MPS / K_X / 2, -ROOM_MPS / 2 - 1e-6, False),
+    (TRACKING.position_m, 0.0, False),  # within the envelope, but the pull back would take the car out of it
+])
+def test_a_plan_starts_on_the_reference_while_the_pull_back_towards_it_fits_the_envelope(
+        off_m: float, off_mps: float, on_reference: bool) -> None:
+    start = plan_start(100.0 + off_m, 7.0 + off_mps, 100.0, 7.0, TRACKING)
+    assert start == ((100.0, 7.0) if on_reference else None)
+
+
+def test_an_av_without_an_envelope_always_plans_from_the_car() -> None:
+    assert plan_start(100.0, 7.0, 100.0, 7.0, EXACT_AV) is None

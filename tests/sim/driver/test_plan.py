@@ -37,7 +37,7 @@ class Scripted:
     asked: list[tuple[Reading, ...]] = field(default_factory=list)
 
     def scenario(self, readings: tuple[Reading, ...], lane: Lane, speed_mps: float | None = None,
-                 oncoming_view_m: float | None = None) -> Scenario:
+                 oncoming_view_m: float | None = None, sensors_ahead_m: float = 0.0) -> Scenario:
         self.asked.append(readings)
         if len(self.asked) - 1 in self.unreadable:
             raise ScenarioError("left_lane", [11, 11], "two vehicles in one cell")

@@ -80,6 +80,7 @@ class Monitor:
     sensed: Breach | None = None
     hold_floor_mps: float = 5.0
     passed: tuple[Action, ...] | None = None
+    sound: Sound = field(default_factory=lambda: Sound(BOUNDS))
 
     def passing(self, actions: tuple[Action, ...]) -> None:
         self.passed = actions
@@ -234,6 +235,57 @@ def test_after_a_proved_sequence_ends_a_kept_proof_is_its_minimal_risk_manoeuvre
     assert all(speed <= 7.0 for speed, _, _ in host.commands) and host.commands[-1][0] >= hold - 1e-9
     assert host.doing == "minimal-risk manoeuvre (the last decision's, no plan)"
     assert host.executor.lane_due is Lane.LEFT and host.reported("traced") == [(0, None, 0.0)]
+
+
+class FramePlanner:
+    """A scripted planner that proves one drive from every snapshot and remembers where each plan started: its speed,
+    and how far ahead of the plan's AV the car's sensors stood (``Sound.sensors_ahead_m``) with the readings seen."""
+
+    def __init__(self) -> None:
+        self.asked: list[tuple[float | None, float, tuple[float, ...]]] = []
+
+    def scenario(self, readings: tuple[Reading, ...], lane: Lane, speed_mps: float | None = None,
+                 oncoming_view_m: float | None = None, sensors_ahead_m: float = 0.0) -> Scenario:
+        self.asked.append((speed_mps, sensors_ahead_m, tuple(r.dx_m for r in readings)))
+        return replace(make_scenario(lane.value, [], [], 0), sound=Sound(BOUNDS, start_mps=speed_mps))
+
+    def plan(self, scenario: Scenario) -> Answer:
+        return Answer(Status.PLAN, ModelKind.FINAL, "scripted", Strategy.SENSIBLE, (Action.DRIVE,), (), 1, 0.5)
+
+
+@pytest.mark.parametrize(("ref_m", "ref_mps", "before", "from_reference"), [
+    (-0.5, 7.2, "plan", True),  # the car 0.5 m ahead of its reference, 0.2 m/s faster: pulled back by 0.6 m/s
+    (0.7, 7.0, "plan", True),
+    (-0.8, 7.0, "plan", False),  # pulled back by 0.64 m/s: more than the envelope leaves above the car's lag
+    (0.0, 7.64, "plan", False),
+    (-0.5, 7.2, "breach", False),  # the last decision's monitor sensed a breach: its proof no longer holds
+    (-0.5, 7.2, "fallback", False),  # after a take-over: no proved reference to run on
+])
+def test_a_decision_plans_from_the_proved_reference_the_car_runs_on_while_its_proof_holds(
+        ref_m: float, ref_mps: float, before: str, from_reference: bool) -> None:
+    """Replanning from the planned state: after a proved plan whose proof still holds, the next decision starts its plan
+    where the reference is (the readings, taken from the car, seen from there: the planner moves them and the
+    phantoms), at the reference's speed, and runs on that reference, not one restarted at the car, while the car is
+    near enough to it (``decide.plan_start``); otherwise, or after a breach or a take-over, at the car."""
+    host = Host(sweep=(Reading(Lane.LEFT, 1, 30.0),))
+    planner = FramePlanner()
+    driver = driver_of(host, planner)
+    host.contain_from((), 0.0, Lane.LEFT)
+    assert perform(driver.execute((Action.DRIVE,), 7.0, "plan 1"), host.step)  # a proved plan: the car on it
+    if before == "breach":
+        host.next_monitor.sensed = BREACH
+    if before == "fallback":
+        host.next_monitor = Monitor()
+        assert perform(driver.fallback("no plan"), host.step)
+    resets = host.executor.resets
+    host.executor.x_ref_m, host.executor.v_ref_mps = ref_m, ref_mps  # the car is at 0 m, 7 m/s (``Host.pose``)
+    host.next_monitor = Monitor()
+    assert perform(driver.decision(), host.step)
+    expected = (ref_mps, -ref_m) if from_reference else (7.0, 0.0)
+    assert planner.asked == [(*expected, (30.0,))]
+    assert host.summary.reference_starts == int(from_reference)
+    assert host.executor.resets == resets + int(not from_reference)
+    assert [a for a, _, _ in host.executor.acted][-1] is Action.DRIVE and driver.on_reference
 
 
 def test_a_dropped_sweep_is_a_sensing_failure_and_the_fallback_takes_over_for_its_whole_time() -> None:
@@ -394,7 +446,7 @@ class MovePlanner:
         self.asked: list[tuple[Lane, float]] = []
 
     def scenario(self, readings: tuple[Reading, ...], lane: Lane, speed_mps: float | None = None,
-                 oncoming_view_m: float | None = None) -> Scenario:
+                 oncoming_view_m: float | None = None, sensors_ahead_m: float = 0.0) -> Scenario:
         return replace(make_scenario(lane.value, [], [], 0), sound=Sound(BOUNDS, start_mps=speed_mps))
 
     def plan(self, scenario: Scenario) -> Answer:
