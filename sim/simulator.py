@@ -630,8 +630,10 @@ def run_drive(seed: int, config: DriveConfig, out_dir: str | None = None, report
 
 
 def assemble(seed: int, config: DriveConfig, observers: tuple[TraceWriter, ...] = (),
-             report: Report | None = None) -> Simulator:
-    """The simulator of the drive of ``seed`` under ``config`` (what ``run_drive`` drives, and a replay redrives)."""
+             report: Report | None = None, simulator: type[Simulator] | None = None) -> Simulator:
+    """The simulator of the drive of ``seed`` under ``config`` (what ``run_drive`` drives, and a replay redrives);
+    ``simulator``: a subclass that observes more (a benchmark's)."""
     tolerance = ToleranceReport(config.step_tolerance_cells, config.plan_tolerance_cells)
-    return Simulator(seed, config.parts(observers), config.replan_on_violation, tolerance, report, config.snapshots,
-                     config.restart_after_collision or config.until_sensing_failure, config.opportunity_checks)
+    return (simulator or Simulator)(seed, config.parts(observers), config.replan_on_violation, tolerance, report,
+                                    config.snapshots, config.restart_after_collision or config.until_sensing_failure,
+                                    config.opportunity_checks)

@@ -160,6 +160,7 @@ ADDED = {"overtake audit": {"--km": "0.3", "--runs": "1"},
          "overtake crossval": {"--count": "5"},
          "python -m ci.bench.audit": {"--km": "0.3"},
          "python -m ci.bench.physics": {"--km": "0.05"},  # in one process over the whole grid: 48 short drives
+         "python -m ci.bench.envelope": {"--km": "0.3", "--seeds": "1"},  # one drive per traffic model
          "python -m ci.bench.speeds": {"--km": "0.3"},
          "python -m ci.bench.sound": {"--count": "5"},
          "python -m ci.bench.commit": {"--count": "5"},
