@@ -81,8 +81,8 @@ class RunSummary:
     committed_parts: int = 0  # sound decisions (commitment semantics) that executed a committed part with an escape
     escapes: int = 0  # sound decisions that proved nothing and kept the last one's rest and its proved escape
     unsafe_starts: int = 0  # sound decisions whose snapshot already broke the safety specification (no failure)
-    #: of the sound decisions whose start at the car broke it, those planned again from the proved reference the car
-    #: runs on (``SoundDriver.from_reference``); an unsafe start from there too is among ``unsafe_starts``
+    #: sound decisions that planned from the proved reference the car runs on, not from the car
+    #: (``SoundDriver.reference_start``, ``sim.driver.decide.plan_start``)
     reference_starts: int = 0
     shadowed: int = 0  # sound decisions whose snapshot had the oncoming lane hidden behind a left-lane vehicle
     takeovers: list[Takeover] = field(default_factory=list)

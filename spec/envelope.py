@@ -50,6 +50,11 @@ TRACKING = Tracking(1.5, 1.5, LOOP.lane_change_lateral_s,
                     "executor measured 2026-11-25: max |x - x_ref| 1.27 m, |v - v_ref| 1.19 m/s over 2 x 250 km "
                     "(paper, spread; start-up, contacts and frame fallbacks left out), rounded up to 0.5; sideways "
                     "move LOOP.lane_change_lateral_s = 2 s (body clear of the old lane within 1.87 s measured)")
+#: The car's lag behind a reference that brakes or speeds up, m/s: the 99.9th percentile of |v - v_ref| with the
+#: reference restarted at the car at every plan, paper traffic, measured 2026-11-25 (0.64 in spread; CHANGELOG.md,
+#: "the AV's envelope as measured on 2026-11-25"). What the envelope's speed error leaves above it bounds where a plan
+#: may start on the reference rather than at the car (``sim.driver.decide.plan_start``).
+SPEED_LAG_MPS = 0.87
 #: No envelope at all: the AV exactly on its reference, lane changes instant (the paper's AV).
 EXACT_AV = Tracking(0.0, 0.0, 0.0, "the paper's AV: exactly on its reference, lane changes instant")
 

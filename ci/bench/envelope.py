@@ -40,17 +40,17 @@ class Measured(Simulator):
     """A simulator that keeps, at each control step where the sound driver holds the AV to its envelope, the car's
     position and speed off its reference."""
 
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        self.off_m: list[float] = []
+        self.off_mps: list[float] = []
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+
     def _contain(self, pose: Pose, dt_s: float) -> None:
         driver = self.sound_driver
         if dt_s and driver is not None and driver.enveloped:
             self.off_m.append(abs(pose.x_m - self.executor.x_ref_m))
             self.off_mps.append(abs(pose.along_mps - self.executor.v_ref_mps))
         super()._contain(pose, dt_s)
-
-    def __init__(self, *args: object, **kwargs: object) -> None:
-        self.off_m: list[float] = []
-        self.off_mps: list[float] = []
-        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
 
 
 @dataclass(frozen=True)

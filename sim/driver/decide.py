@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from sim.driver.control import K_X
 from spec.actions import Action
 from spec.answers import Status
-from spec.envelope import Tracking
+from spec.envelope import SPEED_LAG_MPS, Tracking
 from spec.lanes import Lane
 
 #: The final model's answers that refuse an overtake (no failure of the planner).
@@ -68,12 +68,6 @@ def choose(status: Status, planned: bool, *, refused: Callable[[], bool], step: 
     if not unsafe_again and proved_holds():
         return Choice(Act.KEEP, why)
     return Choice(Act.FALLBACK, f"{why}, and no safe step in lane")
-
-
-#: The car's lag behind a reference that brakes or speeds up, m/s: the 99.9th percentile of |v - v_ref| with the
-#: reference restarted at the car at every plan, paper traffic, measured 2026-11-25 (0.64 in spread; CHANGELOG.md,
-#: "the AV's envelope as measured on 2026-11-25"; docs/sound.md, "The AV's envelope").
-SPEED_LAG_MPS = 0.87
 
 
 def plan_start(car_x_m: float, car_mps: float, ref_x_m: float, ref_mps: float,

@@ -102,9 +102,6 @@ class SoundDriver(Generic[M]):
         self.unsafe_before = False  # the last decision found its start breaking the safety specification
         self.enveloped = False  # a decision's action is under way: the AV is held to its envelope
         self.interrupt = False  # a breach asks the decision under way to end
-        #: the executor's position reference is a proved one (a plan's, or a proved minimal-risk manoeuvre's) that the
-        #: next plan may start from (``decide.plan_start``); a take-over or a move sent back restarts it at the car
-        self.on_reference = False
         #: what a decision taken during a sideways move chose (``hand_over``): it acts once the move is handed over
         self.taken: Callable[[], Steps] | None = None
         self._unproved_move = False  # this move's decisions during it have proved neither way (counted once)
@@ -169,7 +166,8 @@ class SoundDriver(Generic[M]):
         h.summary.shadowed += int(view_m is not None)
         self._watch(readings, pose.x_m, lane, view_m)
         h.check_snapshot()  # the snapshot itself: sensed farther off than the error bound, or unknown
-        start = self.reference_start(readings, pose)
+        holds = self.proof_holds(readings, pose)
+        start = self.reference_start(pose) if holds else None
         ahead_m, speed_mps = (0.0, pose.along_mps) if start is None else (pose.x_m - start[0], start[1])
         try:
             scenario = self.moving(self.planner.scenario(readings, lane, speed_mps, view_m, ahead_m))
@@ -179,21 +177,24 @@ class SoundDriver(Generic[M]):
         h.summary.reference_starts += int(start is not None)
         answer = self.planner.plan(scenario)
         h.planned(answer, scenario, lane)
-        act = self.choice(answer, scenario, readings, pose, speed_mps, start is not None)
+        act = self.choice(answer, scenario, readings, pose, speed_mps, start is not None, holds)
         if not (yield from self.while_planning()):
             return False
         return (yield from act())
 
-    def reference_start(self, readings: tuple[Reading, ...], pose: Odometry) -> tuple[float, float] | None:
-        """Where and how fast this decision's plan starts on the proved reference the car runs on
-        (``decide.plan_start``), while the last decision's proof holds on this snapshot (its monitor has sensed no
-        breach, nor does this sweep show one); None: at the car."""
-        h, ex = self.host, self.host.executor
-        if self.proved is None or not self.on_reference or self.proved.sensed is not None:
-            return None
-        if self.proved.sense(h.summary.sim_time_s, h.summary.km, pose.x_m, readings, h.doing,
-                             self.followed()) is not None:
-            return None
+    def proof_holds(self, readings: tuple[Reading, ...], pose: Odometry) -> bool:
+        """Whether the proof of the last decision executed still holds on this snapshot (``readings``, the AV at
+        ``pose``): its monitor has sensed no breach, nor does this sweep show one (``Monitor.sense``, which records one
+        it finds). Without that proof (none yet, or a take-over or a move sent back since) there is nothing to hold."""
+        h = self.host
+        return self.proved is not None and self.proved.sensed is None and self.proved.sense(
+            h.summary.sim_time_s, h.summary.km, pose.x_m, readings, h.doing, self.followed()) is None
+
+    def reference_start(self, pose: Odometry) -> tuple[float, float] | None:
+        """Where and how fast a decision whose last proof holds (``proof_holds``) starts its plan on that proof's
+        reference, which the car runs on (``decide.plan_start``); None: at the car."""
+        ex = self.host.executor
+        assert self.proved is not None
         return decide.plan_start(pose.x_m, pose.along_mps, ex.x_ref_m, ex.v_ref_mps, self.proved.sound.tracking)
 
     def moving(self, scenario: Scenario, left_s: float | None = None) -> Scenario:
@@ -206,10 +207,11 @@ class SoundDriver(Generic[M]):
         return replace(scenario, sound=replace(scenario.sound, sideways_s=left_s))
 
     def choice(self, answer: Answer, scenario: Scenario, readings: tuple[Reading, ...], pose: Odometry,
-               speed_mps: float, on_reference: bool) -> Callable[[], Steps]:
+               speed_mps: float, on_reference: bool, holds: bool) -> Callable[[], Steps]:
         """What a decision does, chosen when its snapshot (``readings``, the AV at ``pose``) was taken
-        (``decide.choose``): the plan, a step in lane, what the last decision proved, or the fallback; it acts once
-        the planner's time is over (``while_planning``)."""
+        (``decide.choose``): the plan (from ``speed_mps``, on the proved reference or at the car), a step in lane, what
+        the last decision proved (while it ``holds``: ``proof_holds``), or the fallback; it acts once the planner's
+        time is over (``while_planning``)."""
         h = self.host
         unsafe_before, self.unsafe_before = self.unsafe_before, answer.status is Status.UNSAFE_START
         if answer.status is Status.UNSAFE_START:  # an assumption broke before the snapshot: counted, no failure
@@ -223,13 +225,9 @@ class SoundDriver(Generic[M]):
             self.pending = ()
             return True
 
-        def proved_holds() -> bool:
-            return self.proved is not None and self.proved.sensed is None and self.proved.sense(
-                h.summary.sim_time_s, h.summary.km, pose.x_m, readings, h.doing, self.followed()) is None
-
         choice = decide.choose(answer.status, bool(answer.actions), refused=refused,
                                step=lambda: keep_lane(problem_for(scenario, ModelKind.FINAL)),
-                               unsafe_before=unsafe_before, pending=bool(self.pending), proved_holds=proved_holds)
+                               unsafe_before=unsafe_before, pending=bool(self.pending), proved_holds=lambda: holds)
         if choice.act is decide.Act.PLAN:
             h.sight(readings, pose.x_m)
             escape = answer.commit.escape if answer.commit is not None else None
@@ -288,7 +286,8 @@ class SoundDriver(Generic[M]):
 
     def execute(self, actions: tuple[Action, ...], speed_mps: float, what: str,
                 escape: tuple[Action, ...] = (), on_reference: bool = False) -> Steps:
-        """Execute a decision's actions from the speed it planned with (the reference starts at the car), while its
+        """Execute a decision's actions from the speed it planned with (the reference restarts at the car, or with
+        ``on_reference`` runs on from where the proved one stands: ``decide.plan_start``), while its
         monitor holds as the AV senses it; a sensed breach ends it at once (after any sideways move), and the next
         decision re-plans from a fresh snapshot. The decision has sighted what it knew (``Host.sight``). Under the
         commitment semantics ``actions`` are the committed part and ``escape`` the escape's actions proved after it.
@@ -299,7 +298,6 @@ class SoundDriver(Generic[M]):
             h.containment.passing((*actions, *escape))
         if not on_reference:
             h.executor.reset_reference()
-        self.on_reference = True
         self.escape_pending = bool(escape)
         sequence = (*actions, *escape)
         return (yield from self.run_proved(sequence, plan_profiles(sequence, speed_mps, self.grid, to_common=False),
@@ -423,7 +421,6 @@ class SoundDriver(Generic[M]):
         h.summary.reversed_moves += 1
         h.doing = h.doing.replace(" (", " reversed (", 1)
         self.pending, self.pending_profiles, self.proved, self.escape_pending = (), [], None, False
-        self.on_reference = False
         return True
 
     def fallback(self, cause: str) -> Steps:
@@ -434,7 +431,6 @@ class SoundDriver(Generic[M]):
         lane = lane_now(ex, h.pose())
         h.take_over(cause, lane)
         h.doing = f"fallback ({cause})"
-        self.on_reference = False
         since_s = h.summary.sim_time_s
         try:
             if lane is Lane.RIGHT:

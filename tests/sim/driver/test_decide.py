@@ -9,7 +9,6 @@ import pytest
 
 from sim.driver.control import K_X
 from sim.driver.decide import (
-    SPEED_LAG_MPS,
     Act,
     Choice,
     PaperAct,
@@ -21,7 +20,7 @@ from sim.driver.decide import (
 )
 from spec.actions import Action
 from spec.answers import Status
-from spec.envelope import EXACT_AV, TRACKING
+from spec.envelope import EXACT_AV, SPEED_LAG_MPS, TRACKING
 from spec.lanes import Lane
 
 

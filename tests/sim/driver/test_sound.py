@@ -285,7 +285,8 @@ def test_a_decision_plans_from_the_proved_reference_the_car_runs_on_while_its_pr
     assert planner.asked == [(*expected, (30.0,))]
     assert host.summary.reference_starts == int(from_reference)
     assert host.executor.resets == resets + int(not from_reference)
-    assert [a for a, _, _ in host.executor.acted][-1] is Action.DRIVE and driver.on_reference
+    # the plan executed, its proof the one the next decision may plan from the reference of
+    assert [a for a, _, _ in host.executor.acted][-1] is Action.DRIVE and driver.proved is host.next_monitor
 
 
 def test_a_dropped_sweep_is_a_sensing_failure_and_the_fallback_takes_over_for_its_whole_time() -> None:
