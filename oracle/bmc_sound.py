@@ -227,13 +227,14 @@ ABSOLUTE = Frame()
 
 def extents(scenario: Scenario) -> tuple[list[tuple[float, float]], list[tuple[float, float]]]:
     """The sensed vehicles' intervals (same-direction, oncoming): each cell's extent, or what the snapshot measured
-    (``spec.sound.sensed_extents``), widened by the sensing error and the snapshot's age (``Sound.start_error_m``)."""
+    (``spec.sound.sensed_extents``), widened by the sensing error and the snapshot's age in their lane
+    (``Sound.start_error_m``)."""
     sound, grid = scenario.sound, scenario.grid
     assert sound is not None
-    e = sound.start_error_m
+    e, f = sound.start_error_m(Lane.LEFT), sound.start_error_m(Lane.RIGHT)
     same, oncoming = sensed_extents(scenario.lane, scenario.left_lane, scenario.right_lane, grid, scenario.left_m,
                                     scenario.right_m)
-    return [(lo - e, hi + e) for lo, hi in same], [(lo - e, hi + e) for lo, hi in oncoming]
+    return [(lo - e, hi + e) for lo, hi in same], [(lo - f, hi + f) for lo, hi in oncoming]
 
 
 class SoundEncoding:

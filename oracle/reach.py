@@ -600,7 +600,7 @@ def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, c
     cars = _drivers(scenario)
     path = scenario_path(scenario, actions)
     end_s = path.end_s + path.continuation_s
-    b, e = sound.bounds, sound.start_error_m  # the sensing error and the snapshot's age (``Sound.age_m``)
+    b = sound.bounds
     ev = sound.tracking.speed_mps
 
     def interval(c: Vehicle) -> tuple[float, float]:
@@ -634,6 +634,8 @@ def motions(scenario: Scenario, actions: Sequence[Action], rng: random.Random, c
                 sensed = rng.uniform(*measured[c.index])
             else:
                 sensed = _sensed_start(rng, cells[c.index], c.lane, scenario.lane, scenario.grid)
+            # the sensing error and the snapshot's age in its lane (``Sound.age_m``; a measured vehicle's own top)
+            e = sound.start_error_m(c.lane, None if c.dynamics is None else c.dynamics.highest_mps)
             err = {"low": -e, "high": e}.get(pick, rng.uniform(-e, e))
             out.append(sensed + err)
         return tuple(out)

@@ -71,7 +71,7 @@ CONTINUATION = len(ACTION_ORDER)  # the action code of the minimal-risk continua
 WORD_BITS = 32
 MAX_ESCAPE = max(len(e.actions) for e in ESCAPES)  # a sequence probed is a committed part and its escape
 MAX_BATCH = 64  # sequences one run probes (a longer batch is run in parts)
-TABLE_FORMAT = 3  # the table file's layout (table_text): a verifier reads only its own
+TABLE_FORMAT = 4  # the table file's layout (table_text): a verifier reads only its own
 TABLE_END = 271828  # the table's last number: a file cut short is refused
 
 
@@ -201,7 +201,8 @@ def table_text(sound: Sound, grid: Grid, hold_floor_mps: float | None = None, la
              " ".join(map(str, [TABLE_FORMAT, grid.road_cells, CONTINUATION, len(phantoms), *phantoms])),
              " ".join(_f(x) for x in (table.unit_s, table.cell_m, tr.position_m, s.vehicle_length_m,
                                       follower_limit_m(0.0, sound), b.same_mps.low_mps, b.same_mps.high_mps,
-                                      b.oncoming_mps.low_mps, b.oncoming_mps.high_mps, sound.start_error_m)),
+                                      b.oncoming_mps.low_mps, b.oncoming_mps.high_mps, sound.start_error_m(Lane.LEFT),
+                                      sound.start_error_m(Lane.RIGHT))),
              " ".join(_f(x) for x in (s.min_gap_m, s.time_gap_s, tr.speed_mps, change.accel_mps2, change.brake_mps2,
                                       float(b.followers_react), CLOSING_EPS_MPS)) +
              f" {int(sound.overtaken is Overtaken.NO_ACCELERATION)}",
@@ -314,7 +315,7 @@ def _tables(shape: SoundShape) -> str:
         "/* the sound model's numbers, read from its table when the verifier starts (sound_load_table) */",
         f"static const double UNIT_S = {_f(float(grid.time_unit_s))}, CELL_M = {_f(grid.cell)};  /* the grid's */",
         "static double E_X, LEN, FOLLOWER_M, SAME_LOW, SAME_HIGH, ONC_LOW, ONC_HIGH;",
-        "static double START_ERROR_M;  /* sensing error + age */",
+        "static double START_ERROR_M, START_ERROR_ONC_M;  /* sensing error + age: left lane, right lane */",
         "static double G_MIN, TAU, E_V, A_MAX, B_MAX, FOLLOWERS_REACT, CLOSING_EPS;  /* for measured vehicles */",
         "static int NO_ACCELERATION;  /* measured same-direction vehicles do not speed up while the AV is out */",
         "static int held_passing;  /* that profile, and a measured same-direction vehicle it speaks of */",
@@ -840,6 +841,7 @@ static void sound_load_table(const char *path)
 	E_X = table_number(); LEN = table_number();
 	FOLLOWER_M = table_number(); SAME_LOW = table_number(); SAME_HIGH = table_number();
 	ONC_LOW = table_number(); ONC_HIGH = table_number(); START_ERROR_M = table_number();
+	START_ERROR_ONC_M = table_number();
 	G_MIN = table_number(); TAU = table_number(); E_V = table_number(); A_MAX = table_number();
 	B_MAX = table_number(); FOLLOWERS_REACT = table_number(); CLOSING_EPS = table_number();
 	NO_ACCELERATION = table_int(0, 1, "the no-acceleration profile");
@@ -987,8 +989,8 @@ static void sound_load(void)
 		lo = measured ? v[at++] : ONCOMING_EXTENT[cell][0];
 		hi = measured ? v[at++] : ONCOMING_EXTENT[cell][1];
 		if (!(lo <= hi)) { sound_malformed("a right-lane interval"); }
-		O_LO[n_onc] = lo - START_ERROR_M;
-		O_HI[n_onc] = hi + START_ERROR_M;
+		O_LO[n_onc] = lo - START_ERROR_ONC_M;
+		O_HI[n_onc] = hi + START_ERROR_ONC_M;
 		n_onc++;
 	}
 	speeds = (int) v[at++];

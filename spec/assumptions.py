@@ -101,8 +101,8 @@ def check_bounds(bounds: Bounds, key: Callable[[str], str] = lambda name: f"--{n
 
 
 #: The longest planning latency the bounds take, seconds: 15 control steps, far above the closed loop's budget (one). A
-#: snapshot that old is no longer one to plan from: under the default bounds an oncoming vehicle closes more than half a
-#: paper cell on the AV meanwhile (``spec.sound.Sound.age_m``: 12.3 m).
+#: snapshot that old is no longer one to plan from: under the default bounds an oncoming vehicle closes near half a
+#: paper cell on an AV at the common speed meanwhile (``spec.sound.Sound.age_m``: 9.55 m).
 MAX_LATENCY_S = 0.5
 
 

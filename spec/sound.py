@@ -63,8 +63,6 @@ if TYPE_CHECKING:
 EPS_M = 1e-9
 #: The most step answers one scenario's rules remember (a few MB; a longer walk starts again).
 MEMO_ENTRIES = 50_000
-#: The AV's fastest action's speed (``ACTION_RULES``' largest speed factor at the common speed), computed once.
-AV_TOP_MPS = max(float(r.speed_factor) for r in ACTION_RULES.values()) * float(COMMON_SPEED_MPS)
 
 
 class Checks(enum.Enum):
@@ -109,47 +107,55 @@ class Sound:
 
     def phantoms(self) -> tuple[Phantom, ...]:
         """The phantoms of this snapshot: the bounds' own, the oncoming one where the view of that lane ended; each
-        moved by ``sensors_ahead_m`` (their edges are the sensors', the plan's AV is the reference) and nearer by
-        ``age_m`` (a vehicle beyond the view at the snapshot may have come that much closer by the plan's start), never
-        past the AV (an oncoming vehicle that has passed it is behind it, out of the plan's way)."""
-        age, ahead = self.age_m, self.sensors_ahead_m
+        moved by ``sensors_ahead_m`` (their edges are the sensors', the plan's AV is the reference) and nearer by its
+        lane's ``age_m`` (a vehicle beyond the view at the snapshot may have come that much closer by the plan's
+        start), never past the AV (an oncoming vehicle that has passed it is behind it, out of the plan's way)."""
+        ahead = self.sensors_ahead_m
         found = self.bounds.phantom_vehicles(self.oncoming_view_m)
-        if age == 0 and ahead == 0:
+        if not self.bounds.latency_s and ahead == 0:
             return found
-        why = "".join(((f", the sensors {ahead:g} m ahead of the reference" if ahead else ""),
-                       (f", aged {age:g} m" if age else "")))
-        return tuple(replace(p, dx_m=math.copysign(max(abs(p.dx_m) + (ahead if p.dx_m > 0 else -ahead) - age,
-                                                       PHANTOM_NEAREST_M), p.dx_m), why=f"{p.why}{why}")
-                     for p in found)
+        out = []
+        for p in found:
+            age = self.age_m(p.lane)
+            why = "".join(((f", the sensors {ahead:g} m ahead of the reference" if ahead else ""),
+                           (f", aged {age:g} m" if age else "")))
+            out.append(replace(p, dx_m=math.copysign(max(abs(p.dx_m) + (ahead if p.dx_m > 0 else -ahead) - age,
+                                                          PHANTOM_NEAREST_M), p.dx_m), why=f"{p.why}{why}"))
+        return tuple(out)
 
     @property
-    def closing_mps(self) -> float:
-        """The fastest a vehicle within the bounds moves against the AV while the snapshot ages: the AV anywhere from
-        a standstill to its fastest action's speed plus its envelope's speed error (``Tracking.speed_mps``); an oncoming
-        vehicle at its top speed towards it, or a same-direction one at either end of its lane's speeds."""
+    def aging_mps(self) -> tuple[float, float]:
+        """The AV's speeds while the snapshot ages: the loop holds its reference speed meanwhile, the car within the
+        envelope's speed error (``Tracking.speed_mps``) of it, and the plan's start speed (``start_mps``; None: the
+        common speed) is the reference's or the car's, within that error of the same reference: so the plan's AV
+        drives within twice that error of its start speed, never below a standstill."""
+        start = float(COMMON_SPEED_MPS) if self.start_mps is None else self.start_mps
+        slack = 2 * self.tracking.speed_mps
+        return max(0.0, start - slack), start + slack
+
+    def closing_mps(self, lane: Lane, highest_mps: float | None = None) -> float:
+        """The fastest a vehicle of ``lane`` moves against the AV while the snapshot ages (the AV at ``aging_mps``):
+        an oncoming one at its top speed towards it; a same-direction one at either end of its lane's speeds. A vehicle
+        whose speed was measured may reach ``highest_mps`` (its own top may be above its lane's) and stand still."""
         b = self.bounds
-        av_top = AV_TOP_MPS + self.tracking.speed_mps
-        return max(b.oncoming_mps.high_mps + av_top, b.same_mps.high_mps, av_top - b.same_mps.low_mps)
+        av_low, av_high = self.aging_mps
+        if lane is Lane.RIGHT:
+            return (b.oncoming_mps.high_mps if highest_mps is None else highest_mps) + av_high
+        low, high = (b.same_mps.low_mps, b.same_mps.high_mps) if highest_mps is None else (0.0, highest_mps)
+        return max(high - av_low, av_high - low)
 
-    @property
-    def age_m(self) -> float:
-        """How far any vehicle may move against the AV while the snapshot ages by the bounds' ``latency_s`` (the
-        plan acts that much later; the AV keeps its reference speed meanwhile): ``latency_s`` x ``closing_mps``.
-        Every sensed vehicle's interval is widened by it either way (``start_error_m``) and every phantom comes that
-        much nearer (``phantoms``); 0 without latency."""
-        return self.bounds.latency_s * self.closing_mps
+    def age_m(self, lane: Lane, highest_mps: float | None = None) -> float:
+        """How far a vehicle of ``lane`` may move against the AV while the snapshot ages by the bounds' ``latency_s``
+        (the plan acts that much later): ``latency_s`` x ``closing_mps``. Every sensed vehicle's interval is widened
+        by it either way (``start_error_m``) and every phantom comes that much nearer (``phantoms``); 0 without
+        latency."""
+        return self.bounds.latency_s * self.closing_mps(lane, highest_mps)
 
-    @property
-    def start_error_m(self) -> float:
-        """How far a sensed vehicle's centre may be from its reading's interval at the plan's start: the sensing
-        error, plus the snapshot's age (``age_m``). Every engine widens a sensed vehicle's interval by this."""
-        return self.bounds.sensing_error_m + self.age_m
-
-    def measured_error_m(self, highest_mps: float) -> float:
-        """``start_error_m`` for a vehicle whose speed was measured and may reach ``highest_mps`` (its own top may be
-        above its lane's): the snapshot's age at the faster of ``closing_mps`` and the AV's top speed and its own."""
-        av_top = AV_TOP_MPS + self.tracking.speed_mps
-        return self.bounds.sensing_error_m + self.bounds.latency_s * max(self.closing_mps, av_top + highest_mps)
+    def start_error_m(self, lane: Lane, highest_mps: float | None = None) -> float:
+        """How far a sensed vehicle of ``lane`` may be from its reading's interval at the plan's start: the sensing
+        error, plus the snapshot's age (``age_m``; a vehicle whose speed was measured may reach ``highest_mps``).
+        Every engine widens a sensed vehicle's interval by this."""
+        return self.bounds.sensing_error_m + self.age_m(lane, highest_mps)
 
     def describe(self) -> str:
         b = self.bounds
@@ -163,7 +169,8 @@ class Sound:
                 f"oncoming {b.oncoming_mps.low_mps:g}..{b.oncoming_mps.high_mps:g} m/s, sensing error "
                 f"{b.sensing_error_m:g} m, phantoms {'on' if b.phantoms else 'off'}{view}, followers "
                 f"{'react' if b.followers_react else 'keep their speed'}"
-                + (f", latency {b.latency_s:g} s (vehicles {self.age_m:.3g} m on)" if b.latency_s else "")
+                + (f", latency {b.latency_s:g} s (vehicles {self.age_m(Lane.LEFT):.3g} m on in the left lane, "
+                   f"{self.age_m(Lane.RIGHT):.3g} m in the right)" if b.latency_s else "")
                 + ("" if _rates(self.speed_change) == _rates(VEHICLE_SPEED_CHANGE) else
                    f", measured vehicles accelerate at most {self.speed_change.accel_mps2:g} and brake at most "
                    f"{self.speed_change.brake_mps2:g} m/s^2")
@@ -393,7 +400,7 @@ def vehicles(lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Gr
     for key, cells, extents, speeds in ((Lane.LEFT, left, same, left_mps), (Lane.RIGHT, right, oncoming, right_mps)):
         for i, (cell, (lo, hi)) in enumerate(zip(cells, extents, strict=True)):
             own = None if speeds is None else measured_dynamics(sound, key, speeds[i])
-            e = sound.start_error_m if own is None else sound.measured_error_m(own.highest_mps)
+            e = sound.start_error_m(key, None if own is None else own.highest_mps)
             out.append(Vehicle(key, i, lo - e, hi + e, f"{key.value}_lane[{i}] (cell {cell})",
                                None if own is None else own.aged(sound.bounds.latency_s)))
     for p in sound.phantoms():  # the whole unseen stretch: from the view's edge outwards

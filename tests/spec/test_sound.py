@@ -13,7 +13,7 @@ from spec.actions import ACTION_RULES, Action
 from spec.assumptions import MAX_LATENCY_S, Bounds, SpeedBounds, check_bounds, profile
 from spec.envelope import TRACKING, Piece
 from spec.errors import OptionError
-from spec.grid import PAPER_GRID
+from spec.grid import COMMON_SPEED_MPS, PAPER_GRID
 from spec.lanes import Lane
 from spec.motion import action_speed_mps
 from spec.safety import Conflict
@@ -219,32 +219,40 @@ def test_a_view_of_the_oncoming_lane_moves_only_the_oncoming_phantom_and_reads_b
 def test_without_latency_the_snapshot_is_the_plans_start() -> None:
     """No latency: no age, the sensing error alone, the phantoms where the sensors' views end (what every figure
     before the latency was measured with)."""
-    assert DEFAULT.age_m == 0.0 and DEFAULT.start_error_m == DEFAULT.bounds.sensing_error_m
+    for lane in Lane:
+        assert DEFAULT.age_m(lane) == 0.0 and DEFAULT.start_error_m(lane) == DEFAULT.bounds.sensing_error_m
     assert DEFAULT.phantoms() == DEFAULT.bounds.phantom_vehicles()
 
 
-#: The AV's fastest speed while a snapshot ages, worked out here from the actions and the envelope: the rule's input.
+#: The AV's fastest speed, worked out here from the actions and the envelope: the highest start speed drawn.
 AV_TOP_MPS = max(action_speed_mps(a, PAPER_GRID) for a in Action) + TRACKING.speed_mps
 
 
 @given(st.sampled_from(("paper", "default")), st.floats(0.0, MAX_LATENCY_S), st.sampled_from(list(Lane)),
-       st.floats(0.0, 1.0), st.floats(-1.0, 1.0), st.floats(0.0, 1.0), st.floats(0.0, 1.0))
+       st.floats(0.0, 1.0), st.floats(-1.0, 1.0), st.floats(0.0, 1.0), st.one_of(st.none(), st.floats(0.0, 1.0)),
+       st.floats(-1.0, 1.0), st.booleans())
 def test_every_vehicle_within_the_bounds_is_inside_its_aged_interval_when_the_plan_starts(
-        name: str, latency_s: float, lane: Lane, where: float, error: float, speed: float, av: float) -> None:
+        name: str, latency_s: float, lane: Lane, where: float, error: float, speed: float, start: float | None,
+        off: float, measured: bool) -> None:
     """A vehicle sensed anywhere in a reading's interval, off by at most the sensing error, driving at any speed of
-    its lane's bounds while the AV drives at any speed from a standstill to its fastest (its envelope's error
-    included), is inside the interval widened by ``start_error_m`` when the plan starts ``latency_s`` later; and a
-    vehicle beyond a phantom's edge at the snapshot is beyond the aged edge then."""
-    sound = Sound(replace(profile(name), latency_s=latency_s))
+    its lane's bounds (one whose speed was measured: from a standstill to its own top) while the AV drives within
+    its envelope's speed error of a reference whose speed is within that error of the plan's start speed (the car's
+    or the reference's: ``Sound.aging_mps``), is inside the interval widened by ``start_error_m`` when the plan starts
+    ``latency_s`` later; and a vehicle beyond a phantom's edge at the snapshot is beyond the aged edge then."""
+    start_mps = None if start is None else start * AV_TOP_MPS
+    sound = Sound(replace(profile(name), latency_s=latency_s), start_mps=start_mps)
     b, lo, hi = sound.bounds, 30.0, 51.0
     bounds = b.speeds(lane)
-    v_mps = bounds.low_mps + speed * (bounds.high_mps - bounds.low_mps)
-    along_mps = (v_mps if lane is Lane.LEFT else -v_mps) - av * AV_TOP_MPS  # against the AV
+    top_mps = bounds.high_mps + 3.0 if measured else bounds.high_mps
+    v_mps = (speed * top_mps) if measured else bounds.low_mps + speed * (bounds.high_mps - bounds.low_mps)
+    av_mps = max(0.0, (float(COMMON_SPEED_MPS) if start_mps is None else start_mps) + 2 * off * TRACKING.speed_mps)
+    along_mps = (v_mps if lane is Lane.LEFT else -v_mps) - av_mps  # against the AV
     x0 = lo + where * (hi - lo) + error * b.sensing_error_m
     x = x0 + along_mps * latency_s
-    assert lo - sound.start_error_m - 1e-9 <= x <= hi + sound.start_error_m + 1e-9
+    e = sound.start_error_m(lane, top_mps if measured else None)
+    assert lo - e - 1e-9 <= x <= hi + e + 1e-9
     for edge, aged in zip(b.phantom_vehicles(), sound.phantoms(), strict=True):
-        if edge.lane is lane:
+        if edge.lane is lane and not measured:  # a phantom is a vehicle of its lane's bounds
             moved = edge.dx_m + along_mps * latency_s  # at the edge at the snapshot: the nearest it can be
             assert (moved >= aged.dx_m - 1e-9) if edge.dx_m > 0 else (moved <= aged.dx_m + 1e-9)
 
@@ -254,7 +262,7 @@ def test_a_latency_reads_back_from_a_file_and_is_bad_input_out_of_range() -> Non
     assert aged.bounds.latency_s == 0.1 and sound_from_table(sound_to_table(aged)) == aged
     assert "latency 0.1 s" in aged.describe()
     fresh, old = (vehicles(Lane.LEFT, (12,), (), PAPER_GRID, s)[0] for s in (DEFAULT, aged))
-    assert (fresh.lo_m - old.lo_m, old.hi_m - fresh.hi_m) == pytest.approx((aged.age_m, aged.age_m))
+    assert (fresh.lo_m - old.lo_m, old.hi_m - fresh.hi_m) == pytest.approx((aged.age_m(Lane.LEFT),) * 2)
     with pytest.raises(OptionError, match=r"bounds\.latency_s"):
         sound_from_table({"latency_s": "soon"})
     with pytest.raises(OptionError, match="--latency-s"):
