@@ -134,10 +134,14 @@ MUTANTS: tuple[Mutant, ...] = (
            "the executor's speed command not corrected for the car's heading: a lane change from a slow queue falls "
            "more than the envelope's 1.5 m behind its reference"),
     Mutant("fallback-brake-closing-at-hold-speed", "sim/driver/fallback.py",
-           "        closing = lead.closing_mps(speed_mps)\n        if lead.too_near_after(closing, 0.0):",
-           "        closing = lead.closing_mps(hold_mps)\n        if lead.too_near_after(closing, 0.0):",
+           "        closing = lead.closing_mps(speed_mps)\n        if too_near_now(a, speed_mps):",
+           "        closing = lead.closing_mps(hold_mps)\n        if too_near_now(a, hold_mps):",
            "the fallback's emergency brake reads the closing speed on the vehicle ahead at the hold speed, not at the "
            "car's own: behind a vehicle slower than the hold speed it brakes on below that vehicle's speed"),
+    Mutant("fallback-return-kept-whole", "sim/driver/sound.py",
+           "stop=lambda: fallback.return_ends(self.around(), h.pose().along_mps)", "stop=lambda: False",
+           "the fallback's return runs to its end at the speed chosen at its start, whatever the vehicle ahead does "
+           "meanwhile: one braking to a standstill is hit"),
     Mutant("fallback-emergency-brake-speeds-up", "sim/driver/fallback.py",
            "target, decel = min(command_mps, max(0.0, speed_mps - closing)), mr.emergency_decel_mps2",
            "target, decel = max(0.0, speed_mps - closing), mr.emergency_decel_mps2",

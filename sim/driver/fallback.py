@@ -210,6 +210,22 @@ def return_profile(a: Around, speed_mps: float) -> SpeedProfile:
     return SpeedProfile(speed_mps, (Ramp(pass_first_s(a.follower, lead, speed_mps, closing), brake_s, -closing),))
 
 
+def too_near_now(a: Around, speed_mps: float) -> bool:
+    """Whether the sensed vehicle ahead is nearer than the safety specification allows at the closing speed at the
+    car's own ``speed_mps`` (``Nearest.closing_mps``): the emergency brake's trigger (``brake_command``), and what
+    ends the fallback's return once its sideways move is over (``return_ends``)."""
+    lead = a.lead
+    return lead is not None and lead.too_near_after(lead.closing_mps(speed_mps), 0.0)
+
+
+def return_ends(a: Around, speed_mps: float) -> bool:
+    """Whether the fallback's return, its sideways move over (the AV in the left lane), ends at once for the brake in
+    lane, whose emergency rule then brakes: the vehicle ahead now nearer than the specification allows
+    (``too_near_now``). The return's profile was chosen at its start, from the closing speed fitted then; a vehicle
+    that brakes harder meanwhile (to a standstill, below its lane's bounds) closes faster than that."""
+    return too_near_now(a, speed_mps)
+
+
 def in_lane_hold_mps(emergency: bool, speed_mps: float, slowest_ahead_mps: float) -> float:
     """The speed the minimal-risk manoeuvre holds in lane: the fallback's (``emergency``) the slowest a vehicle ahead
     may be, from below as from above; a proved continuation's never faster than the AV already is."""
@@ -241,7 +257,7 @@ def brake_command(a: Around, speed_mps: float, command_mps: float, hold_mps: flo
     lead = a.lead
     if emergency and lead is not None:
         closing = lead.closing_mps(speed_mps)
-        if lead.too_near_after(closing, 0.0):
+        if too_near_now(a, speed_mps):
             # never up while it is too near: the command the car runs above, or the speed of a vehicle that does not
             # close, would keep the gap as near as it is
             target, decel = min(command_mps, max(0.0, speed_mps - closing)), mr.emergency_decel_mps2

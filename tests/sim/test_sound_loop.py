@@ -274,3 +274,14 @@ def test_spin_and_the_interpreter_drive_the_same_sound_drive(traffic: str, speed
         drives[engine] = text.replace("(no_plan)", "(no_plan_within_horizon)") if engine == "interpreter" else text
     assert drives["spin"] == drives["interpreter"]
     assert min(plans) > 10
+
+
+def test_the_fallbacks_return_ends_for_the_emergency_brake_when_the_vehicle_ahead_brakes_to_a_standstill() -> None:
+    """Following traffic, 10.5 m, seed 4: at km 1.6 the fallback takes over in the right lane beside a platoon that
+    slows to a standstill (below its lane's bounds) and returns behind a vehicle whose closing speed was 0.4 m/s when
+    the return began. A return kept whole held its start speed for the second after its move and hit that vehicle;
+    ending once the move is over (``fallback.return_ends``), the emergency brake stops the AV behind it."""
+    summary = run_drive(4, DriveConfig(1.7, model="sound", traffic="following", cell_m=10.5, opportunity_checks=0,
+                                       restart_after_collision=True))
+    assert summary.takeovers
+    assert summary.safety.count("contact", True) == 0 and summary.safety.count("contact", False) == 0

@@ -319,6 +319,19 @@ def test_a_gap_at_the_specifications_boundary_is_braked_for_only_once_it_breaks_
         speed - MINIMAL_RISK.emergency_decel_mps2 * DT_S)
 
 
+def test_a_return_ends_once_its_move_is_over_where_the_vehicle_ahead_has_come_nearer_than_the_spec_allows() -> None:
+    """The return's profile is chosen at its start; a vehicle ahead that then brakes to a standstill (below its lane's
+    bounds: following traffic, 10.5 m, seed 4, km 1.63, where the AV kept its speed for the return's last second and
+    hit it) closes faster. Once the move is over the return ends for the brake in lane where the gap breaks the
+    specification at the closing speed measured now (the emergency brake's own trigger), a centimetre either side."""
+    closing = 3.0
+    edge_m = SAFETY.required_gap_m(closing) + CAR.length_m
+    assert fallback.return_ends(around(Nearest(edge_m - 0.01, closing)), 4.0)
+    assert not fallback.return_ends(around(Nearest(edge_m + 0.01, closing)), 4.0)
+    assert not fallback.return_ends(around(None), 4.0)  # nothing ahead
+    assert fallback.too_near_now(around(Nearest(edge_m - 0.01, closing)), 4.0)
+
+
 def test_the_fallback_opens_the_gap_ahead_only_where_a_decision_needs_it_and_the_vehicle_behind_leaves_room(
         ) -> None:
     """Within the specification but with no safe step in lane for a decision at the hand-back speed (asked of the
