@@ -129,6 +129,7 @@ class Sound:
         envelope's speed error (``Tracking.speed_mps``) of it, and the plan's start speed (``start_mps``; None: the
         common speed) is the reference's or the car's, within that error of the same reference: so the plan's AV
         drives within twice that error of its start speed, never below a standstill."""
+        # None: the common speed, every grid's (``spec.grid.Grid.speed_mps``; no grid is built with another)
         start = float(COMMON_SPEED_MPS) if self.start_mps is None else self.start_mps
         slack = 2 * self.tracking.speed_mps
         return max(0.0, start - slack), start + slack

@@ -141,7 +141,7 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("fallback-return-kept-whole", "sim/driver/sound.py",
            "stop=lambda: fallback.return_ends(self.around(), h.pose().along_mps)", "stop=lambda: False",
            "the fallback's return runs to its end at the speed chosen at its start, whatever the vehicle ahead does "
-           "meanwhile: one braking to a standstill is hit"),
+           "meanwhile: one braking to a standstill is hit", ("tests/sim/test_sound_loop.py",)),
     Mutant("fallback-emergency-brake-speeds-up", "sim/driver/fallback.py",
            "target, decel = min(command_mps, max(0.0, speed_mps - closing)), mr.emergency_decel_mps2",
            "target, decel = max(0.0, speed_mps - closing), mr.emergency_decel_mps2",

@@ -368,7 +368,7 @@ def test_the_nearest_reading_accepted_of_a_measured_vehicle_ahead_is_spins_too(
     """The interpreter's nearest accepted reading of a vehicle ahead (the start and a stop behind it proved: the empty
     plan): Spin accepts it and not a millimetre nearer, as the interpreter. At 2.3 m/s, the AV at 1.08 m/s: the vehicle
     still braking when the AV stands. At 10 m/s, above its lane's top, one control step of age: its own error at the
-    plan's start (``Sound.measured_error_m``), 3 cm wider than the lane's."""
+    plan's start (``Sound.start_error_m`` at its own top), 16 cm wider than the lane's."""
     def at(dx_m: float) -> Scenario:
         base = sensed(make_scenario("left", [11], [], 0), [(dx_m, dx_m)])
         sound_ = sound_from(None, "default", semantics="whole", latency_s=latency_s)
