@@ -141,7 +141,7 @@ class MinimalRisk:
       of a vehicle it is passing (``sim.driver.nearest.pass_first_s``). Once its sideways move is over it ends at
       once where the vehicle ahead is nearer than the specification allows at the closing speed measured then, and
       the brake in lane takes over (a vehicle that brakes harder than at the return's start, to a standstill, closes
-      faster than the profile was chosen for: ``sim.driver.fallback.return_ends``).
+      faster than the profile was chosen for: ``sim.driver.fallback.too_near_now``).
     - **In lane**, it brakes at ``decel_mps2`` to the hold speed (``fallback_hold_mps``) and, while the sensed
       vehicle ahead is nearer than the specification allows at the closing speed (``fallback_closing_mps``), at
       ``emergency_decel_mps2`` down to that vehicle's speed (a standstill when it is not known), never up (the

@@ -139,7 +139,7 @@ MUTANTS: tuple[Mutant, ...] = (
            "the fallback's emergency brake reads the closing speed on the vehicle ahead at the hold speed, not at the "
            "car's own: behind a vehicle slower than the hold speed it brakes on below that vehicle's speed"),
     Mutant("fallback-return-kept-whole", "sim/driver/sound.py",
-           "stop=lambda: fallback.return_ends(self.around(), h.pose().along_mps)", "stop=lambda: False",
+           "stop=lambda: fallback.too_near_now(self.around(), h.pose().along_mps)", "stop=lambda: False",
            "the fallback's return runs to its end at the speed chosen at its start, whatever the vehicle ahead does "
            "meanwhile: one braking to a standstill is hit", ("tests/sim/test_sound_loop.py",)),
     Mutant("fallback-emergency-brake-speeds-up", "sim/driver/fallback.py",

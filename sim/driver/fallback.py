@@ -213,17 +213,11 @@ def return_profile(a: Around, speed_mps: float) -> SpeedProfile:
 def too_near_now(a: Around, speed_mps: float) -> bool:
     """Whether the sensed vehicle ahead is nearer than the safety specification allows at the closing speed at the
     car's own ``speed_mps`` (``Nearest.closing_mps``): the emergency brake's trigger (``brake_command``), and what
-    ends the fallback's return once its sideways move is over (``return_ends``)."""
+    ends the fallback's return once its sideways move is over (the AV in the left lane) for the brake in lane. The
+    return's profile was chosen at its start, from the closing speed fitted then; a vehicle that brakes harder
+    meanwhile (to a standstill, below its lane's bounds) closes faster than that."""
     lead = a.lead
     return lead is not None and lead.too_near_after(lead.closing_mps(speed_mps), 0.0)
-
-
-def return_ends(a: Around, speed_mps: float) -> bool:
-    """Whether the fallback's return, its sideways move over (the AV in the left lane), ends at once for the brake in
-    lane, whose emergency rule then brakes: the vehicle ahead now nearer than the specification allows
-    (``too_near_now``). The return's profile was chosen at its start, from the closing speed fitted then; a vehicle
-    that brakes harder meanwhile (to a standstill, below its lane's bounds) closes faster than that."""
-    return too_near_now(a, speed_mps)
 
 
 def in_lane_hold_mps(emergency: bool, speed_mps: float, slowest_ahead_mps: float) -> float:

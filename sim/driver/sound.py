@@ -426,7 +426,7 @@ class SoundDriver(Generic[M]):
     def fallback(self, cause: str) -> Steps:
         """The minimal-risk manoeuvre takes over for ``MINIMAL_RISK.takeover_s`` (the host records the take-over):
         back to the left lane from the right one (a return that ends early, its move over, once the vehicle ahead is
-        nearer than the specification allows: ``fallback.return_ends``), then brake in lane to the hold speed, and
+        nearer than the specification allows: ``fallback.too_near_now``), then brake in lane to the hold speed, and
         down to the sensed vehicle ahead's speed while it is nearer than the safety specification allows
         (``brake_in_lane``)."""
         h, ex = self.host, self.host.executor
@@ -441,7 +441,7 @@ class SoundDriver(Generic[M]):
                 ex.reset_reference()
                 if not (yield from ex.acting(Action.LEFT_LANE_CHANGE,
                                              fallback.return_profile(self.around(), h.pose().along_mps),
-                                             stop=lambda: fallback.return_ends(self.around(), h.pose().along_mps))):
+                                             stop=lambda: fallback.too_near_now(self.around(), h.pose().along_mps))):
                     return False
             self.pending, self.proved = (), None
             return (yield from self.brake_in_lane(emergency=True))

@@ -280,7 +280,7 @@ def test_the_fallbacks_return_ends_for_the_emergency_brake_when_the_vehicle_ahea
     """Following traffic, 10.5 m, seed 4: at km 1.6 the fallback takes over in the right lane beside a platoon that
     slows to a standstill (below its lane's bounds) and returns behind a vehicle whose closing speed was 0.4 m/s when
     the return began. A return kept whole held its start speed for the second after its move and hit that vehicle;
-    ending once the move is over (``fallback.return_ends``), the emergency brake stops the AV behind it."""
+    ending once the move is over (``fallback.too_near_now``), the emergency brake stops the AV behind it."""
     summary = run_drive(4, DriveConfig(1.7, model="sound", traffic="following", cell_m=10.5, opportunity_checks=0,
                                        restart_after_collision=True))
     assert summary.takeovers

@@ -326,10 +326,9 @@ def test_a_return_ends_once_its_move_is_over_where_the_vehicle_ahead_has_come_ne
     specification at the closing speed measured now (the emergency brake's own trigger), a centimetre either side."""
     closing = 3.0
     edge_m = SAFETY.required_gap_m(closing) + CAR.length_m
-    assert fallback.return_ends(around(Nearest(edge_m - 0.01, closing)), 4.0)
-    assert not fallback.return_ends(around(Nearest(edge_m + 0.01, closing)), 4.0)
-    assert not fallback.return_ends(around(None), 4.0)  # nothing ahead
     assert fallback.too_near_now(around(Nearest(edge_m - 0.01, closing)), 4.0)
+    assert not fallback.too_near_now(around(Nearest(edge_m + 0.01, closing)), 4.0)
+    assert not fallback.too_near_now(around(None), 4.0)  # nothing ahead
 
 
 def test_the_fallback_opens_the_gap_ahead_only_where_a_decision_needs_it_and_the_vehicle_behind_leaves_room(
