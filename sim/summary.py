@@ -84,6 +84,8 @@ class RunSummary:
     #: sound decisions that planned from the proved reference the car runs on, not from the car
     #: (``SoundDriver.reference_start``, ``sim.driver.decide.plan_start``)
     reference_starts: int = 0
+    #: sound decisions whose snapshot the last proof's sets narrowed (``SoundDriver.refined``, ``Monitor.refine``)
+    refined_starts: int = 0
     shadowed: int = 0  # sound decisions whose snapshot had the oncoming lane hidden behind a left-lane vehicle
     takeovers: list[Takeover] = field(default_factory=list)
     sweeps: int = 0  # the sensors' sweeps (``spec.physical.SENSORS.sweep_hz``)
@@ -152,7 +154,8 @@ class RunSummary:
                 "unseen_breaches": self.unseen_breaches, "keep_lane_steps": self.keep_lane_steps,
                 "minimal_risk_steps": self.minimal_risk_steps, "committed_parts": self.committed_parts,
                 "escapes": self.escapes, "unsafe_starts": self.unsafe_starts,
-                "reference_starts": self.reference_starts, "shadowed": self.shadowed,
+                "reference_starts": self.reference_starts, "refined_starts": self.refined_starts,
+                "shadowed": self.shadowed,
                 "takeovers": [asdict(t) for t in self.takeovers], "sweeps": self.sweeps, "faults": self.faults,
                 "refusals": self.refusals}
 
@@ -176,6 +179,7 @@ class RunSummary:
                    keep_lane_steps=data.get("keep_lane_steps", 0), minimal_risk_steps=data.get("minimal_risk_steps", 0),
                    committed_parts=data.get("committed_parts", 0), escapes=data.get("escapes", 0),
                    unsafe_starts=data.get("unsafe_starts", 0), reference_starts=data.get("reference_starts", 0),
+                   refined_starts=data.get("refined_starts", 0),
                    takeovers=[Takeover(**t) for t in data.get("takeovers", [])], sweeps=data.get("sweeps", 0),
                    refusals=data.get("refusals", 0), shadowed=data.get("shadowed", 0),
                    faults={k: dict(v) for k, v in data.get("faults", {}).items()})

@@ -104,6 +104,10 @@ class Sound:
     #: the car runs on (``sim.driver.decide.plan_start``) reads its vehicles from there, and every phantom, at an edge
     #: of what the sensors saw, stands that much farther ahead of the reference. 0: the plan starts at the car
     sensors_ahead_m: float = 0.0
+    #: whether the scenario's sensed extents (``Scenario.left_m``, ``right_m``) are sets each vehicle is known to be in
+    #: at the snapshot, the sensing error held: readings narrowed by the sets of the last proof, which still holds
+    #: (``sim.driver.monitor.Monitor.refine``). False: readings, each vehicle within the sensing error of its own
+    sensed_sets: bool = False
 
     def phantoms(self) -> tuple[Phantom, ...]:
         """The phantoms of this snapshot: the bounds' own, the oncoming one where the view of that lane ended; each
@@ -154,9 +158,10 @@ class Sound:
 
     def start_error_m(self, lane: Lane, highest_mps: float | None = None) -> float:
         """How far a sensed vehicle of ``lane`` may be from its reading's interval at the plan's start: the sensing
-        error, plus the snapshot's age (``age_m``; a vehicle whose speed was measured may reach ``highest_mps``).
-        Every engine widens a sensed vehicle's interval by this."""
-        return self.bounds.sensing_error_m + self.age_m(lane, highest_mps)
+        error (none where the extents are sets that hold it: ``sensed_sets``), plus the snapshot's age (``age_m``; a
+        vehicle whose speed was measured may reach ``highest_mps``). Every engine widens a sensed vehicle's interval
+        by this."""
+        return (0.0 if self.sensed_sets else self.bounds.sensing_error_m) + self.age_m(lane, highest_mps)
 
     def describe(self) -> str:
         b = self.bounds
@@ -180,13 +185,14 @@ class Sound:
                 + (f", a sideways move under way at the start (both lanes for up to {self.sideways_s:g} s)"
                    if self.sideways_s else "")
                 + (f", planned from the reference the car stood {self.sensors_ahead_m:g} m ahead of"
-                   if self.sensors_ahead_m else ""))
+                   if self.sensors_ahead_m else "")
+                + (", vehicles sensed as sets that hold the sensing error" if self.sensed_sets else ""))
 
 
 #: The keys of a scenario file's ``bounds`` table (and the command line's options of the same names).
 BOUNDS_KEYS = ("profile", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
                "oncoming_view_m", "latency_s", "semantics", "commit_max", "escapes", "accel_mps2", "brake_mps2",
-               "overtaken", "sideways_s", "sensors_ahead_m")
+               "overtaken", "sideways_s", "sensors_ahead_m", "sensed_sets")
 #: How near the AV an aged phantom may come (``Sound.phantoms``): never onto it (Spin reads a phantom at 0 as none).
 PHANTOM_NEAREST_M = 1e-3
 
@@ -196,7 +202,8 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
                where: str = "--", followers_react: bool | None = None, oncoming_view_m: object = None,
                latency_s: object = None, semantics: object = None, commit_max: object = None,
                escapes: object = None, accel_mps2: object = None, brake_mps2: object = None,
-               overtaken: object = None, sideways_s: object = None, sensors_ahead_m: object = None) -> Sound:
+               overtaken: object = None, sideways_s: object = None, sensors_ahead_m: object = None,
+               sensed_sets: object = None) -> Sound:
     """The sound model from a base (a file's, or None: the default profile, under the commitment semantics), a named
     profile and overrides of its numbers and semantics; every value is checked, and bad input names the option or
     key (``where`` + its name)."""
@@ -253,11 +260,17 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
     if sensors_ahead_m is not None:
         ahead_m = check_sensors_ahead_m(key("sensors_ahead_m"), sensors_ahead_m,
                                         base.tracking if base is not None else TRACKING)
+    sets = base.sensed_sets if base is not None else False
+    if sensed_sets is not None:
+        if not isinstance(sensed_sets, bool):
+            raise OptionError(key("sensed_sets"), sensed_sets, "must be true or false")
+        sets = sensed_sets
     if base is None:
         return Sound(bounds, start_mps=start, oncoming_view_m=view, commitment=commitment, speed_change=change,
-                     overtaken=behaves, sideways_s=moving_s, sensors_ahead_m=ahead_m)
+                     overtaken=behaves, sideways_s=moving_s, sensors_ahead_m=ahead_m, sensed_sets=sets)
     return replace(base, bounds=bounds, start_mps=start, oncoming_view_m=view, commitment=commitment,
-                   speed_change=change, overtaken=behaves, sideways_s=moving_s, sensors_ahead_m=ahead_m)
+                   speed_change=change, overtaken=behaves, sideways_s=moving_s, sensors_ahead_m=ahead_m,
+                   sensed_sets=sets)
 
 
 def check_sideways_s(where: str, value: object, tracking: Tracking = TRACKING) -> float:
@@ -327,7 +340,7 @@ def sound_from_table(table: object, where: str = "bounds") -> Sound:
                       table.get("followers_react"), table.get("oncoming_view_m"), table.get("latency_s"),
                       table.get("semantics"), table.get("commit_max"), table.get("escapes"), table.get("accel_mps2"),
                       table.get("brake_mps2"), table.get("overtaken"), table.get("sideways_s"),
-                      table.get("sensors_ahead_m"))
+                      table.get("sensors_ahead_m"), table.get("sensed_sets"))
 
 
 def sound_to_table(sound: Sound) -> dict[str, object]:
@@ -358,6 +371,8 @@ def sound_to_table(sound: Sound) -> dict[str, object]:
         table["sideways_s"] = sound.sideways_s
     if sound.sensors_ahead_m:
         table["sensors_ahead_m"] = sound.sensors_ahead_m
+    if sound.sensed_sets:
+        table["sensed_sets"] = True
     return table
 
 

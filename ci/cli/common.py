@@ -221,7 +221,7 @@ def abbrev(answer: Answer, compact: bool = False) -> str:
 COMMIT_OPTIONS = ("semantics", "commit_max", "escapes")
 SOUND_OPTIONS = ("bounds", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
                  "oncoming_view_m", "latency_s", "accel_mps2", "brake_mps2", "overtaken", "sideways_s",
-                 "sensors_ahead_m", *COMMIT_OPTIONS)
+                 "sensors_ahead_m", "sensed_sets", *COMMIT_OPTIONS)
 
 
 def sound_options(command: Any) -> Any:
@@ -287,6 +287,10 @@ def _sound_options(command: Any, commitment: bool) -> Any:
                      "reference, where the plan starts, the car and its sensors stood at the snapshot (negative: "
                      f"behind; within the envelope's {TRACKING.position_m:g} m; default 0, the plan starts at the "
                      "car): the phantoms stand that much farther ahead. See docs/sound.md."),
+        click.option("--sensed-sets/--sensed-readings", "sensed_sets", default=None, help="Sound model: whether "
+                     "the file's sensed extents (left_m, right_m) are sets each vehicle is known to be in, the "
+                     "sensing error held (the closed loop's readings narrowed by the last proof), or readings, "
+                     "each vehicle within the sensing error of its own (the default). See docs/sound.md."),
     ) + ((
         click.option("--semantics", default=None, help="Sound model: commit (committed actions with a proved "
                      "escape and a predicted continuation; the default) or whole (every plan proved to its end). "
@@ -306,15 +310,16 @@ def with_sound(scenario: Scenario, bounds: str | None, same_mps: str | None, onc
                latency_s: float | None = None, semantics: str | None = None, commit_max: str | None = None,
                escapes: str | None = None, accel_mps2: float | None = None,
                brake_mps2: float | None = None, overtaken: str | None = None,
-               sideways_s: float | None = None, sensors_ahead_m: float | None = None) -> Scenario:
+               sideways_s: float | None = None, sensors_ahead_m: float | None = None,
+               sensed_sets: bool | None = None) -> Scenario:
     """``scenario`` under the sound model the options (over the file's ``bounds``) choose; unchanged without any."""
     if all(v is None for v in (bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
                                followers_react, oncoming_view_m, latency_s, semantics, commit_max, escapes,
-                               accel_mps2, brake_mps2, overtaken, sideways_s, sensors_ahead_m)):
+                               accel_mps2, brake_mps2, overtaken, sideways_s, sensors_ahead_m, sensed_sets)):
         return scenario
     sound = sound_from(scenario.sound, bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
                        followers_react=followers_react, oncoming_view_m=oncoming_view_m, latency_s=latency_s,
                        semantics=semantics, commit_max=commit_max, escapes=escapes, accel_mps2=accel_mps2,
                        brake_mps2=brake_mps2, overtaken=overtaken, sideways_s=sideways_s,
-                       sensors_ahead_m=sensors_ahead_m)
+                       sensors_ahead_m=sensors_ahead_m, sensed_sets=sensed_sets)
     return replace(scenario, sound=sound)

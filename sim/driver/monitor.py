@@ -15,7 +15,7 @@ from __future__ import annotations
 import enum
 import math
 from collections.abc import Iterable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 from sim.driver.discretiser import in_window, reading_cell
@@ -179,6 +179,30 @@ class Monitor:
         return None
 
 
+    def refine(self, readings: tuple[Reading, ...], t_s: float, av_x_m: float) -> tuple[Reading, ...] | None:
+        """A sweep's readings (the AV at ``av_x_m`` at ``t_s``) that this decision's sets explain (``sense`` found
+        none outside them) as sets each vehicle is known to be in, the sensing error held
+        (``spec.sound.Sound.sensed_sets``): where the reading's own error and an interval the proof took share
+        (``known_m``), since while every assumption holds the vehicle is in both (SPOT's set-based prediction refined
+        by a measurement); a reading that shares nothing with them, or one ``sense`` passes over (an oncoming vehicle
+        the AV has passed), is its interval widened by the error. A noisy reading nearer than the sets then asks for
+        no more room than the proof holds. None: no reading narrowed, the readings as read."""
+        elapsed, shift_m, error_m = t_s - self.t0_s, av_x_m - self.x0_m, self.bounds.sensing_error_m
+        out, narrower = [], False
+        for r in readings:
+            lo, hi = r.interval_m
+            wide = (lo - error_m, hi + error_m)
+            known = None
+            if not (r.lane is Lane.RIGHT and r.dx_m < -CAR.length_m):
+                sets = [reach_m(self.assumed(v, elapsed), self.bounds, elapsed) for v in self.explaining[r.lane]]
+                known = known_m(wide, [(low - shift_m, high - shift_m) for low, high in sets])
+            a, b = wide if known is None else known
+            narrower = narrower or a > wide[0] + ROUNDING_M or b < wide[1] - ROUNDING_M
+            dx_m = min(max(r.dx_m, a), b)
+            out.append(replace(r, dx_m=dx_m, spread_m=(dx_m - a, b - dx_m)))
+        return tuple(out) if narrower else None
+
+
 class Sighting:
     """The vehicles one snapshot showed, as the planner knows them (readings: a lane and a distance, no identity), for
     the paper's re-planning rule: re-plan when "new surrounding vehicles were sensed". A later reading is a vehicle
@@ -205,6 +229,18 @@ class Sighting:
             if not any(_miss_m(r, v, self.bounds, shift_m, elapsed) == 0.0 for v in self.known[r.lane]):
                 return True
         return False
+
+
+def known_m(read_m: tuple[float, float], sets_m: list[tuple[float, float]]) -> tuple[float, float] | None:
+    """Where a vehicle can be that a reading puts within ``read_m`` (its interval widened by the sensing error) and
+    that is inside one of ``sets_m``: the hull of what they share (None: nothing; touching within ``ROUNDING_M``
+    shares a point)."""
+    lo, hi = read_m
+    shared = [(max(lo, low), min(hi, high)) for low, high in sets_m]
+    shared = [(a, max(a, b)) for a, b in shared if a <= b + ROUNDING_M]
+    if not shared:
+        return None
+    return min(a for a, _ in shared), max(b for _, b in shared)
 
 
 def _miss_m(r: Reading, v: Vehicle, bounds: Bounds, shift_m: float, elapsed_s: float) -> float:

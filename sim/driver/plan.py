@@ -21,7 +21,8 @@ class Planner(Protocol):
     """What the decision layer asks of a planner: a snapshot cut into a scenario, and that scenario's answer."""
 
     def scenario(self, readings: tuple[Reading, ...], lane: Lane, speed_mps: float | None = ...,
-                 oncoming_view_m: float | None = ..., sensors_ahead_m: float = ...) -> Scenario: ...
+                 oncoming_view_m: float | None = ..., sensors_ahead_m: float = ...,
+                 sensed_sets: bool = ...) -> Scenario: ...
 
     def plan(self, scenario: Scenario) -> Answer: ...
 

@@ -56,6 +56,7 @@ class Tally(Counts, Protocol):
     escapes: int
     unsafe_starts: int
     reference_starts: int
+    refined_starts: int
     shadowed: int
     sensed_breaches: int
 
@@ -146,8 +147,9 @@ class SoundDriver(Generic[M]):
         due_s, ref_m = self.boundary
         self.boundary = (due_s, ref_m + dx_m)
 
-    def _watch(self, readings: tuple[Reading, ...], av_x_m: float, lane: Lane, view_m: float | None = None) -> None:
-        self.host.contain_from(readings, av_x_m, lane, view_m)
+    def _watch(self, readings: tuple[Reading, ...], av_x_m: float, lane: Lane, view_m: float | None = None,
+               sensed_sets: bool = False) -> None:
+        self.host.contain_from(readings, av_x_m, lane, view_m, sensed_sets)
         self.interrupt = False
 
     def decision(self) -> Steps:
@@ -164,13 +166,15 @@ class SoundDriver(Generic[M]):
             return (yield from self.fallback(f"sensing: {err.reason}"))
         view_m = h.view_m(readings, pose.y_m)
         h.summary.shadowed += int(view_m is not None)
-        self._watch(readings, pose.x_m, lane, view_m)
-        h.check_snapshot()  # the snapshot itself: sensed farther off than the error bound, or unknown
         holds = self.proof_holds(readings, pose)
+        sets = self.refined(readings, pose) if holds else None
+        seen = readings if sets is None else sets
+        self._watch(seen, pose.x_m, lane, view_m, sets is not None)
+        h.check_snapshot()  # the snapshot itself: sensed farther off than the error bound, or unknown
         start = self.reference_start(pose) if holds else None
         ahead_m, speed_mps = (0.0, pose.along_mps) if start is None else (pose.x_m - start[0], start[1])
         try:
-            scenario = self.moving(self.planner.scenario(readings, lane, speed_mps, view_m, ahead_m))
+            scenario = self.moving(self.planner.scenario(seen, lane, speed_mps, view_m, ahead_m, sets is not None))
         except ScenarioError as err:
             h.fail(FailureKind.SENSING, err.reason, str(err))
             return (yield from self.fallback(f"sensing: {err.reason}"))
@@ -189,6 +193,15 @@ class SoundDriver(Generic[M]):
         h = self.host
         return self.proved is not None and self.proved.sensed is None and self.proved.sense(
             h.summary.sim_time_s, h.summary.km, pose.x_m, readings, h.doing, self.followed()) is None
+
+    def refined(self, readings: tuple[Reading, ...], pose: Odometry) -> tuple[Reading, ...] | None:
+        """The snapshot's ``readings`` as the sets the last proof, which still holds, narrows them to
+        (``Monitor.refine``): the decision plans, and its monitor watches, against what both say of each vehicle.
+        None: the proof narrows none of them."""
+        assert self.proved is not None
+        sets = self.proved.refine(readings, self.host.summary.sim_time_s, pose.x_m)
+        self.host.summary.refined_starts += int(sets is not None)
+        return sets
 
     def reference_start(self, pose: Odometry) -> tuple[float, float] | None:
         """Where and how fast a decision whose last proof holds (``proof_holds``) starts its plan on that proof's

@@ -7,9 +7,10 @@ speeding up (each time the same actions, plans and overtakes; the positions and 
 moved by centimetres). The default assembly must reproduce both exactly: the same
 kilometres, overtakes, plans, deviations and every traced number. Figures added to the summary since (safety,
 traffic collisions, restarts, opportunities, containment and the sound model's counts, its committed parts and
-escapes, its starts on a proved reference, the shadowed snapshots, sensed and unseen breaches and the moves a breach
-ended among them, the sensors' sweeps and the faults injected) are not part of that record: measuring
-containment, and sensing at a fixed 10 Hz rate whenever the planner decides, change nothing an exact drive does.
+escapes, its starts on a proved reference and from readings the last proof narrowed, the shadowed snapshots, sensed
+and unseen breaches and the moves a breach ended among them, the sensors' sweeps and the faults injected) are not
+part of that record: measuring containment, and sensing at a fixed 10 Hz rate whenever the planner decides, change
+nothing an exact drive does.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ def test_the_default_assembly_drives_the_pinned_drive_exactly(tmp_path: Path) ->
                                                             "takeovers", "sweeps", "faults", "refusals", "shadowed",
                                                             "sensed_breaches", "unseen_breaches", "committed_parts",
                                                             "escapes", "unsafe_starts", "reference_starts",
-                                                            "reversed_moves",
+                                                            "refined_starts", "reversed_moves",
                                                             "moves_finished", "moves_undone", "moves_unproved"}
     assert summary["traffic_collisions"] == 0 and summary["safety"]["contacts"] == 0 and summary["restarts"] == 0
     assert (tmp_path / "trace-seed3.jsonl").read_text() == (GOLDEN / "drive-seed3-2km-trace.jsonl").read_text()

@@ -307,6 +307,21 @@ def test_a_plan_from_the_reference_puts_every_phantom_where_the_sensors_view_end
     assert "sensors_ahead_m" not in sound_to_table(DEFAULT)
 
 
+def test_vehicles_sensed_as_sets_are_widened_by_the_snapshots_age_alone_and_read_back_from_a_file() -> None:
+    """``Sound.sensed_sets``: a scenario's extents that hold the sensing error (a snapshot the last proof narrowed)
+    start each vehicle within the age alone, in either lane; the file reads it back and the model states it."""
+    sound = sound_from(None, "default", latency_s=0.1)
+    sets = sound_from(None, "default", latency_s=0.1, sensed_sets=True)
+    for lane in Lane:
+        assert sets.start_error_m(lane) == pytest.approx(sound.start_error_m(lane) - sound.bounds.sensing_error_m)
+        assert sets.start_error_m(lane) == pytest.approx(sound.age_m(lane)) and sound.bounds.sensing_error_m > 0
+    assert sound_from_table(sound_to_table(sets)) == sets and "sensed_sets" not in sound_to_table(sound)
+    assert "sensed as sets" in sets.describe() and "sensed as sets" not in sound.describe()
+    for bad in ("yes", 1):
+        with pytest.raises(OptionError, match=r"bounds\.sensed_sets"):
+            sound_from_table({"sensed_sets": bad})
+
+
 def test_a_phantom_moved_onto_the_av_stays_on_its_side() -> None:
     """An oncoming view ending right ahead of the car, the reference ahead of the car by more: the phantom stays
     ahead of the AV, at the nearest a phantom may be (never past it, never at 0, which Spin reads as none)."""

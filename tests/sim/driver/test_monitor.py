@@ -12,9 +12,11 @@ from __future__ import annotations
 from dataclasses import replace
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from sim.driver.discretiser import discretise
-from sim.driver.monitor import BreachKind, Monitor
+from sim.driver.monitor import ROUNDING_M, BreachKind, Monitor, known_m
 from sim.driver.readings import Reading
 from spec.assumptions import world_bounds
 from spec.dynamics import Dynamics
@@ -87,3 +89,54 @@ def test_a_reading_just_beyond_its_allowance_is_a_sensed_breach_one_just_inside_
     slower = (side == "behind") == (lane is Lane.LEFT)
     assert breach.kind is (BreachKind.TOO_SLOW if slower else BreachKind.TOO_FAST)
     assert breach.by_m == pytest.approx(NUDGE_M, abs=1e-6)
+
+
+@pytest.mark.parametrize("measured", [False, True], ids=["lane speeds", "measured speeds"])
+@pytest.mark.parametrize("lane", list(Lane))
+def test_a_reading_the_sets_explain_is_narrowed_to_what_it_and_the_sets_share(lane: Lane, measured: bool) -> None:
+    """SPOT's refinement (``Monitor.refine``): a reading half its error inside the sets' near edge becomes the set from
+    that edge to the reading's own far error, the sensing error held (``Sound.sensed_sets``); every other reading
+    is its interval widened by the error. Computed from the same edges as the breach test above."""
+    low, high = _edges_m(lane, measured)
+    near, far = low + E_M, high - E_M  # the sets' own edges, without the reading's error
+    x_m = near - E_M / 2  # its error reaches 1.5 E behind the near edge, 0.5 E beyond it
+    other = Reading(Lane.RIGHT if lane is Lane.LEFT else Lane.LEFT, 3, 500.0 - AV_MOVED_M)
+    refined = _monitor(measured).refine((Reading(lane, 1, x_m - AV_MOVED_M), other), ELAPSED_S, AV_MOVED_M)
+    assert refined is not None
+    (narrowed, widened) = refined
+    assert narrowed.interval_m == pytest.approx((near - AV_MOVED_M, x_m + E_M - AV_MOVED_M))
+    assert widened.interval_m == pytest.approx((500.0 - E_M - AV_MOVED_M, 500.0 + E_M - AV_MOVED_M))
+    assert far > x_m + E_M  # the far edge is the reading's own
+
+
+def test_readings_inside_the_sets_whole_or_that_meet_none_are_not_narrowed() -> None:
+    """A reading whose error lies inside the sets gains nothing, and one that meets no set (a breach ``sense``
+    reports) is left as read: the monitor narrows no snapshot then."""
+    low, high = _edges_m(Lane.LEFT, False)
+    monitor = _monitor(False)
+    inside = Reading(Lane.LEFT, 1, (low + high) / 2 - AV_MOVED_M)
+    beyond = Reading(Lane.LEFT, 1, high + 1.0 - AV_MOVED_M)
+    assert monitor.refine((inside,), ELAPSED_S, AV_MOVED_M) is None
+    assert monitor.refine((beyond,), ELAPSED_S, AV_MOVED_M) is None
+
+
+@given(read=st.tuples(st.floats(-50, 50), st.floats(0, 3)), error_m=st.floats(0, 3),
+       sets=st.lists(st.tuples(st.floats(-60, 60), st.floats(0, 20)), max_size=4), at=st.floats(0, 1))
+def test_property_a_known_set_holds_every_place_the_reading_and_the_sets_both_allow(
+        read: tuple[float, float], error_m: float, sets: list[tuple[float, float]], at: float) -> None:
+    """``known_m``: every place within the reading's error that a set holds is in the known set, and the known set
+    lies within the reading's error (so a plan from it is proved for every vehicle the assumptions allow, and never
+    asks for more room than the reading alone)."""
+    read_m = (read[0] - error_m, read[0] + read[1] + error_m)
+    sets_m = [(lo, lo + width) for lo, width in sets]
+    known = known_m(read_m, sets_m)
+    shared = [(max(read_m[0], lo), min(read_m[1], hi)) for lo, hi in sets_m]
+    shared = [(a, b) for a, b in shared if a <= b]
+    if not shared:
+        assert known is None or known[1] - known[0] <= ROUNDING_M
+        return
+    assert known is not None
+    assert read_m[0] <= known[0] <= known[1] <= read_m[1]
+    for a, b in shared:
+        x = a + at * (b - a)
+        assert known[0] <= x <= known[1]

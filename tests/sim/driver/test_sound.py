@@ -88,6 +88,12 @@ class Monitor:
     def sense(self, *_: object) -> Breach | None:
         return self.sensed
 
+    #: what ``refine`` answers: the readings as sets the proof narrows them to (None: it narrows none)
+    narrows: tuple[Reading, ...] | None = None
+
+    def refine(self, *_: object) -> tuple[Reading, ...] | None:
+        return self.narrows
+
 
 @dataclass
 class Host:
@@ -120,9 +126,10 @@ class Host:
     def where_swept(self) -> tuple[float, float]:
         return 0.0, self.summary.sim_time_s
 
-    def contain_from(self, readings: tuple[Reading, ...], av_x_m: float, lane: Lane,
-                     view_m: float | None = None) -> None:
+    def contain_from(self, readings: tuple[Reading, ...], av_x_m: float, lane: Lane, view_m: float | None = None,
+                     sensed_sets: bool = False) -> None:
         self.containment = self.next_monitor
+        self.log.append(("contain_from", (tuple(r.interval_m for r in readings), sensed_sets)))
 
     def resume(self, monitor: Monitor) -> None:
         self.containment = monitor
@@ -243,10 +250,13 @@ class FramePlanner:
 
     def __init__(self) -> None:
         self.asked: list[tuple[float | None, float, tuple[float, ...]]] = []
+        self.sets: list[bool] = []  # whether each snapshot's readings were sets (``Sound.sensed_sets``)
 
     def scenario(self, readings: tuple[Reading, ...], lane: Lane, speed_mps: float | None = None,
-                 oncoming_view_m: float | None = None, sensors_ahead_m: float = 0.0) -> Scenario:
+                 oncoming_view_m: float | None = None, sensors_ahead_m: float = 0.0,
+                 sensed_sets: bool = False) -> Scenario:
         self.asked.append((speed_mps, sensors_ahead_m, tuple(r.dx_m for r in readings)))
+        self.sets.append(sensed_sets)
         return replace(make_scenario(lane.value, [], [], 0), sound=Sound(BOUNDS, start_mps=speed_mps))
 
     def plan(self, scenario: Scenario) -> Answer:
@@ -287,6 +297,34 @@ def test_a_decision_plans_from_the_proved_reference_the_car_runs_on_while_its_pr
     assert host.executor.resets == resets + int(not from_reference)
     # the plan executed, its proof the one the next decision may plan from the reference of
     assert [a for a, _, _ in host.executor.acted][-1] is Action.DRIVE and driver.proved is host.next_monitor
+
+
+@pytest.mark.parametrize("narrows", [True, False])
+def test_a_decision_whose_proof_holds_plans_and_watches_against_the_sets_it_narrows_the_readings_to(
+        narrows: bool) -> None:
+    """SPOT's refinement in the loop: while the last proof holds, its monitor narrows the snapshot's readings to sets
+    (``Monitor.refine``); the decision's planner reads those sets (``Sound.sensed_sets``) and its own monitor watches
+    the same ones. A proof that narrows nothing leaves the readings as read; a decision after a breach never asks."""
+    read, known = Reading(Lane.LEFT, 1, 8.47), Reading(Lane.LEFT, 1, 8.48, (0.0, 1.49))
+    host = Host(sweep=(read,))
+    planner = FramePlanner()
+    driver = driver_of(host, planner)
+    host.contain_from((), 0.0, Lane.LEFT)
+    assert perform(driver.execute((Action.DRIVE,), 7.0, "plan 1"), host.step)
+    proved = driver.proved
+    assert isinstance(proved, Monitor)
+    proved.narrows = (known,) if narrows else None
+    host.next_monitor = Monitor()
+    assert perform(driver.decision(), host.step)
+    assert driver.proved is host.next_monitor
+    seen = known if narrows else read
+    assert planner.asked[-1][2] == (seen.dx_m,) and planner.sets[-1] is narrows
+    assert host.reported("contain_from")[-1] == ((seen.interval_m,), narrows)
+    assert host.summary.refined_starts == int(narrows)
+    proved.sensed, proved.narrows = BREACH, (known,)  # the next decision, after a breach: the readings as read
+    driver.proved = proved
+    assert perform(driver.decision(), host.step)
+    assert planner.sets[-1] is False and host.summary.refined_starts == int(narrows)
 
 
 def test_a_dropped_sweep_is_a_sensing_failure_and_the_fallback_takes_over_for_its_whole_time() -> None:
