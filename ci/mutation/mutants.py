@@ -142,6 +142,15 @@ MUTANTS: tuple[Mutant, ...] = (
            "stop=lambda: fallback.too_near_now(self.around(), h.pose().along_mps)", "stop=lambda: False",
            "the fallback's return runs to its end at the speed chosen at its start, whatever the vehicle ahead does "
            "meanwhile: one braking to a standstill is hit", ("tests/sim/test_sound_loop.py",)),
+    Mutant("monitor-refine-drops-the-sensing-error", "sim/driver/monitor.py",
+           "wide = (lo - error_m, hi + error_m)", "wide = (lo, hi)",
+           "the last proof's sets narrow a reading taken as exact: a vehicle up to the sensing error from its reading "
+           "is left out of the sets a plan is proved against"),
+    Mutant("driver-plans-from-the-readings-alone", "sim/driver/sound.py",
+           "sets = self.refined(readings, pose) if holds else None", "sets = None",
+           "a decision whose last proof holds plans from the snapshot's readings alone: a noisy reading nearer than "
+           "the proof's sets finds the start unsafe twice and the fallback takes over with no assumption broken",
+           ("tests/sim/test_sound_loop.py",)),
     Mutant("fallback-emergency-brake-speeds-up", "sim/driver/fallback.py",
            "target, decel = min(command_mps, max(0.0, speed_mps - closing)), mr.emergency_decel_mps2",
            "target, decel = max(0.0, speed_mps - closing), mr.emergency_decel_mps2",

@@ -285,3 +285,14 @@ def test_the_fallbacks_return_ends_for_the_emergency_brake_when_the_vehicle_ahea
                                        restart_after_collision=True))
     assert summary.takeovers
     assert summary.safety.count("contact", True) == 0 and summary.safety.count("contact", False) == 0
+
+
+def test_a_noisy_reading_nearer_than_the_last_proofs_sets_plans_from_what_both_say_and_no_fallback_takes_over() -> None:
+    """The paper's world, noisy, 10.5 m, seed 4, km 1.90: the vehicle ahead read at 8.47 m (error 1.5 m) where the
+    last proof, still holding, had it between 8.48 and 11.33 m. From the reading alone the start broke the
+    specification twice in a row and the fallback took over with no assumption broken; from the sets the proof
+    narrows it to (``Monitor.refine``) every decision has its plan."""
+    summary = run_drive(4, DriveConfig(1.95, model="sound", sensor="noisy", cell_m=10.5, opportunity_checks=0))
+    assert summary.refined_starts > 0
+    assert [t for t in summary.takeovers if not t.after_breach] == []
+    assert summary.safety.count("contact", True) == 0 and summary.safety.count("near_miss", True) == 0
