@@ -82,18 +82,20 @@ class Planner:
 
     def scenario(self, readings: tuple[Reading, ...], lane: Lane, speed_mps: float | None = None,
                  oncoming_view_m: float | None = None, sensors_ahead_m: float = 0.0,
-                 sensed_sets: bool = False) -> Scenario:
+                 sensed_sets: bool = False, from_reference: bool = False) -> Scenario:
         """The snapshot as a scenario on this planner's grid (ScenarioError when it is inconsistent); under the
         sound model, with ``speed_mps`` as the plan's start, the oncoming phantom where the snapshot's view of that
         lane ended (``sim.sensors.oncoming_view_m``; None: the sensor's range), and the plan's AV ``sensors_ahead_m``
         behind the car the readings were taken from (``spec.sound.Sound.sensors_ahead_m``: the proved reference the
-        car runs on; 0, the car itself); with ``sensed_sets`` the readings are sets that hold the sensing error
+        car runs on; 0, the car itself), ``from_reference`` whether the plan's AV is that reference
+        (``spec.sound.Sound.from_reference``); with ``sensed_sets`` the readings are sets that hold the sensing error
         (``spec.sound.Sound.sensed_sets``)."""
         if self.sound is None:
             return discretise(readings, lane, self.grid)
         scenario = discretise(seen_from(readings, sensors_ahead_m), lane, self.grid, measured=True)
         return replace(scenario, sound=replace(self.sound, start_mps=speed_mps, oncoming_view_m=oncoming_view_m,
-                                               sensors_ahead_m=sensors_ahead_m, sensed_sets=sensed_sets))
+                                               sensors_ahead_m=sensors_ahead_m, sensed_sets=sensed_sets,
+                                               from_reference=from_reference))
 
     def plan(self, scenario: Scenario) -> Answer:
         return plan(scenario, self.strategy, engine=self.engine)

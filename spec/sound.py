@@ -108,6 +108,10 @@ class Sound:
     #: at the snapshot, the sensing error held: readings narrowed by the sets of the last proof, which still holds
     #: (``sim.driver.monitor.Monitor.refine``). False: readings, each vehicle within the sensing error of its own
     sensed_sets: bool = False
+    #: whether the plan's AV is the proved reference the car runs on (``sim.driver.decide.plan_start``), whose place
+    #: advances at exactly its speed, the plan's start speed, while the snapshot ages (``aging_mps``); False: the car,
+    #: its reference restarted there when the plan acts
+    from_reference: bool = False
 
     def phantoms(self) -> tuple[Phantom, ...]:
         """The phantoms of this snapshot: the bounds' own, the oncoming one where the view of that lane ended; each
@@ -129,13 +133,16 @@ class Sound:
 
     @property
     def aging_mps(self) -> tuple[float, float]:
-        """The AV's speeds while the snapshot ages: the loop holds its reference speed meanwhile, the car within the
-        envelope's speed error (``Tracking.speed_mps``) of it, and the plan's start speed (``start_mps``; None: the
-        common speed) is the reference's or the car's, within that error of the same reference: so the plan's AV
-        drives within twice that error of its start speed, never below a standstill."""
+        """The AV's speeds while the snapshot ages: the loop holds its reference speed meanwhile. A plan from that
+        reference (``from_reference``) has it for its AV, and its start speed (``start_mps``) is the reference's: the
+        plan's AV drives at exactly that speed (``sim.executor.Executor.control`` advances the reference's place by
+        its speed). A plan from the car has the car, within the envelope's speed error (``Tracking.speed_mps``) of
+        the reference, and its start speed (``start_mps``; None: the common speed) is the car's, within that error of
+        the same reference: so the plan's AV drives within twice that error of its start speed, never below a
+        standstill."""
         # None: the common speed, every grid's (``spec.grid.Grid.speed_mps``; no grid is built with another)
         start = float(COMMON_SPEED_MPS) if self.start_mps is None else self.start_mps
-        slack = 2 * self.tracking.speed_mps
+        slack = 0.0 if self.from_reference else 2 * self.tracking.speed_mps
         return max(0.0, start - slack), start + slack
 
     def closing_mps(self, lane: Lane, highest_mps: float | None = None) -> float:
@@ -186,13 +193,16 @@ class Sound:
                    if self.sideways_s else "")
                 + (f", planned from the reference the car stood {self.sensors_ahead_m:g} m ahead of"
                    if self.sensors_ahead_m else "")
-                + (", vehicles sensed as sets that hold the sensing error" if self.sensed_sets else ""))
+                + (", vehicles sensed as sets that hold the sensing error" if self.sensed_sets else "")
+                + (", the plan's AV the proved reference, at its speed while the snapshot ages"
+                   if self.from_reference else ""))
 
 
 #: The keys of a scenario file's ``bounds`` table (and the command line's options of the same names).
 BOUNDS_KEYS = ("profile", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
                "oncoming_view_m", "latency_s", "semantics", "commit_max", "escapes", "accel_mps2", "brake_mps2",
-               "overtaken", "sideways_s", "sensors_ahead_m", "sensed_sets")
+               "overtaken", "sideways_s", "sensors_ahead_m", "sensed_sets",
+                "from_reference")
 #: How near the AV an aged phantom may come (``Sound.phantoms``): never onto it (Spin reads a phantom at 0 as none).
 PHANTOM_NEAREST_M = 1e-3
 
@@ -203,7 +213,7 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
                latency_s: object = None, semantics: object = None, commit_max: object = None,
                escapes: object = None, accel_mps2: object = None, brake_mps2: object = None,
                overtaken: object = None, sideways_s: object = None, sensors_ahead_m: object = None,
-               sensed_sets: object = None) -> Sound:
+               sensed_sets: object = None, from_reference: object = None) -> Sound:
     """The sound model from a base (a file's, or None: the default profile, under the commitment semantics), a named
     profile and overrides of its numbers and semantics; every value is checked, and bad input names the option or
     key (``where`` + its name)."""
@@ -260,17 +270,24 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
     if sensors_ahead_m is not None:
         ahead_m = check_sensors_ahead_m(key("sensors_ahead_m"), sensors_ahead_m,
                                         base.tracking if base is not None else TRACKING)
-    sets = base.sensed_sets if base is not None else False
-    if sensed_sets is not None:
-        if not isinstance(sensed_sets, bool):
-            raise OptionError(key("sensed_sets"), sensed_sets, "must be true or false")
-        sets = sensed_sets
+    sets = check_flag(key("sensed_sets"), sensed_sets, base.sensed_sets if base is not None else False)
+    on_ref = check_flag(key("from_reference"), from_reference, base.from_reference if base is not None else False)
     if base is None:
         return Sound(bounds, start_mps=start, oncoming_view_m=view, commitment=commitment, speed_change=change,
-                     overtaken=behaves, sideways_s=moving_s, sensors_ahead_m=ahead_m, sensed_sets=sets)
+                     overtaken=behaves, sideways_s=moving_s, sensors_ahead_m=ahead_m, sensed_sets=sets,
+                     from_reference=on_ref)
     return replace(base, bounds=bounds, start_mps=start, oncoming_view_m=view, commitment=commitment,
                    speed_change=change, overtaken=behaves, sideways_s=moving_s, sensors_ahead_m=ahead_m,
-                   sensed_sets=sets)
+                   sensed_sets=sets, from_reference=on_ref)
+
+
+def check_flag(where: str, value: object, default: bool) -> bool:
+    """A true-or-false option or key (None: ``default``); anything else is bad input naming it."""
+    if value is None:
+        return default
+    if not isinstance(value, bool):
+        raise OptionError(where, value, "must be true or false")
+    return value
 
 
 def check_sideways_s(where: str, value: object, tracking: Tracking = TRACKING) -> float:
@@ -340,7 +357,7 @@ def sound_from_table(table: object, where: str = "bounds") -> Sound:
                       table.get("followers_react"), table.get("oncoming_view_m"), table.get("latency_s"),
                       table.get("semantics"), table.get("commit_max"), table.get("escapes"), table.get("accel_mps2"),
                       table.get("brake_mps2"), table.get("overtaken"), table.get("sideways_s"),
-                      table.get("sensors_ahead_m"), table.get("sensed_sets"))
+                      table.get("sensors_ahead_m"), table.get("sensed_sets"), table.get("from_reference"))
 
 
 def sound_to_table(sound: Sound) -> dict[str, object]:
@@ -373,6 +390,8 @@ def sound_to_table(sound: Sound) -> dict[str, object]:
         table["sensors_ahead_m"] = sound.sensors_ahead_m
     if sound.sensed_sets:
         table["sensed_sets"] = True
+    if sound.from_reference:
+        table["from_reference"] = True
     return table
 
 

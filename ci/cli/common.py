@@ -221,7 +221,7 @@ def abbrev(answer: Answer, compact: bool = False) -> str:
 COMMIT_OPTIONS = ("semantics", "commit_max", "escapes")
 SOUND_OPTIONS = ("bounds", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
                  "oncoming_view_m", "latency_s", "accel_mps2", "brake_mps2", "overtaken", "sideways_s",
-                 "sensors_ahead_m", "sensed_sets", *COMMIT_OPTIONS)
+                 "sensors_ahead_m", "sensed_sets", "from_reference", *COMMIT_OPTIONS)
 
 
 def sound_options(command: Any) -> Any:
@@ -291,6 +291,10 @@ def _sound_options(command: Any, commitment: bool) -> Any:
                      "the file's sensed extents (left_m, right_m) are sets each vehicle is known to be in, the "
                      "sensing error held (the closed loop's readings narrowed by the last proof), or readings, "
                      "each vehicle within the sensing error of its own (the default). See docs/sound.md."),
+        click.option("--from-reference/--from-car", "from_reference", default=None, help="Sound model: whether "
+                     "the plan's AV is the proved reference the car runs on, at exactly its speed while the snapshot "
+                     "ages, or the car (the default), within twice the envelope's speed error of it. See "
+                     "docs/sound.md."),
     ) + ((
         click.option("--semantics", default=None, help="Sound model: commit (committed actions with a proved "
                      "escape and a predicted continuation; the default) or whole (every plan proved to its end). "
@@ -311,15 +315,16 @@ def with_sound(scenario: Scenario, bounds: str | None, same_mps: str | None, onc
                escapes: str | None = None, accel_mps2: float | None = None,
                brake_mps2: float | None = None, overtaken: str | None = None,
                sideways_s: float | None = None, sensors_ahead_m: float | None = None,
-               sensed_sets: bool | None = None) -> Scenario:
+               sensed_sets: bool | None = None, from_reference: bool | None = None) -> Scenario:
     """``scenario`` under the sound model the options (over the file's ``bounds``) choose; unchanged without any."""
     if all(v is None for v in (bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
                                followers_react, oncoming_view_m, latency_s, semantics, commit_max, escapes,
-                               accel_mps2, brake_mps2, overtaken, sideways_s, sensors_ahead_m, sensed_sets)):
+                               accel_mps2, brake_mps2, overtaken, sideways_s, sensors_ahead_m, sensed_sets,
+                               from_reference)):
         return scenario
     sound = sound_from(scenario.sound, bounds, same_mps, oncoming_mps, sensing_error_m, phantoms, av_speed_mps,
                        followers_react=followers_react, oncoming_view_m=oncoming_view_m, latency_s=latency_s,
                        semantics=semantics, commit_max=commit_max, escapes=escapes, accel_mps2=accel_mps2,
                        brake_mps2=brake_mps2, overtaken=overtaken, sideways_s=sideways_s,
-                       sensors_ahead_m=sensors_ahead_m, sensed_sets=sensed_sets)
+                       sensors_ahead_m=sensors_ahead_m, sensed_sets=sensed_sets, from_reference=from_reference)
     return replace(scenario, sound=sound)

@@ -95,8 +95,9 @@ VIEWS_M = tuple(c * float(PAPER_GRID.cell) for c in VIEW_CELLS)  # the same, in 
 @st.composite
 def drawn_sound(draw: st.DrawFn) -> Sound:
     """Bounds from the stated choices (shrinking towards the paper profile's), a sideways move under way or none, the
-    sensors at the plan's reference or off it, and the vehicles sensed as readings or as sets that hold the sensing
-    error (``Sound.sensed_sets``: a quarter of the time, shrinking towards readings)."""
+    sensors at the plan's reference or off it, the plan's AV the car or that reference (``Sound.from_reference``),
+    and the vehicles sensed as readings or as sets that hold the sensing error (``Sound.sensed_sets``: a quarter of
+    the time, shrinking towards readings)."""
     same, oncoming = draw(st.sampled_from(SPEED_CHOICES)), draw(st.sampled_from(SPEED_CHOICES))
     error, phantoms = draw(st.sampled_from(ERROR_CHOICES)), draw(st.sampled_from((True, False)))
     react, latency = draw(st.sampled_from((True, False))), draw(st.sampled_from(LATENCY_CHOICES))
@@ -107,7 +108,8 @@ def drawn_sound(draw: st.DrawFn) -> Sound:
     return Sound(Bounds(name, same, oncoming, error, phantoms, source, react, latency),
                  sideways_s=draw(st.sampled_from(SIDEWAYS_CHOICES)),
                  sensors_ahead_m=draw(st.sampled_from(SENSORS_AHEAD_CHOICES)),
-                 sensed_sets=draw(st.sampled_from((False, False, False, True))))
+                 sensed_sets=draw(st.sampled_from((False, False, False, True))),
+                 from_reference=draw(st.sampled_from((False, True))))
 
 
 #: A sideways move under way at the start, as the hypothesis source draws it (``spec.sound.Sound.sideways_s``): none

@@ -146,6 +146,11 @@ MUTANTS: tuple[Mutant, ...] = (
            "wide = (lo - error_m, hi + error_m)", "wide = (lo, hi)",
            "the last proof's sets narrow a reading taken as exact: a vehicle up to the sensing error from its reading "
            "is left out of the sets a plan is proved against"),
+    Mutant("sound-reference-ages-at-the-cars-speeds", "spec/sound.py",
+           "slack = 0.0 if self.from_reference else 2 * self.tracking.speed_mps",
+           "slack = 2 * self.tracking.speed_mps",
+           "a plan from the proved reference ages its vehicles against every speed the car may have about it, where "
+           "the reference holds the start speed: a start the last proof holds breaks the specification by centimetres"),
     Mutant("driver-plans-from-the-readings-alone", "sim/driver/sound.py",
            "sets = self.refined(readings, pose) if holds else None", "sets = None",
            "a decision whose last proof holds plans from the snapshot's readings alone: a noisy reading nearer than "

@@ -174,7 +174,8 @@ class SoundDriver(Generic[M]):
         start = self.reference_start(pose) if holds else None
         ahead_m, speed_mps = (0.0, pose.along_mps) if start is None else (pose.x_m - start[0], start[1])
         try:
-            scenario = self.moving(self.planner.scenario(seen, lane, speed_mps, view_m, ahead_m, sets is not None))
+            scenario = self.moving(self.planner.scenario(seen, lane, speed_mps, view_m, ahead_m, sets is not None,
+                                                         start is not None))
         except ScenarioError as err:
             h.fail(FailureKind.SENSING, err.reason, str(err))
             return (yield from self.fallback(f"sensing: {err.reason}"))

@@ -230,17 +230,20 @@ AV_TOP_MPS = max(action_speed_mps(a, PAPER_GRID) for a in Action) + TRACKING.spe
 
 @given(st.sampled_from(("paper", "default")), st.floats(0.0, MAX_LATENCY_S), st.sampled_from(list(Lane)),
        st.floats(0.0, 1.0), st.floats(-1.0, 1.0), st.floats(0.0, 1.0), st.one_of(st.none(), st.floats(0.0, 1.0)),
-       st.floats(-1.0, 1.0), st.booleans())
+       st.floats(-1.0, 1.0), st.booleans(), st.booleans())
 def test_every_vehicle_within_the_bounds_is_inside_its_aged_interval_when_the_plan_starts(
         name: str, latency_s: float, lane: Lane, where: float, error: float, speed: float, start: float | None,
-        off: float, measured: bool) -> None:
+        off: float, measured: bool, from_reference: bool) -> None:
     """A vehicle sensed anywhere in a reading's interval, off by at most the sensing error, driving at any speed of
-    its lane's bounds (one whose speed was measured: from a standstill to its own top) while the AV drives within
-    its envelope's speed error of a reference whose speed is within that error of the plan's start speed (the car's
-    or the reference's: ``Sound.aging_mps``), is inside the interval widened by ``start_error_m`` when the plan starts
-    ``latency_s`` later; and a vehicle beyond a phantom's edge at the snapshot is beyond the aged edge then."""
+    its lane's bounds (one whose speed was measured: from a standstill to its own top) while the plan's AV drives
+    (the car: within its envelope's speed error of a reference whose speed is within that error of the plan's start
+    speed, the car's; the reference, ``from_reference``: at exactly the start speed, its own: ``Sound.aging_mps``),
+    is inside the interval widened by ``start_error_m`` when the plan starts ``latency_s`` later; and a vehicle
+    beyond a phantom's edge at the snapshot is beyond the aged edge then."""
     start_mps = None if start is None else start * AV_TOP_MPS
-    sound = Sound(replace(profile(name), latency_s=latency_s), start_mps=start_mps)
+    if from_reference:
+        off = 0.0
+    sound = Sound(replace(profile(name), latency_s=latency_s), start_mps=start_mps, from_reference=from_reference)
     b, lo, hi = sound.bounds, 30.0, 51.0
     bounds = b.speeds(lane)
     top_mps = bounds.high_mps + 3.0 if measured else bounds.high_mps
@@ -320,6 +323,21 @@ def test_vehicles_sensed_as_sets_are_widened_by_the_snapshots_age_alone_and_read
     for bad in ("yes", 1):
         with pytest.raises(OptionError, match=r"bounds\.sensed_sets"):
             sound_from_table({"sensed_sets": bad})
+
+
+def test_a_plan_from_the_reference_ages_its_vehicles_at_the_references_speed_alone() -> None:
+    """``Sound.from_reference``: the plan's AV is the reference, which holds the start speed while the snapshot ages,
+    so a same-direction vehicle of the paper's profile (every one at 7 m/s) does not move against a reference at
+    7 m/s, where against the car it may by twice the envelope's speed error for the latency; the file reads it back,
+    the model states it, and anything but true or false names the key."""
+    car = sound_from(None, "paper", latency_s=0.1, av_speed_mps=7.0)
+    ref = sound_from(None, "paper", latency_s=0.1, av_speed_mps=7.0, from_reference=True)
+    assert ref.age_m(Lane.LEFT) == 0.0 and car.age_m(Lane.LEFT) == pytest.approx(0.1 * 2 * TRACKING.speed_mps)
+    assert ref.age_m(Lane.RIGHT) == pytest.approx(0.1 * (ref.bounds.oncoming_mps.high_mps + 7.0))
+    assert sound_from_table(sound_to_table(ref)) == ref and "from_reference" not in sound_to_table(car)
+    assert "the plan's AV the proved reference" in ref.describe()
+    with pytest.raises(OptionError, match=r"bounds\.from_reference"):
+        sound_from_table({"from_reference": "yes"})
 
 
 def test_a_phantom_moved_onto_the_av_stays_on_its_side() -> None:

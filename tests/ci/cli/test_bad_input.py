@@ -197,7 +197,8 @@ BOUNDS_FILES = {"bounds_reversed.toml": "bounds.same_mps", "bounds_key.json": "b
                 "speeds_reversed.toml": "left_mps[0]", "speeds_negative.json": "left_mps[0]",
                 "speeds_nan.json": "right_mps[0]", "bounds_overtaken.toml": "bounds.overtaken",
                 "bounds_sideways.toml": "bounds.sideways_s", "bounds_sensors_ahead.json": "bounds.sensors_ahead_m",
-                "bounds_sensed_sets.toml": "bounds.sensed_sets"}
+                "bounds_sensed_sets.toml": "bounds.sensed_sets",
+                "bounds_from_reference.json": "bounds.from_reference"}
 
 
 def out_dirs(command: str, option: str = "--out") -> list[Case]:
@@ -283,6 +284,7 @@ def _hostile_files(folder: Path) -> None:
         "bounds_overtaken.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\novertaken = true\n',
         "bounds_sideways.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nsideways_s = 3\n',
         "bounds_sensors_ahead.json": "{" + good + ', "bounds": {"sensors_ahead_m": -2}}',
+        "bounds_from_reference.json": "{" + good + ', "bounds": {"from_reference": 1}}',
         "bounds_sensed_sets.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\n[bounds]\nsensed_sets = "yes"\n',
         "speeds_length.json": "{" + good + ', "left_mps": [[5, 6], [7, 8]], "bounds": {}}',
         "speeds_reversed.toml": 'lane = "left"\nleft_lane = [12]\nright_lane = []\nleft_mps = [[6, 5]]\n[bounds]\n',

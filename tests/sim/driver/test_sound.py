@@ -251,12 +251,14 @@ class FramePlanner:
     def __init__(self) -> None:
         self.asked: list[tuple[float | None, float, tuple[float, ...]]] = []
         self.sets: list[bool] = []  # whether each snapshot's readings were sets (``Sound.sensed_sets``)
+        self.on_reference: list[bool] = []  # whether each plan's AV was the proved reference (``from_reference``)
 
     def scenario(self, readings: tuple[Reading, ...], lane: Lane, speed_mps: float | None = None,
                  oncoming_view_m: float | None = None, sensors_ahead_m: float = 0.0,
-                 sensed_sets: bool = False) -> Scenario:
+                 sensed_sets: bool = False, from_reference: bool = False) -> Scenario:
         self.asked.append((speed_mps, sensors_ahead_m, tuple(r.dx_m for r in readings)))
         self.sets.append(sensed_sets)
+        self.on_reference.append(from_reference)
         return replace(make_scenario(lane.value, [], [], 0), sound=Sound(BOUNDS, start_mps=speed_mps))
 
     def plan(self, scenario: Scenario) -> Answer:
@@ -292,7 +294,7 @@ def test_a_decision_plans_from_the_proved_reference_the_car_runs_on_while_its_pr
     host.next_monitor = Monitor()
     assert perform(driver.decision(), host.step)
     expected = (ref_mps, -ref_m) if from_reference else (7.0, 0.0)
-    assert planner.asked == [(*expected, (30.0,))]
+    assert planner.asked == [(*expected, (30.0,))] and planner.on_reference == [from_reference]
     assert host.summary.reference_starts == int(from_reference)
     assert host.executor.resets == resets + int(not from_reference)
     # the plan executed, its proof the one the next decision may plan from the reference of
