@@ -227,8 +227,8 @@ ABSOLUTE = Frame()
 
 def extents(scenario: Scenario) -> tuple[list[tuple[float, float]], list[tuple[float, float]]]:
     """The sensed vehicles' intervals (same-direction, oncoming): each cell's extent, or what the snapshot measured
-    (``spec.sound.sensed_extents``), widened by the sensing error and the snapshot's age in their lane
-    (``Sound.start_error_m``)."""
+    (``spec.sound.sensed_extents``), widened by the sensing error (none for sets that hold it) and the snapshot's
+    age in their lane (``Sound.start_error_m``)."""
     sound, grid = scenario.sound, scenario.grid
     assert sound is not None
     e, f = sound.start_error_m(Lane.LEFT), sound.start_error_m(Lane.RIGHT)

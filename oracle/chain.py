@@ -244,7 +244,7 @@ def _decide(world: World, sound: Sound, grid: Grid, policy: Policy, rng: random.
         scenario = sensed(base, tuple((r, r) for _, r in left), tuple((r, r) for _, r in right))
     except ScenarioError:
         return None
-    return policy(replace(scenario, sound=replace(sound, start_mps=v)))
+    return policy(replace(scenario, sound=replace(sound, start_mps=v, sensed_sets=False)))  # readings, not sets
 
 
 def chain_sound(sound: Sound, most_actions: int = 1) -> Sound:

@@ -85,8 +85,9 @@ class Containment(Monitor):
     against them: the breaches found since."""
 
     def __init__(self, decision: int, sound: Sound, scenario: Scenario, seen: tuple[Reading, ...], grid: Grid,
-                 av_x_m: float, t_s: float, cars: Iterable[KinematicCar]) -> None:
-        super().__init__(decision, sound, scenario, seen, grid, av_x_m, t_s)
+                 av_x_m: float, t_s: float, cars: Iterable[KinematicCar],
+                 read: tuple[Reading, ...] | None = None) -> None:
+        super().__init__(decision, sound, scenario, seen, grid, av_x_m, t_s, read)
         self.tracking = sound.tracking
         cars = list(cars)
         truth_m = {car.body: car.x_m - av_x_m for car in cars}  # the bookkeeping only
@@ -97,7 +98,7 @@ class Containment(Monitor):
         # from it (a fake gap's displaced copy held beside the vehicle's own kept track): the snapshot broke the sensing
         # assumption (every reading within the error bound of a vehicle), whatever it is planned around
         self.ghosts = [r for r in seen if r.body == GHOST_BODY]
-        error_m = self.bounds.sensing_error_m
+        error_m = 0.0 if sound.sensed_sets else self.bounds.sensing_error_m  # a set holds the error
         self.misread = [(r, miss) for r in seen if r.body in own and r is not own[r.body]
                         and (miss := abs(apart(*r.interval_m, truth_m[r.body] - error_m, truth_m[r.body] + error_m)))]
         self.generation = {car.body: car.respawns for car in cars}  # a respawned car is a new vehicle

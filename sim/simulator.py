@@ -231,10 +231,11 @@ class Simulator:
         return oncoming_view_m(readings, av_y_m, self.sound.bounds.sensing_error_m)
 
     def contain_from(self, readings: tuple[Reading, ...], pose_x_m: float, lane: Lane, view_m: float | None = None,
-                     sensed_sets: bool = False) -> None:
+                     sensed_sets: bool = False, read: tuple[Reading, ...] | None = None) -> None:
         """Containment from this snapshot on, against the drive's bounds and the snapshot's view of the oncoming lane
         (a snapshot that makes no scenario: none); with ``sensed_sets`` the readings are sets that hold the sensing
-        error (``spec.sound.Sound.sensed_sets``), as the decision's planner read them."""
+        error (``spec.sound.Sound.sensed_sets``), as the decision's planner read them, narrowed from what was
+        ``read``."""
         old = self.containment
         self.previous = old
         self.broken_before = old is not None and old.world_breached()
@@ -253,7 +254,7 @@ class Simulator:
         self.summary.decisions += 1
         watch = replace(self.watch, oncoming_view_m=view_m, sensed_sets=sensed_sets)
         self.containment = Containment(self.summary.decisions, watch, scenario, readings, self.grid, pose_x_m,
-                                       self.summary.sim_time_s, self.traffic.cars())
+                                       self.summary.sim_time_s, self.traffic.cars(), read)
 
     def _contain(self, pose: Pose, dt_s: float) -> None:
         """One control step's containment check against the truth (the simulator's bookkeeping); under the sound

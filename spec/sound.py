@@ -2,7 +2,8 @@
 motion inside the stated assumptions, at every instant, not only at ticks.
 
 Sets, not cells. Every vehicle is an interval of positions at the plan's start (its cell's extent,
-``spec.cells``, widened by the sensing error; a phantom where each sensor's view ends, ``spec.assumptions``)
+``spec.cells``, widened by the sensing error unless the snapshot's extents hold it, and by the snapshot's age;
+a phantom where each sensor's view ends, ``spec.assumptions``)
 that grows with its lane's speed interval: a same-direction vehicle is within ``[lo + v_low t,
 hi + v_high t]``, an oncoming one within ``[lo - v_high t, hi - v_low t]``. The AV is its reference
 (``spec.envelope``) plus the tracking error. A step is safe when, over its whole window (from the
@@ -201,8 +202,7 @@ class Sound:
 #: The keys of a scenario file's ``bounds`` table (and the command line's options of the same names).
 BOUNDS_KEYS = ("profile", "same_mps", "oncoming_mps", "sensing_error_m", "phantoms", "av_speed_mps", "followers_react",
                "oncoming_view_m", "latency_s", "semantics", "commit_max", "escapes", "accel_mps2", "brake_mps2",
-               "overtaken", "sideways_s", "sensors_ahead_m", "sensed_sets",
-                "from_reference")
+               "overtaken", "sideways_s", "sensors_ahead_m", "sensed_sets", "from_reference")
 #: How near the AV an aged phantom may come (``Sound.phantoms``): never onto it (Spin reads a phantom at 0 as none).
 PHANTOM_NEAREST_M = 1e-3
 
@@ -428,7 +428,8 @@ def vehicles(lane: Lane, left: tuple[int, ...], right: tuple[int, ...], grid: Gr
              left_mps: tuple[Speed, ...] | None = None, right_mps: tuple[Speed, ...] | None = None) -> tuple[
         Vehicle, ...]:
     """Every vehicle of a scenario (the AV starting in ``lane``) as an interval (``sensed_extents`` widened by the
-    sensing error and the snapshot's age: ``Sound.start_error_m``), then the phantoms. A vehicle whose speed was
+    sensing error, unless the extents are sets that hold it, and the snapshot's age: ``Sound.start_error_m``), then
+    the phantoms. A vehicle whose speed was
     measured (``left_mps``, ``right_mps``) moves by its own dynamics (``measured_dynamics``)."""
     out = []
     same, oncoming = sensed_extents(lane, left, right, grid, left_m, right_m)

@@ -89,7 +89,8 @@ class Host(Protocol):
     def decided(self, lane: Lane) -> None: ...  # a decision is taken in ``lane`` from the last sweep
 
     def contain_from(self, readings: tuple[Reading, ...], av_x_m: float, lane: Lane, view_m: float | None = None,
-                     sensed_sets: bool = False) -> None: ...  # the sets a new decision is measured against
+                     sensed_sets: bool = False, read: tuple[Reading, ...] | None = None) -> None:
+        ...  # the sets a new decision is measured against (``read``: what they were narrowed from)
 
     def planned(self, answer: Answer, scenario: Scenario, lane: Lane) -> None: ...
 

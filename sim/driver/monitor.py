@@ -6,7 +6,8 @@ A decision is made from one snapshot; under the drive's bounds (``spec.assumptio
 that snapshot is an interval that grows with its lane's speeds (``spec.sound.reach_m``; a vehicle whose speed was
 measured, with its own dynamics), and where the sensors cannot see, a phantom's interval covers what may come from
 beyond. A reading that no vehicle's interval nor any phantom's can explain, the sensing error allowed once more (the
-reading's own), is a breach the AV knows of. The simulator's bookkeeping holds every vehicle's truth against the same
+reading's own), is a breach the AV knows of; while none is, the next snapshot's readings are narrowed to what they
+and the sets share (``Monitor.refine``). The simulator's bookkeeping holds every vehicle's truth against the same
 sets (``sim.containment.Containment``, which extends this monitor).
 """
 
@@ -14,14 +15,16 @@ from __future__ import annotations
 
 import enum
 import math
+from collections import Counter
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, replace
 from typing import Any
 
-from sim.driver.discretiser import in_window, reading_cell
+from sim.driver.discretiser import discretise, in_window, reading_cell
 from sim.driver.readings import Reading
 from spec.actions import Action
 from spec.assumptions import Bounds
+from spec.errors import ScenarioError
 from spec.grid import Grid
 from spec.lanes import Lane
 from spec.physical import CAR
@@ -100,27 +103,27 @@ class Monitor:
     sensed outside them (``sensed``)."""
 
     def __init__(self, decision: int, sound: Sound, scenario: Scenario, seen: tuple[Reading, ...], grid: Grid,
-                 av_x_m: float, t_s: float) -> None:
+                 av_x_m: float, t_s: float, read: tuple[Reading, ...] | None = None) -> None:
         self.decision, self.bounds = decision, sound.bounds
         self.x0_m, self.t0_s = av_x_m, t_s
         self.lane, self.sound = scenario.lane, sound
         #: the decision's passing windows (``passing``): measured same-direction vehicles hold their speed in them
         self.windows_s: tuple[tuple[float, float], ...] = ()
-        found = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, grid, sound, scenario.left_m,
-                         scenario.right_m, scenario.left_mps, scenario.right_mps)
-        by_index = {(v.lane, v.index): v for v in found if v.index is not None}
+        #: each reading in the window with the vehicle it makes, and what may explain a reading of each lane
+        #: (``sense``): the vehicles the decision knew, then the phantoms
+        found, self.placed, self.explaining = _explained(scenario, seen, grid, sound)
         self.phantoms = {lane: [v for v in found if v.index is None and v.lane is lane] for lane in Lane}
-        #: each reading in the window with the vehicle it makes, in order: a lane's cells in the window, nearest first,
-        #: are its scenario's vehicles in order (readings in one cell: one hull, one vehicle)
-        self.placed: list[tuple[Reading, Vehicle]] = []
-        for lane in Lane:
-            readings = sorted((r for r in seen if r.lane is lane), key=lambda r: r.dx_m)
-            cells = [(c, r) for r in readings if in_window(c := reading_cell(r, scenario.lane, grid), grid)]
-            order = sorted({c for c, _ in cells})
-            self.placed += [(reading, by_index[(lane, order.index(cell))]) for cell, reading in cells]
-        read = dict.fromkeys(v for _, v in self.placed)  # the vehicles the snapshot's readings make: what the AV knows
-        # what may explain a reading of each lane (``sense``): the vehicles the decision knew, then the phantoms
-        self.explaining = {lane: [*(v for v in read if v.lane is lane), *self.phantoms[lane]] for lane in Lane}
+        #: what the next snapshot is narrowed against (``refine``): the vehicles as the snapshot ``read`` them, each
+        #: within the sensing error of its reading, not the sets a narrowed snapshot made of them (a reading beyond
+        #: the error bound narrows one decision's sets, never every later one's)
+        self.read_explaining = self.explaining
+        if read is not None and sound.sensed_sets:
+            try:
+                raw = discretise(read, scenario.lane, grid, measured=True)
+            except ScenarioError:
+                raw = None
+            if raw is not None:
+                self.read_explaining = _explained(raw, read, grid, replace(sound, sensed_sets=False))[2]
         self.sensed: Breach | None = None  # the first reading the AV's own monitor could not explain (``sense``)
         #: the speed the decision's minimal-risk manoeuvre brakes to, as its proof took it (``slowest_ahead_mps``: a
         #: standstill where a vehicle's speed was measured)
@@ -182,25 +185,37 @@ class Monitor:
     def refine(self, readings: tuple[Reading, ...], t_s: float, av_x_m: float) -> tuple[Reading, ...] | None:
         """A sweep's readings (the AV at ``av_x_m`` at ``t_s``) that this decision's sets explain (``sense`` found
         none outside them) as sets each vehicle is known to be in, the sensing error held
-        (``spec.sound.Sound.sensed_sets``): where the reading's own error and an interval the proof took share
-        (``known_m``), since while every assumption holds the vehicle is in both (SPOT's set-based prediction refined
-        by a measurement); a reading that shares nothing with them, or one ``sense`` passes over (an oncoming vehicle
-        the AV has passed), is its interval widened by the error. A noisy reading nearer than the sets then asks for
-        no more room than the proof holds. None: no reading narrowed, the readings as read."""
+        (``spec.sound.Sound.sensed_sets``): where the reading's own error and the sets it meets share (``known_m``),
+        the sets of the vehicles as this decision's snapshot read them (``read_explaining``), grown by the bounds
+        since. Every vehicle of that snapshot was read within the error, or is beyond a phantom's edge, or has
+        ``appeared`` (a breach: ``spec.assumptions``), and moves within its bounds, so while every assumption holds
+        each vehicle read now is in both (SPOT's set-based prediction refined by a measurement). A vehicle read is one
+        vehicle: where two readings meet its set, one of them may be a vehicle hidden at that snapshot, and neither
+        is narrowed. A reading so narrowed by nothing, or one that may be an oncoming vehicle the AV has passed, is
+        its interval widened by the error. A noisy reading nearer than the sets then asks for no more room than the
+        proof holds. None: no reading narrowed, the readings as read."""
         elapsed, shift_m, error_m = t_s - self.t0_s, av_x_m - self.x0_m, self.bounds.sensing_error_m
+        sets = {lane: [(v, _shifted(reach_m(self.assumed(v, elapsed), self.bounds, elapsed), -shift_m))
+                       for v in self.read_explaining[lane]] for lane in Lane}
+        wide = [(r.interval_m[0] - error_m, r.interval_m[1] + error_m) for r in readings]
+        met: list[list[tuple[Vehicle, tuple[float, float]]]] = []
+        claims: Counter[tuple[Lane, int | None]] = Counter()  # readings meeting each known vehicle's set
+        for r, w in zip(readings, wide, strict=True):
+            passed = r.lane is Lane.RIGHT and r.dx_m < error_m - CAR.length_m
+            met.append([] if passed else [(v, m) for v, m in sets[r.lane] if known_m(w, [m]) is not None])
+            claims.update((v.lane, v.index) for v, _ in met[-1] if v.index is not None)
         out, narrower = [], False
-        for r in readings:
-            lo, hi = r.interval_m
-            wide = (lo - error_m, hi + error_m)
-            known = None
-            if not (r.lane is Lane.RIGHT and r.dx_m < -CAR.length_m):
-                sets = [reach_m(self.assumed(v, elapsed), self.bounds, elapsed) for v in self.explaining[r.lane]]
-                known = known_m(wide, [(low - shift_m, high - shift_m) for low, high in sets])
-            a, b = wide if known is None else known
-            narrower = narrower or a > wide[0] + ROUNDING_M or b < wide[1] - ROUNDING_M
+        for r, w, meeting in zip(readings, wide, met, strict=True):
+            alone = all(v.index is None or claims[(v.lane, v.index)] == 1 for v, _ in meeting)
+            a, b = (known_m(w, [m for _, m in meeting]) or w) if meeting and alone else w
+            narrower = narrower or a > w[0] + ROUNDING_M or b < w[1] - ROUNDING_M
             dx_m = min(max(r.dx_m, a), b)
             out.append(replace(r, dx_m=dx_m, spread_m=(dx_m - a, b - dx_m)))
         return tuple(out) if narrower else None
+
+
+def _shifted(interval_m: tuple[float, float], dx_m: float) -> tuple[float, float]:
+    return interval_m[0] + dx_m, interval_m[1] + dx_m
 
 
 class Sighting:
@@ -229,6 +244,27 @@ class Sighting:
             if not any(_miss_m(r, v, self.bounds, shift_m, elapsed) == 0.0 for v in self.known[r.lane]):
                 return True
         return False
+
+
+def _explained(scenario: Scenario, seen: tuple[Reading, ...], grid: Grid, sound: Sound) -> tuple[
+        tuple[Vehicle, ...], list[tuple[Reading, Vehicle]], dict[Lane, list[Vehicle]]]:
+    """A snapshot's vehicles (``seen`` made ``scenario``), each reading in the window with the vehicle it makes (a
+    lane's cells in the window, nearest first, are its scenario's vehicles in order; readings in one cell: one hull,
+    one vehicle), and what may explain a later reading of each lane: the vehicles the readings make, then the
+    phantoms."""
+    found = vehicles(scenario.lane, scenario.left_lane, scenario.right_lane, grid, sound, scenario.left_m,
+                     scenario.right_m, scenario.left_mps, scenario.right_mps)
+    by_index = {(v.lane, v.index): v for v in found if v.index is not None}
+    placed: list[tuple[Reading, Vehicle]] = []
+    for lane in Lane:
+        readings = sorted((r for r in seen if r.lane is lane), key=lambda r: r.dx_m)
+        cells = [(c, r) for r in readings if in_window(c := reading_cell(r, scenario.lane, grid), grid)]
+        order = sorted({c for c, _ in cells})
+        placed += [(reading, by_index[(lane, order.index(cell))]) for cell, reading in cells]
+    read = dict.fromkeys(v for _, v in placed)  # the vehicles the snapshot's readings make: what the AV knows
+    explaining = {lane: [*(v for v in read if v.lane is lane),
+                         *(v for v in found if v.index is None and v.lane is lane)] for lane in Lane}
+    return found, placed, explaining
 
 
 def known_m(read_m: tuple[float, float], sets_m: list[tuple[float, float]]) -> tuple[float, float] | None:

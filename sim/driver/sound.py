@@ -148,8 +148,10 @@ class SoundDriver(Generic[M]):
         self.boundary = (due_s, ref_m + dx_m)
 
     def _watch(self, readings: tuple[Reading, ...], av_x_m: float, lane: Lane, view_m: float | None = None,
-               sensed_sets: bool = False) -> None:
-        self.host.contain_from(readings, av_x_m, lane, view_m, sensed_sets)
+               read: tuple[Reading, ...] | None = None) -> None:
+        """The decision's sets from ``readings``: sets that hold the sensing error where they were narrowed from what
+        was ``read`` (``refined``), else readings."""
+        self.host.contain_from(readings, av_x_m, lane, view_m, read is not None, read)
         self.interrupt = False
 
     def decision(self) -> Steps:
@@ -169,7 +171,7 @@ class SoundDriver(Generic[M]):
         holds = self.proof_holds(readings, pose)
         sets = self.refined(readings, pose) if holds else None
         seen = readings if sets is None else sets
-        self._watch(seen, pose.x_m, lane, view_m, sets is not None)
+        self._watch(seen, pose.x_m, lane, view_m, readings if sets is not None else None)
         h.check_snapshot()  # the snapshot itself: sensed farther off than the error bound, or unknown
         start = self.reference_start(pose) if holds else None
         ahead_m, speed_mps = (0.0, pose.along_mps) if start is None else (pose.x_m - start[0], start[1])

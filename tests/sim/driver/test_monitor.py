@@ -140,3 +140,37 @@ def test_property_a_known_set_holds_every_place_the_reading_and_the_sets_both_al
     for a, b in shared:
         x = a + at * (b - a)
         assert known[0] <= x <= known[1]
+
+
+def test_two_readings_that_meet_one_known_vehicles_set_are_neither_narrowed() -> None:
+    """A vehicle the decision knew is one vehicle: a second reading meeting its set may be one hidden at that snapshot
+    (an ``appeared`` breach the AV cannot tell), here 1 m beyond the set and read 1.4 m short. Narrowed into the set
+    it would lose its truth; neither reading is narrowed, where the same reading alone would be."""
+    low, high = _edges_m(Lane.LEFT, False)
+    far = high - E_M  # the set's far edge, the reading's own error taken off
+    hidden = Reading(Lane.LEFT, 2, far + 1.0 - 1.4 - AV_MOVED_M)
+    known = Reading(Lane.LEFT, 1, low + E_M + 2.0 - AV_MOVED_M)
+    monitor = _monitor(False)
+    alone = monitor.refine((hidden,), ELAPSED_S, AV_MOVED_M)
+    assert alone is not None and alone[0].interval_m[1] == pytest.approx(far - AV_MOVED_M)
+    both = monitor.refine((known, hidden), ELAPSED_S, AV_MOVED_M)
+    assert both is None or both[1].interval_m == pytest.approx((hidden.dx_m - E_M, hidden.dx_m + E_M))
+
+
+def test_a_narrowed_decision_narrows_the_next_snapshot_against_what_it_read_not_against_its_own_sets() -> None:
+    """A decision whose snapshot was narrowed (its sets hold the sensing error, ``Sound.sensed_sets``) watches those
+    sets, but narrows the next snapshot against the vehicles as its snapshot read them (each within the error of its
+    reading, grown since): a reading beyond the error bound narrows one decision's sets, never every later one's."""
+    read = (Reading(Lane.LEFT, 1, READ_M[Lane.LEFT]),)
+    narrowed = (Reading(Lane.LEFT, 1, READ_M[Lane.LEFT], (0.0, 0.5)),)
+    sets = Sound(BOUNDS, sensed_sets=True)
+    scenario = replace(discretise(narrowed, Lane.LEFT, PAPER_GRID, measured=True), sound=sets)
+    monitor = Monitor(0, sets, scenario, narrowed, PAPER_GRID, 0.0, 0.0, read)
+    low, _ = _edges_m(Lane.LEFT, False)
+    near_m = READ_M[Lane.LEFT] + BOUNDS.same_mps.low_mps * ELAPSED_S  # the narrowed set's near edge now
+    x_m = low + 1.5 * E_M  # its error reaches half an error behind the read set's near edge, into the narrowed set
+    assert x_m - E_M < near_m < x_m + E_M
+    assert monitor.sense(ELAPSED_S, 0.0, AV_MOVED_M, (Reading(Lane.LEFT, 1, x_m - AV_MOVED_M),), "a test") is None
+    refined = monitor.refine((Reading(Lane.LEFT, 1, x_m - AV_MOVED_M),), ELAPSED_S, AV_MOVED_M)
+    assert refined is not None and refined[0].interval_m[0] == pytest.approx(low + E_M - AV_MOVED_M)
+    assert low + E_M < near_m

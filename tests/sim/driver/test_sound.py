@@ -127,7 +127,7 @@ class Host:
         return 0.0, self.summary.sim_time_s
 
     def contain_from(self, readings: tuple[Reading, ...], av_x_m: float, lane: Lane, view_m: float | None = None,
-                     sensed_sets: bool = False) -> None:
+                     sensed_sets: bool = False, read: tuple[Reading, ...] | None = None) -> None:
         self.containment = self.next_monitor
         self.log.append(("contain_from", (tuple(r.interval_m for r in readings), sensed_sets)))
 
