@@ -290,8 +290,9 @@ def test_the_fallbacks_return_ends_for_the_emergency_brake_when_the_vehicle_ahea
 def test_a_noisy_reading_nearer_than_the_last_proofs_sets_plans_from_what_both_say_and_no_fallback_takes_over() -> None:
     """The paper's world, noisy, 10.5 m, seed 4, km 1.90: the vehicle ahead read at 8.47 m (error 1.5 m) where the
     last proof, still holding, had it between 8.48 and 11.33 m. From the reading alone the start broke the
-    specification twice in a row and the fallback took over with no assumption broken; from the sets the proof
-    narrows it to (``Monitor.refine``) every decision has its plan."""
+    specification twice in a row and the fallback took over with no assumption broken; with every snapshot narrowed
+    by the last one's readings (``Monitor.refine``) the drive goes otherwise from earlier on, and no take-over comes
+    without a breach."""
     summary = run_drive(4, DriveConfig(1.95, model="sound", sensor="noisy", cell_m=10.5, opportunity_checks=0))
     assert summary.refined_starts > 0
     assert [t for t in summary.takeovers if not t.after_breach] == []
