@@ -143,7 +143,8 @@ MUTANTS: tuple[Mutant, ...] = (
            "the fallback's return runs to its end at the speed chosen at its start, whatever the vehicle ahead does "
            "meanwhile: one braking to a standstill is hit", ("tests/sim/test_sound_loop.py",)),
     Mutant("monitor-refine-drops-the-sensing-error", "sim/driver/monitor.py",
-           "wide = (lo - error_m, hi + error_m)", "wide = (lo, hi)",
+           "wide = [(r.interval_m[0] - error_m, r.interval_m[1] + error_m) for r in readings]",
+           "wide = [r.interval_m for r in readings]",
            "the last proof's sets narrow a reading taken as exact: a vehicle up to the sensing error from its reading "
            "is left out of the sets a plan is proved against"),
     Mutant("sound-reference-ages-at-the-cars-speeds", "spec/sound.py",
