@@ -235,14 +235,11 @@ def sound_from(base: Sound | None, profile_name: str | None = None, same: object
         bounds = replace(bounds, sensing_error_m=check_number(key("sensing_error_m"), sensing_error_m))
         changed.append("sensing error")
     if phantoms is not None:
-        if not isinstance(phantoms, bool):
-            raise OptionError(key("phantoms"), phantoms, "must be true or false")
-        bounds = replace(bounds, phantoms=phantoms)
+        bounds = replace(bounds, phantoms=check_flag(key("phantoms"), phantoms, bounds.phantoms))
         changed.append("phantoms")
     if followers_react is not None:
-        if not isinstance(followers_react, bool):
-            raise OptionError(key("followers_react"), followers_react, "must be true or false")
-        bounds = replace(bounds, followers_react=followers_react)
+        bounds = replace(bounds, followers_react=check_flag(key("followers_react"), followers_react,
+                                                            bounds.followers_react))
         changed.append("followers_react")
     if latency_s is not None:
         bounds = replace(bounds, latency_s=check_number(key("latency_s"), latency_s))

@@ -171,7 +171,7 @@ class SoundDriver(Generic[M]):
         holds = self.proof_holds(readings, pose)
         sets = self.refined(readings, pose) if holds else None
         seen = readings if sets is None else sets
-        self._watch(seen, pose.x_m, lane, view_m, readings if sets is not None else None)
+        self._watch(seen, pose.x_m, lane, view_m, read=None if sets is None else readings)
         h.check_snapshot()  # the snapshot itself: sensed farther off than the error bound, or unknown
         start = self.reference_start(pose) if holds else None
         ahead_m, speed_mps = (0.0, pose.along_mps) if start is None else (pose.x_m - start[0], start[1])
